@@ -1,0 +1,363 @@
+// The friction oscillator, one realisation per invocation, in f32.
+// This is src/cpu.rs's algorithm (same function names, same order): fixed
+// steps per excitation period, steps split at noise-interval boundaries,
+// RK4 in slip with the slip direction frozen, velocity zeros located by root
+// finding on the RK4 map, breakaway from stick in closed form.
+// Time inside a period comes from the integer step counter, never from
+// accumulating dt; noise boundaries are 32.32 fixed-point positions in periods.
+// Requires philox.wgsl.
+
+struct Params {
+    mass_kg: f32,
+    stiffness_n_per_m: f32,
+    damping_n_s_per_m: f32,
+    base_amplitude_m: f32,
+    friction_a: f32,
+    friction_b: f32,
+    friction_c_s_per_m: f32,
+    friction_d_s2_per_m2: f32,
+    friction_sigma: f32,
+    normal_force_sigma_n: f32,
+    steps_per_period: u32,
+    warmup_cycles: u32,
+    seed_lo: u32,
+    seed_hi: u32,
+    invocations: u32,
+    realisations_per_point: u32,
+    realisation_offset: u32,
+    first_cycle: u32,
+    cycles: u32,
+    point_offset: u32,
+}
+
+struct GridPoint {
+    omega_rad_per_s: f32,
+    period_s: f32,
+    normal_force_mean_n: f32,
+    noise_interval_whole: u32,
+    noise_interval_frac: u32,
+    initial_x_m: f32,
+    initial_v_m_per_s: f32,
+    _pad: u32,
+}
+
+struct PathState {
+    x_m: f32,
+    v_m_per_s: f32,
+    mode: i32,
+    period: u32,
+    interval: u32,
+    next_boundary_whole: u32,
+    next_boundary_frac: u32,
+    friction_noise: f32,
+    normal_force_n: f32,
+    stick_time_s: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> points: array<GridPoint>;
+@group(0) @binding(2) var<storage, read_write> states: array<PathState>;
+@group(0) @binding(3) var<storage, read_write> peaks: array<f32>;
+
+const MODE_STICK: i32 = 0;
+const MAX_EVENTS_PER_SEGMENT: u32 = 16u;
+const TAU: f32 = 6.283185307179586;
+const FIXED_ONE_INV: f32 = 2.3283064365386963e-10; // 2^-32
+
+// The realisation being integrated (module-private, like `self` on the CPU).
+struct Path {
+    x_m: f32,
+    v_m_per_s: f32,
+    mode: i32,
+    period: u32,
+    interval: u32,
+    next_boundary_whole: u32,
+    next_boundary_frac: u32,
+    friction_noise: f32,
+    normal_force_n: f32,
+    stick_time_s: f32,
+    period_max_x_m: f32,
+    period_stick_s: f32,
+}
+
+var<private> path: Path;
+var<private> point: GridPoint;
+var<private> realisation: u32;
+var<private> key: vec2<u32>;
+
+fn draw_noise() {
+    let xi_mu = gaussian(key, realisation, STREAM_FRICTION, path.interval);
+    let xi_n = gaussian(key, realisation, STREAM_NORMAL_FORCE, path.interval);
+    path.friction_noise = params.friction_sigma * xi_mu;
+    path.normal_force_n = max(point.normal_force_mean_n + params.normal_force_sigma_n * xi_n, 0.0);
+}
+
+fn spring_force(t_local_s: f32, x_m: f32) -> f32 {
+    return params.stiffness_n_per_m * (params.base_amplitude_m * cos(point.omega_rad_per_s * t_local_s) - x_m);
+}
+
+fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
+    return max(params.friction_a
+        + params.friction_b / (1.0 + params.friction_c_s_per_m * speed_m_per_s)
+        + params.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
+        + path.friction_noise, 0.0);
+}
+
+fn breakaway_force() -> f32 {
+    return friction_coefficient(0.0, 0.0) * path.normal_force_n;
+}
+
+fn slip_acceleration(t_local_s: f32, x_m: f32, v_m_per_s: f32, sign: f32) -> f32 {
+    let friction = sign * friction_coefficient(sign * v_m_per_s, v_m_per_s) * path.normal_force_n;
+    return (spring_force(t_local_s, x_m) - params.damping_n_s_per_m * v_m_per_s - friction) / params.mass_kg;
+}
+
+fn rk4_slip(t_local_s: f32, x_m: f32, v_m_per_s: f32, h_s: f32, sign: f32) -> vec2<f32> {
+    let half = 0.5 * h_s;
+    let k1x = v_m_per_s;
+    let k1v = slip_acceleration(t_local_s, x_m, v_m_per_s, sign);
+    let k2x = v_m_per_s + half * k1v;
+    let k2v = slip_acceleration(t_local_s + half, x_m + half * k1x, k2x, sign);
+    let k3x = v_m_per_s + half * k2v;
+    let k3v = slip_acceleration(t_local_s + half, x_m + half * k2x, k3x, sign);
+    let k4x = v_m_per_s + h_s * k3v;
+    let k4v = slip_acceleration(t_local_s + h_s, x_m + h_s * k3x, k4x, sign);
+    return vec2<f32>(
+        x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+        v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v));
+}
+
+fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
+    var lo = 0.0;
+    var g_lo = sign * path.v_m_per_s;
+    var hi = h_s;
+    var g_hi = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, h_s, sign).y;
+    if (g_lo <= 0.0) {
+        var probe = 0.5 * h_s;
+        var found = false;
+        for (var i = 0u; i < 30u; i++) {
+            let g_probe = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, probe, sign).y;
+            if (g_probe > 0.0) {
+                lo = probe;
+                g_lo = g_probe;
+                found = true;
+                break;
+            }
+            hi = probe;
+            g_hi = g_probe;
+            probe = probe * 0.5;
+        }
+        if (!found) {
+            return hi;
+        }
+    }
+    var side = 0;
+    for (var i = 0u; i < 40u; i++) {
+        if (hi - lo <= 2e-7 * h_s) {
+            break;
+        }
+        var mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+        if (!(mid > lo && mid < hi)) {
+            mid = 0.5 * (lo + hi);
+        }
+        let g_mid = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, mid, sign).y;
+        if (g_mid > 0.0) {
+            lo = mid;
+            g_lo = g_mid;
+            if (side == 1) {
+                g_hi = g_hi * 0.5;
+            }
+            side = 1;
+        } else {
+            hi = mid;
+            g_hi = g_mid;
+            if (side == -1) {
+                g_lo = g_lo * 0.5;
+            }
+            side = -1;
+        }
+    }
+    return hi;
+}
+
+fn stick_or_slip(t_local_s: f32) -> i32 {
+    let force = spring_force(t_local_s, path.x_m);
+    if (abs(force) <= breakaway_force()) {
+        return MODE_STICK;
+    }
+    return select(-1, 1, force > 0.0);
+}
+
+// Earliest (time, direction) of breakaway in [t_a, t_b]; direction 0 = none.
+fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
+    let force = spring_force(t_a, path.x_m);
+    let threshold = breakaway_force();
+    if (force > threshold) {
+        return vec2<f32>(t_a, 1.0);
+    }
+    if (force < -threshold) {
+        return vec2<f32>(t_a, -1.0);
+    }
+    if (params.base_amplitude_m == 0.0) {
+        return vec2<f32>(t_b, 0.0);
+    }
+    let w = point.omega_rad_per_s;
+    let phase_a = w * t_a;
+    let reach = threshold / params.stiffness_n_per_m;
+    var best = vec2<f32>(t_b, 0.0);
+    for (var j = 0; j < 2; j++) {
+        let sign = select(-1.0, 1.0, j == 0);
+        let level = (path.x_m + sign * reach) / params.base_amplitude_m;
+        if (level < -1.0 || level > 1.0) {
+            continue;
+        }
+        let base = -sign * acos(level);
+        let n = ceil((phase_a - base) / TAU);
+        let t = (base + n * TAU) / w;
+        if (t <= t_b && (best.y == 0.0 || t < best.x)) {
+            best = vec2<f32>(max(t, t_a), sign);
+        }
+    }
+    return best;
+}
+
+fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
+    var t_a = t_start;
+    var events = 0u;
+    loop {
+        if (!(t_a < t_b)) {
+            break;
+        }
+        if (path.mode == MODE_STICK) {
+            var until = vec2<f32>(t_b, 0.0);
+            if (events < MAX_EVENTS_PER_SEGMENT) {
+                until = breakaway_time(t_a, t_b);
+            }
+            let t_end = select(until.x, t_b, until.y == 0.0);
+            if (measuring) {
+                path.period_stick_s += t_end - t_a;
+            }
+            path.mode = i32(until.y);
+            t_a = t_end;
+            events += 1u;
+        } else {
+            let sign = f32(path.mode);
+            let h = t_b - t_a;
+            let y1 = rk4_slip(t_a, path.x_m, path.v_m_per_s, h, sign);
+            if (sign * y1.y > 0.0) {
+                path.x_m = y1.x;
+                path.v_m_per_s = y1.y;
+                path.period_max_x_m = max(path.period_max_x_m, y1.x);
+                t_a = t_b;
+            } else {
+                let h_zero = locate_velocity_zero(t_a, h, sign);
+                let x_zero = rk4_slip(t_a, path.x_m, path.v_m_per_s, h_zero, sign).x;
+                path.x_m = x_zero;
+                path.v_m_per_s = 0.0;
+                path.period_max_x_m = max(path.period_max_x_m, x_zero);
+                t_a = t_a + h_zero;
+                if (events < MAX_EVENTS_PER_SEGMENT) {
+                    path.mode = stick_or_slip(t_a);
+                } else {
+                    path.mode = MODE_STICK;
+                }
+                events += 1u;
+            }
+        }
+    }
+}
+
+fn run_period(measuring: bool) {
+    let steps = params.steps_per_period;
+    let dt = point.period_s / f32(steps);
+    path.period_max_x_m = path.x_m;
+    path.period_stick_s = 0.0;
+    var t = 0.0;
+    var step = 0u;
+    loop {
+        let step_end = select(f32(step + 1u) * dt, point.period_s, step + 1u == steps);
+        var noise_t = 3.0e38;
+        if (path.next_boundary_whole == path.period) {
+            // Position of the boundary in steps: frac * steps / 2^32, exactly.
+            let position = mulhilo(path.next_boundary_frac, steps);
+            noise_t = (f32(position.x) + f32(position.y) * FIXED_ONE_INV) * dt;
+        }
+        let target_t = max(min(step_end, noise_t), t);
+        advance_segment(t, target_t, measuring);
+        t = target_t;
+        if (noise_t <= target_t) {
+            path.interval += 1u;
+            let frac = path.next_boundary_frac + point.noise_interval_frac;
+            let carry = select(0u, 1u, frac < path.next_boundary_frac);
+            path.next_boundary_frac = frac;
+            path.next_boundary_whole += point.noise_interval_whole + carry;
+            draw_noise();
+        }
+        if (step_end <= target_t) {
+            step += 1u;
+            if (step == steps) {
+                break;
+            }
+        }
+    }
+    path.period += 1u;
+}
+
+fn load_invocation(n: u32) {
+    let p = params.point_offset + n / params.realisations_per_point;
+    point = points[p];
+    realisation = params.realisation_offset + n % params.realisations_per_point;
+    key = vec2<u32>(params.seed_lo, params.seed_hi);
+}
+
+@compute @workgroup_size(64)
+fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let n = gid.x + gid.y * 65535u * 64u;
+    if (n >= params.invocations) {
+        return;
+    }
+    load_invocation(n);
+    path.x_m = point.initial_x_m;
+    path.v_m_per_s = point.initial_v_m_per_s;
+    path.period = 0u;
+    path.interval = 0u;
+    path.next_boundary_whole = point.noise_interval_whole;
+    path.next_boundary_frac = point.noise_interval_frac;
+    path.stick_time_s = 0.0;
+    draw_noise();
+    if (path.v_m_per_s > 0.0) {
+        path.mode = 1;
+    } else if (path.v_m_per_s < 0.0) {
+        path.mode = -1;
+    } else {
+        path.mode = stick_or_slip(0.0);
+    }
+    states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
+        path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
+        path.normal_force_n, path.stick_time_s, 0u, 0u);
+}
+
+@compute @workgroup_size(64)
+fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let n = gid.x + gid.y * 65535u * 64u;
+    if (n >= params.invocations) {
+        return;
+    }
+    load_invocation(n);
+    let s = states[n];
+    path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
+        s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s, 0.0, 0.0);
+    for (var c = 0u; c < params.cycles; c++) {
+        let measuring = params.first_cycle + c >= params.warmup_cycles;
+        run_period(measuring);
+        if (measuring) {
+            peaks[n * params.cycles + c] = path.period_max_x_m;
+            path.stick_time_s += path.period_stick_s;
+        }
+    }
+    states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
+        path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
+        path.normal_force_n, path.stick_time_s, 0u, 0u);
+}

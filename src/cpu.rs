@@ -1,0 +1,448 @@
+//! The f64 reference integrator.
+//!
+//! Each realisation is integrated on a fixed grid of `steps_per_period` steps
+//! per excitation period. Noise-interval boundaries and output samples split
+//! steps, so every random value holds exactly over its interval. Slip phases
+//! use classical RK4 with the slip direction frozen (the ODE is smooth there);
+//! a velocity zero inside a step is located by root finding on the RK4 map
+//! itself (Illinois method), and the stick→slip breakaway is solved in closed
+//! form because the block is at rest and only the base moves. No `sgn` is
+//! smoothed.
+//!
+//! `shaders/ensemble.wgsl` is the same algorithm in f32; the functions below
+//! carry the kernel's names and come in its order.
+
+use rayon::prelude::*;
+
+use crate::model::Oscillator;
+use crate::rng;
+
+/// Whether the block sticks or slips, and in which direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Stick,
+    /// Slipping with velocity sign +1 or −1.
+    Slip(i8),
+}
+
+/// How long a realisation runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunPlan {
+    /// Excitation periods discarded before measuring.
+    pub warmup_cycles: u32,
+    /// Excitation periods whose peaks are measured.
+    pub measured_cycles: u32,
+}
+
+/// State at t = 0: displacement (m) and velocity (m/s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InitialState {
+    pub x_m: f64,
+    pub v_m_per_s: f64,
+}
+
+/// What one realisation produced.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathResult {
+    /// Peak displacement of each measured period, m.
+    pub peaks_m: Vec<f64>,
+    /// Time spent stuck during the measured periods, s.
+    pub stick_time_s: f64,
+}
+
+/// One output sample of a time-series record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the start of the run, s.
+    pub t_s: f64,
+    /// Displacement, m.
+    pub x_m: f64,
+    /// Velocity, m/s.
+    pub v_m_per_s: f64,
+    /// Normal force, N.
+    pub normal_force_n: f64,
+    /// Friction force on the block, N.
+    pub friction_force_n: f64,
+}
+
+/// Fixed-point `2^32`.
+const FIXED_ONE: f64 = 4_294_967_296.0;
+/// Events handled within one segment before the integrator forces progress
+/// (guards against chattering at exactly balanced forces).
+const MAX_EVENTS_PER_SEGMENT: u32 = 64;
+
+/// The state of one realisation.
+#[derive(Clone, Debug)]
+struct Path<'a> {
+    osc: &'a Oscillator,
+    key: [u32; 2],
+    realisation: u32,
+    /// Displacement x, m.
+    x_m: f64,
+    /// Velocity v, m/s.
+    v_m_per_s: f64,
+    mode: Mode,
+    /// Index of the current excitation period.
+    period: u64,
+    /// Index of the current noise interval.
+    interval: u64,
+    /// Start of the next noise interval, in periods, 32.32 fixed point.
+    next_boundary: u64,
+    /// Friction coefficient's random part `σ_μ ξ_μ` in the current interval, –.
+    friction_noise: f64,
+    /// Normal force in the current interval, N.
+    normal_force_n: f64,
+    /// Largest x so far in the current period, m.
+    period_max_x_m: f64,
+    /// Time stuck so far in the current period, s.
+    period_stick_s: f64,
+}
+
+impl<'a> Path<'a> {
+    fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
+        let mut path = Path {
+            osc,
+            key: rng::seed_key(seed),
+            realisation,
+            x_m: initial.x_m,
+            v_m_per_s: initial.v_m_per_s,
+            mode: Mode::Stick,
+            period: 0,
+            interval: 0,
+            next_boundary: osc.noise_interval_fixed,
+            friction_noise: 0.0,
+            normal_force_n: 0.0,
+            period_max_x_m: initial.x_m,
+            period_stick_s: 0.0,
+        };
+        path.draw_noise();
+        path.mode = if initial.v_m_per_s > 0.0 {
+            Mode::Slip(1)
+        } else if initial.v_m_per_s < 0.0 {
+            Mode::Slip(-1)
+        } else {
+            path.stick_or_slip(0.0)
+        };
+        path
+    }
+
+    /// Noise values of the current interval.
+    fn draw_noise(&mut self) {
+        let o = self.osc;
+        let xi_mu = rng::gaussian(self.key, self.realisation, rng::STREAM_FRICTION, self.interval);
+        let xi_n = rng::gaussian(self.key, self.realisation, rng::STREAM_NORMAL_FORCE, self.interval);
+        self.friction_noise = o.friction_sigma * xi_mu;
+        self.normal_force_n = (o.normal_force_mean_n + o.normal_force_sigma_n * xi_n).max(0.0);
+    }
+
+    /// Force of springs and damper on the block at rest, `k (u(t) − x)`, N.
+    fn spring_force(&self, t_local_s: f64, x_m: f64) -> f64 {
+        let o = self.osc;
+        o.stiffness_n_per_m * (o.base_amplitude_m * (o.omega_rad_per_s * t_local_s).cos() - x_m)
+    }
+
+    /// Friction coefficient while slipping with speed `speed` (m/s), clipped at 0.
+    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+        let o = self.osc;
+        (o.friction_a
+            + o.friction_b / (1.0 + o.friction_c_s_per_m * speed_m_per_s)
+            + o.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
+            + self.friction_noise)
+            .max(0.0)
+    }
+
+    /// Breakaway force `μ_s N`, N.
+    fn breakaway_force(&self) -> f64 {
+        self.friction_coefficient(0.0, 0.0) * self.normal_force_n
+    }
+
+    /// Acceleration while slipping in direction `sign`, m/s².
+    fn slip_acceleration(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, sign: f64) -> f64 {
+        let o = self.osc;
+        let friction = sign * self.friction_coefficient(sign * v_m_per_s, v_m_per_s) * self.normal_force_n;
+        (self.spring_force(t_local_s, x_m) - o.damping_n_s_per_m * v_m_per_s - friction) / o.mass_kg
+    }
+
+    /// One classical RK4 step of the slip ODE from `t` over `h` seconds.
+    fn rk4_slip(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, h_s: f64, sign: f64) -> (f64, f64) {
+        let half = 0.5 * h_s;
+        let k1x = v_m_per_s;
+        let k1v = self.slip_acceleration(t_local_s, x_m, v_m_per_s, sign);
+        let k2x = v_m_per_s + half * k1v;
+        let k2v = self.slip_acceleration(t_local_s + half, x_m + half * k1x, k2x, sign);
+        let k3x = v_m_per_s + half * k2v;
+        let k3v = self.slip_acceleration(t_local_s + half, x_m + half * k2x, k3x, sign);
+        let k4x = v_m_per_s + h_s * k3v;
+        let k4v = self.slip_acceleration(t_local_s + h_s, x_m + h_s * k3x, k4x, sign);
+        (
+            x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+        )
+    }
+
+    /// The step length `h* ∈ (0, h]` at which the RK4 map's velocity reaches
+    /// zero, given that `sign · v` is ≤ 0 after the full step `h`.
+    fn locate_velocity_zero(&self, t_local_s: f64, h_s: f64, sign: f64) -> f64 {
+        let g = |h: f64| sign * self.rk4_slip(t_local_s, self.x_m, self.v_m_per_s, h, sign).1;
+        let (mut lo, mut g_lo) = (0.0, sign * self.v_m_per_s);
+        let (mut hi, mut g_hi) = (h_s, g(h_s));
+        if g_lo <= 0.0 {
+            // Slip starting from rest: find a point where it is under way.
+            let mut probe = 0.5 * h_s;
+            let mut found = false;
+            for _ in 0..60 {
+                let g_probe = g(probe);
+                if g_probe > 0.0 {
+                    (lo, g_lo) = (probe, g_probe);
+                    found = true;
+                    break;
+                }
+                (hi, g_hi) = (probe, g_probe);
+                probe *= 0.5;
+            }
+            if !found {
+                return hi;
+            }
+        }
+        // Illinois (modified regula falsi): g_lo > 0 >= g_hi.
+        let mut side = 0i8;
+        for _ in 0..100 {
+            if hi - lo <= 1e-15 * h_s.max(self.osc.period_s * 1e-6) {
+                break;
+            }
+            let mut mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+            if !(mid > lo && mid < hi) {
+                mid = 0.5 * (lo + hi);
+            }
+            let g_mid = g(mid);
+            if g_mid > 0.0 {
+                (lo, g_lo) = (mid, g_mid);
+                if side == 1 {
+                    g_hi *= 0.5;
+                }
+                side = 1;
+            } else {
+                (hi, g_hi) = (mid, g_mid);
+                if side == -1 {
+                    g_lo *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        hi
+    }
+
+    /// At rest at `t`: stick if the spring force does not exceed the
+    /// breakaway force, otherwise slip in the direction of that force.
+    fn stick_or_slip(&self, t_local_s: f64) -> Mode {
+        let force = self.spring_force(t_local_s, self.x_m);
+        if force.abs() <= self.breakaway_force() {
+            Mode::Stick
+        } else if force > 0.0 {
+            Mode::Slip(1)
+        } else {
+            Mode::Slip(-1)
+        }
+    }
+
+    /// Earliest time in `[t_a, t_b]` at which a stuck block breaks away, and
+    /// the direction. `k (U0 cos(Ω t) − x) = ±μ_s N` is solved in closed form.
+    fn breakaway_time(&self, t_a: f64, t_b: f64) -> Option<(f64, i8)> {
+        let o = self.osc;
+        let force = self.spring_force(t_a, self.x_m);
+        let threshold = self.breakaway_force();
+        if force > threshold {
+            return Some((t_a, 1));
+        }
+        if force < -threshold {
+            return Some((t_a, -1));
+        }
+        if o.base_amplitude_m == 0.0 {
+            return None;
+        }
+        let w = o.omega_rad_per_s;
+        let phase_a = w * t_a;
+        let reach = threshold / o.stiffness_n_per_m;
+        let mut best: Option<(f64, i8)> = None;
+        // Entering cos(θ) >= C+ happens at θ = 2πn − acos(C+);
+        // entering cos(θ) <= C− happens at θ = 2πn + acos(C−).
+        for (level, sign) in [((self.x_m + reach) / o.base_amplitude_m, 1i8), ((self.x_m - reach) / o.base_amplitude_m, -1i8)] {
+            if !(-1.0..=1.0).contains(&level) {
+                continue;
+            }
+            let base = if sign > 0 { -level.acos() } else { level.acos() };
+            let n = ((phase_a - base) / std::f64::consts::TAU).ceil();
+            let phase = base + n * std::f64::consts::TAU;
+            let t = phase / w;
+            if t <= t_b && best.is_none_or(|(tb, _)| t < tb) {
+                best = Some((t.max(t_a), sign));
+            }
+        }
+        best
+    }
+
+    /// Advances from `t_a` to `t_b` (local times in the period) with the
+    /// noise held, through any stick/slip events on the way.
+    fn advance_segment(&mut self, mut t_a: f64, t_b: f64, measuring: bool) {
+        let mut events = 0;
+        while t_a < t_b {
+            match self.mode {
+                Mode::Stick => {
+                    let until = if events < MAX_EVENTS_PER_SEGMENT { self.breakaway_time(t_a, t_b) } else { None };
+                    let (t_end, next) = match until {
+                        None => (t_b, Mode::Stick),
+                        Some((t, sign)) => (t, Mode::Slip(sign)),
+                    };
+                    if measuring {
+                        self.period_stick_s += t_end - t_a;
+                    }
+                    self.mode = next;
+                    t_a = t_end;
+                    events += 1;
+                }
+                Mode::Slip(s) => {
+                    let sign = f64::from(s);
+                    let h = t_b - t_a;
+                    let (x1, v1) = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h, sign);
+                    if sign * v1 > 0.0 {
+                        self.x_m = x1;
+                        self.v_m_per_s = v1;
+                        self.period_max_x_m = self.period_max_x_m.max(x1);
+                        t_a = t_b;
+                    } else {
+                        let h_zero = self.locate_velocity_zero(t_a, h, sign);
+                        let (x_zero, _) = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h_zero, sign);
+                        self.x_m = x_zero;
+                        self.v_m_per_s = 0.0;
+                        self.period_max_x_m = self.period_max_x_m.max(x_zero);
+                        t_a += h_zero;
+                        self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(t_a) } else { Mode::Stick };
+                        events += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Friction force on the block at local time `t` (for output samples), N.
+    fn friction_force(&self, t_local_s: f64) -> f64 {
+        match self.mode {
+            Mode::Stick => -self.spring_force(t_local_s, self.x_m),
+            Mode::Slip(s) => {
+                let sign = f64::from(s);
+                -sign * self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s) * self.normal_force_n
+            }
+        }
+    }
+
+    /// Integrates one excitation period, splitting steps at noise boundaries
+    /// and at output samples.
+    fn run_period(&mut self, measuring: bool, mut sampler: Option<&mut Sampler>) {
+        let o = self.osc;
+        let steps = o.steps_per_period;
+        let dt = o.period_s / f64::from(steps);
+        let period_start_s = self.period as f64 * o.period_s;
+        self.period_max_x_m = self.x_m;
+        self.period_stick_s = 0.0;
+        let mut t = 0.0;
+        let mut step = 0u32;
+        loop {
+            let step_end = if step + 1 == steps { o.period_s } else { f64::from(step + 1) * dt };
+            let noise_t = if self.next_boundary >> 32 == self.period {
+                (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE * o.period_s
+            } else {
+                f64::INFINITY
+            };
+            let sample_t = sampler.as_ref().map_or(f64::INFINITY, |s| s.next_time_s() - period_start_s);
+            let target = step_end.min(noise_t).min(sample_t).max(t);
+            self.advance_segment(t, target, measuring);
+            t = target;
+            if noise_t <= target {
+                self.interval += 1;
+                self.next_boundary += o.noise_interval_fixed;
+                self.draw_noise();
+            }
+            if sample_t <= target {
+                let sample = Sample {
+                    t_s: period_start_s + t,
+                    x_m: self.x_m,
+                    v_m_per_s: self.v_m_per_s,
+                    normal_force_n: self.normal_force_n,
+                    friction_force_n: self.friction_force(t),
+                };
+                sampler.as_mut().expect("sample time implies a sampler").push(sample);
+            }
+            if step_end <= target {
+                step += 1;
+                if step == steps {
+                    break;
+                }
+            }
+        }
+        self.period += 1;
+    }
+}
+
+/// Collects output samples at a fixed rate.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    /// Sampling interval, s.
+    pub interval_s: f64,
+    /// Samples so far.
+    pub samples: Vec<Sample>,
+    /// Samples before this time are not recorded, s.
+    pub start_s: f64,
+}
+
+impl Sampler {
+    /// A sampler recording from `start_s` onwards every `interval_s`.
+    pub fn new(interval_s: f64, start_s: f64) -> Self {
+        Sampler { interval_s, samples: Vec::new(), start_s }
+    }
+
+    fn next_time_s(&self) -> f64 {
+        let first = (self.start_s / self.interval_s).ceil();
+        (first + self.samples.len() as f64) * self.interval_s
+    }
+
+    fn push(&mut self, sample: Sample) {
+        self.samples.push(sample);
+    }
+}
+
+/// Runs one realisation and returns its per-period peaks.
+pub fn simulate_path(
+    osc: &Oscillator,
+    seed: u64,
+    realisation: u32,
+    plan: RunPlan,
+    initial: InitialState,
+    mut sampler: Option<&mut Sampler>,
+) -> PathResult {
+    let mut path = Path::new(osc, seed, realisation, initial);
+    let mut peaks_m = Vec::with_capacity(plan.measured_cycles as usize);
+    let mut stick_time_s = 0.0;
+    for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
+        let measuring = cycle >= plan.warmup_cycles;
+        path.run_period(measuring, sampler.as_deref_mut());
+        if measuring {
+            peaks_m.push(path.period_max_x_m);
+            stick_time_s += path.period_stick_s;
+        }
+    }
+    PathResult { peaks_m, stick_time_s }
+}
+
+/// Runs realisations `realisations` in parallel (rayon), each from `initial`.
+pub fn simulate_ensemble(
+    osc: &Oscillator,
+    seed: u64,
+    realisations: std::ops::Range<u32>,
+    plan: RunPlan,
+    initial: InitialState,
+) -> Vec<PathResult> {
+    realisations
+        .into_par_iter()
+        .map(|r| simulate_path(osc, seed, r, plan, initial, None))
+        .collect()
+}

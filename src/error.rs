@@ -1,0 +1,53 @@
+//! The library's error type. Every variant names what was wrong so that the
+//! command line can print it as it is.
+
+use std::path::PathBuf;
+
+/// Errors from the stickslip library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A model file (or `--set` override) that cannot be read as TOML or does
+    /// not match the schema (unknown key, missing key, wrong type).
+    #[error("model {source_name}: {message}")]
+    ModelSyntax { source_name: String, message: String },
+
+    /// A model parameter outside its physical range; `key` is the dotted key.
+    #[error("model parameter `{key}` = {value}: {message}")]
+    InvalidParameter { key: String, value: String, message: String },
+
+    /// A bad run setting: step size, cycle counts, grid, realisations, shard.
+    #[error("invalid {what}: {message}")]
+    InvalidSetting { what: String, message: String },
+
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+
+    /// A measurement set that the format spec refuses.
+    #[error("{}{}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Measurement { file: PathBuf, line: Option<u64>, message: String },
+
+    /// No usable GPU adapter / device.
+    #[error("GPU unavailable: {0}")]
+    NoGpu(String),
+
+    /// A GPU operation failed (buffer mapping, validation, device lost).
+    #[error("GPU error: {0}")]
+    Gpu(String),
+
+    /// Inputs that cannot be combined (e.g. shards of different runs).
+    #[error("{0}")]
+    Mismatch(String),
+}
+
+impl Error {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+
+    pub(crate) fn setting(what: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidSetting { what: what.into(), message: message.into() }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,571 @@
+//! The GPU ensemble: one context owning device, queue and pipelines, the
+//! host structs shared with `shaders/*.wgsl`, and the dispatch loop.
+//!
+//! Functions take `&Device, &Queue` (and the pipelines in [`Kernels`]) so
+//! tests can pass their own device.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use crate::cpu::{InitialState, PathResult, RunPlan};
+use crate::error::{Error, Result};
+use crate::model::Oscillator;
+
+/// The ensemble kernel: Philox plus the oscillator.
+pub const ENSEMBLE_WGSL: &str = concat!(include_str!("../shaders/philox.wgsl"), include_str!("../shaders/ensemble.wgsl"));
+/// The generator check kernel: Philox plus a kernel writing raw words.
+pub const PHILOX_CHECK_WGSL: &str =
+    concat!(include_str!("../shaders/philox.wgsl"), include_str!("../shaders/philox_check.wgsl"));
+
+/// Invocations per workgroup in every kernel (`@workgroup_size(64)`).
+pub const WORKGROUP_SIZE: u32 = 64;
+/// Most workgroups per dispatch dimension (WebGPU's guaranteed limit).
+const MAX_WORKGROUPS_PER_DIMENSION: u32 = 65_535;
+/// Integration steps (invocations × steps) per dispatch. Keeps each
+/// submission near 0.1 s on lavapipe and far below desktop drivers'
+/// watchdogs. (lavapipe was seen to end a 1.8·10^7-step dispatch early
+/// without an error; [`run_ensemble`] checks every path's cycle count.)
+pub const DEFAULT_STEPS_PER_DISPATCH: u64 = 1 << 22;
+
+/// Uniform parameters of `ensemble.wgsl` (struct `Params`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    /// kg
+    pub mass_kg: f32,
+    /// N/m
+    pub stiffness_n_per_m: f32,
+    /// N·s/m
+    pub damping_n_s_per_m: f32,
+    /// m
+    pub base_amplitude_m: f32,
+    /// –
+    pub friction_a: f32,
+    /// –
+    pub friction_b: f32,
+    /// s/m
+    pub friction_c_s_per_m: f32,
+    /// s²/m²
+    pub friction_d_s2_per_m2: f32,
+    /// –
+    pub friction_sigma: f32,
+    /// N
+    pub normal_force_sigma_n: f32,
+    pub steps_per_period: u32,
+    pub warmup_cycles: u32,
+    pub seed_lo: u32,
+    pub seed_hi: u32,
+    /// Invocations in this dispatch.
+    pub invocations: u32,
+    pub realisations_per_point: u32,
+    /// Realisation index of the dispatch's first realisation of each point.
+    pub realisation_offset: u32,
+    /// Index (from the start of the run) of the first cycle of this dispatch.
+    pub first_cycle: u32,
+    /// Cycles integrated by this dispatch.
+    pub cycles: u32,
+    /// Index into the grid-point buffer of this dispatch's first point.
+    pub point_offset: u32,
+}
+
+/// One grid point as the kernel sees it (struct `GridPoint`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridPoint {
+    /// rad/s
+    pub omega_rad_per_s: f32,
+    /// s
+    pub period_s: f32,
+    /// N
+    pub normal_force_mean_n: f32,
+    /// Noise hold interval in periods, 32.32 fixed point: whole part.
+    pub noise_interval_whole: u32,
+    /// Fractional part (units of 2^-32 periods).
+    pub noise_interval_frac: u32,
+    /// m
+    pub initial_x_m: f32,
+    /// m/s
+    pub initial_v_m_per_s: f32,
+    pub _pad: u32,
+}
+
+/// Per-invocation state kept between dispatches (struct `PathState`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathState {
+    pub x_m: f32,
+    pub v_m_per_s: f32,
+    pub mode: i32,
+    pub period: u32,
+    pub interval: u32,
+    pub next_boundary_whole: u32,
+    pub next_boundary_frac: u32,
+    pub friction_noise: f32,
+    pub normal_force_n: f32,
+    /// Time stuck during measured cycles, s.
+    pub stick_time_s: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// Uniform of `philox_check.wgsl` (struct `CheckParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CheckParams {
+    pub seed_lo: u32,
+    pub seed_hi: u32,
+    pub first: u32,
+    pub count: u32,
+}
+
+/// Compiled pipelines and their bind-group layouts.
+pub struct Kernels {
+    ensemble_layout: wgpu::BindGroupLayout,
+    init_paths: wgpu::ComputePipeline,
+    run_cycles: wgpu::ComputePipeline,
+    check_layout: wgpu::BindGroupLayout,
+    philox_check: wgpu::ComputePipeline,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn compute_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+    entry_point: &str,
+) -> wgpu::ComputePipeline {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry_point),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry_point),
+        layout: Some(&pipeline_layout),
+        module,
+        entry_point: Some(entry_point),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+impl Kernels {
+    /// Compiles the WGSL and builds the pipelines.
+    pub fn new(device: &wgpu::Device) -> Kernels {
+        let ensemble = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ensemble.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(ENSEMBLE_WGSL.into()),
+        });
+        let ensemble_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ensemble"),
+            entries: &[uniform_entry(0), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
+        });
+        let check = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("philox_check.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(PHILOX_CHECK_WGSL.into()),
+        });
+        let check_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("philox_check"),
+            entries: &[uniform_entry(0), storage_entry(1, false), storage_entry(2, false)],
+        });
+        Kernels {
+            init_paths: compute_pipeline(device, &ensemble_layout, &ensemble, "init_paths"),
+            run_cycles: compute_pipeline(device, &ensemble_layout, &ensemble, "run_cycles"),
+            philox_check: compute_pipeline(device, &check_layout, &check, "philox_check"),
+            ensemble_layout,
+            check_layout,
+        }
+    }
+}
+
+/// What kind of adapter a context runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdapterClass {
+    /// A hardware GPU (discrete, integrated or virtual).
+    Hardware,
+    /// A software rasteriser such as Mesa's lavapipe.
+    Software,
+}
+
+/// One GPU: device, queue, adapter description and compiled pipelines.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    pub kernels: Kernels,
+}
+
+impl GpuContext {
+    /// Opens the best adapter: a hardware GPU if there is one, otherwise a
+    /// software one (lavapipe) when `allow_software` is set.
+    pub fn new(allow_software: bool) -> Result<GpuContext> {
+        pollster::block_on(Self::new_async(allow_software))
+    }
+
+    async fn new_async(allow_software: bool) -> Result<GpuContext> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+        let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+        let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        adapters.retain(|a| a.get_info().backend != wgpu::Backend::Noop && (allow_software || rank(a) < 3));
+        adapters.sort_by_key(|a| rank(a));
+        let adapter = adapters.into_iter().next().ok_or_else(|| {
+            Error::NoGpu(if allow_software {
+                "no Vulkan, Metal or DX12 adapter found (install Mesa's lavapipe, package mesa-vulkan-drivers, for a software one)".into()
+            } else {
+                "no hardware GPU adapter found".into()
+            })
+        })?;
+        let adapter_info = adapter.get_info();
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("stickslip"),
+                required_limits: adapter.limits(),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| Error::NoGpu(format!("{}: {e}", adapter_info.name)))?;
+        let kernels = Kernels::new(&device);
+        Ok(GpuContext { device, queue, adapter_info, kernels })
+    }
+
+    /// Hardware or software adapter.
+    pub fn adapter_class(&self) -> AdapterClass {
+        match self.adapter_info.device_type {
+            wgpu::DeviceType::Cpu | wgpu::DeviceType::Other => AdapterClass::Software,
+            _ => AdapterClass::Hardware,
+        }
+    }
+
+    /// A one-line description: name, type, backend, driver.
+    pub fn describe(&self) -> String {
+        let i = &self.adapter_info;
+        format!("{} ({:?}, {:?}, {} {})", i.name, i.device_type, i.backend, i.driver, i.driver_info)
+    }
+}
+
+/// Waits for the queue and reads a buffer back.
+fn read_back(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read back") });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    receiver
+        .recv()
+        .map_err(|e| Error::Gpu(e.to_string()))?
+        .map_err(|e| Error::Gpu(format!("mapping a result buffer: {e}")))?;
+    let bytes = slice.get_mapped_range().map_err(|e| Error::Gpu(e.to_string()))?.to_vec();
+    staging.unmap();
+    Ok(bytes)
+}
+
+fn storage_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn workgroups(invocations: u32) -> u32 {
+    invocations.div_ceil(WORKGROUP_SIZE)
+}
+
+/// The Philox key and counter that check index `i` uses in `philox_check.wgsl`.
+pub fn philox_check_input(seed: u64, i: u32) -> ([u32; 4], [u32; 2]) {
+    let [lo, hi] = crate::rng::seed_key(seed);
+    (
+        [i, i.wrapping_mul(0x9E37_79B9), !i, i ^ 0x85EB_CA6B],
+        [lo ^ i, hi.wrapping_add(i >> 3)],
+    )
+}
+
+/// Raw Philox words and Gaussians for check indices `first..first+count`,
+/// computed by the WGSL generator.
+pub fn philox_check(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    kernels: &Kernels,
+    seed: u64,
+    first: u32,
+    count: u32,
+) -> Result<(Vec<[u32; 4]>, Vec<f32>)> {
+    if count == 0 || workgroups(count) > MAX_WORKGROUPS_PER_DIMENSION {
+        return Err(Error::setting("philox check", format!("count {count} must be in 1..={}", MAX_WORKGROUPS_PER_DIMENSION * WORKGROUP_SIZE)));
+    }
+    let [seed_lo, seed_hi] = crate::rng::seed_key(seed);
+    let params = CheckParams { seed_lo, seed_hi, first, count };
+    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("check params"),
+        contents: bytemuck::bytes_of(&params),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let words = storage_buffer(device, "words", u64::from(count) * 16);
+    let normals = storage_buffer(device, "normals", u64::from(count) * 4);
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("philox check"),
+        layout: &kernels.check_layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: words.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: normals.as_entire_binding() },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&kernels.philox_check);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(workgroups(count), 1, 1);
+    }
+    queue.submit([encoder.finish()]);
+    let w = read_back(device, queue, &words, u64::from(count) * 16)?;
+    let n = read_back(device, queue, &normals, u64::from(count) * 4)?;
+    Ok((bytemuck::cast_slice(&w).to_vec(), bytemuck::cast_slice(&n).to_vec()))
+}
+
+/// One grid point of a GPU ensemble.
+#[derive(Clone, Debug)]
+pub struct PointSpec {
+    pub oscillator: Oscillator,
+    pub initial: InitialState,
+}
+
+/// What to run: points × realisations, all with the same rig and friction law.
+#[derive(Clone, Debug)]
+pub struct EnsembleRequest<'a> {
+    pub points: &'a [PointSpec],
+    pub realisations_per_point: u32,
+    /// Realisation index of the first realisation of each point.
+    pub realisation_offset: u32,
+    pub seed: u64,
+    pub plan: RunPlan,
+    /// Budget of integration steps per dispatch.
+    pub steps_per_dispatch: u64,
+}
+
+fn params_for(osc: &Oscillator, request: &EnsembleRequest<'_>) -> Params {
+    let [seed_lo, seed_hi] = crate::rng::seed_key(request.seed);
+    Params {
+        mass_kg: osc.mass_kg as f32,
+        stiffness_n_per_m: osc.stiffness_n_per_m as f32,
+        damping_n_s_per_m: osc.damping_n_s_per_m as f32,
+        base_amplitude_m: osc.base_amplitude_m as f32,
+        friction_a: osc.friction_a as f32,
+        friction_b: osc.friction_b as f32,
+        friction_c_s_per_m: osc.friction_c_s_per_m as f32,
+        friction_d_s2_per_m2: osc.friction_d_s2_per_m2 as f32,
+        friction_sigma: osc.friction_sigma as f32,
+        normal_force_sigma_n: osc.normal_force_sigma_n as f32,
+        steps_per_period: osc.steps_per_period,
+        warmup_cycles: request.plan.warmup_cycles,
+        seed_lo,
+        seed_hi,
+        invocations: 0,
+        realisations_per_point: request.realisations_per_point,
+        realisation_offset: request.realisation_offset,
+        first_cycle: 0,
+        cycles: 0,
+        point_offset: 0,
+    }
+}
+
+impl GridPoint {
+    fn from_spec(spec: &PointSpec) -> GridPoint {
+        let o = &spec.oscillator;
+        GridPoint {
+            omega_rad_per_s: o.omega_rad_per_s as f32,
+            period_s: o.period_s as f32,
+            normal_force_mean_n: o.normal_force_mean_n as f32,
+            noise_interval_whole: (o.noise_interval_fixed >> 32) as u32,
+            noise_interval_frac: o.noise_interval_fixed as u32,
+            initial_x_m: spec.initial.x_m as f32,
+            initial_v_m_per_s: spec.initial.v_m_per_s as f32,
+            _pad: 0,
+        }
+    }
+}
+
+/// Checks that a request can run on the GPU: one rig and friction law for
+/// all points, noise intervals and periods that fit the kernel's counters.
+fn validate_request(request: &EnsembleRequest<'_>) -> Result<()> {
+    let first = request.points.first().ok_or_else(|| Error::setting("grid", "no grid points"))?;
+    if request.realisations_per_point == 0 {
+        return Err(Error::setting("realisations", "must be at least 1"));
+    }
+    let cycles = u64::from(request.plan.warmup_cycles) + u64::from(request.plan.measured_cycles);
+    for spec in request.points {
+        let o = &spec.oscillator;
+        let same_model = Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, ..o.clone() }
+            == Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, ..first.oscillator.clone() };
+        if !same_model {
+            return Err(Error::Mismatch("all grid points of one GPU ensemble must share the model".into()));
+        }
+        if o.noise_intervals_in(cycles) >= 1 << 32 || o.noise_interval_fixed >> 32 >= 1 << 31 {
+            return Err(Error::setting(
+                "run length",
+                format!(
+                    "{cycles} cycles at {:.4} Hz span {} noise intervals; the GPU kernel counts them in 32 bits",
+                    1.0 / o.period_s,
+                    o.noise_intervals_in(cycles)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Runs an ensemble on the GPU. Results are in invocation order: point-major,
+/// then realisation. `progress(done, total)` counts integrated cycles × paths.
+pub fn run_ensemble(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    kernels: &Kernels,
+    request: &EnsembleRequest<'_>,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Vec<PathResult>> {
+    validate_request(request)?;
+    let limits = device.limits();
+    let rpp = u64::from(request.realisations_per_point);
+    let total_invocations = request.points.len() as u64 * rpp;
+    let plan = request.plan;
+    let total_cycles = plan.warmup_cycles + plan.measured_cycles;
+    let steps = u64::from(request.points[0].oscillator.steps_per_period);
+    let binding_limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+    // Invocations per chunk: whole points, within the dispatch and binding limits.
+    let max_invocations = (u64::from(MAX_WORKGROUPS_PER_DIMENSION) * u64::from(WORKGROUP_SIZE))
+        .min(binding_limit / std::mem::size_of::<PathState>() as u64)
+        .min(binding_limit / 4);
+    let points_per_chunk = (max_invocations / rpp).max(1);
+    if rpp > max_invocations {
+        return Err(Error::setting(
+            "realisations",
+            format!("{rpp} realisations per point exceed one dispatch ({max_invocations}); split them with --shard"),
+        ));
+    }
+    let mut results = Vec::with_capacity(total_invocations as usize);
+    let work_total = total_invocations * u64::from(total_cycles);
+    let mut work_done = 0u64;
+    for chunk in request.points.chunks(points_per_chunk as usize){
+        let invocations = (chunk.len() as u64 * rpp) as u32;
+        let cycles_per_dispatch = (request.steps_per_dispatch / (u64::from(invocations) * steps))
+            .clamp(1, u64::from(total_cycles.max(1)))
+            .min(binding_limit / (4 * u64::from(invocations))) as u32;
+        let mut params = params_for(&chunk[0].oscillator, request);
+        params.invocations = invocations;
+        let grid: Vec<GridPoint> = chunk.iter().map(GridPoint::from_spec).collect();
+        let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grid points"),
+            contents: bytemuck::cast_slice(&grid),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let states = storage_buffer(device, "path states", u64::from(invocations) * std::mem::size_of::<PathState>() as u64);
+        let peaks_len = u64::from(invocations) * u64::from(cycles_per_dispatch);
+        let peaks = storage_buffer(device, "peaks", peaks_len * 4);
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ensemble"),
+            layout: &kernels.ensemble_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: points_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: states.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: peaks.as_entire_binding() },
+            ],
+        });
+        let dispatch = |pipeline: &wgpu::ComputePipeline, params: &Params| {
+            queue.write_buffer(&uniform, 0, bytemuck::bytes_of(params));
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(workgroups(invocations), 1, 1);
+            }
+            queue.submit([encoder.finish()]);
+        };
+        dispatch(&kernels.init_paths, &params);
+        let mut chunk_peaks: Vec<Vec<f64>> = vec![Vec::with_capacity(plan.measured_cycles as usize); invocations as usize];
+        let mut first_cycle = 0;
+        while first_cycle < total_cycles {
+            let cycles = cycles_per_dispatch.min(total_cycles - first_cycle);
+            params.first_cycle = first_cycle;
+            params.cycles = cycles;
+            dispatch(&kernels.run_cycles, &params);
+            let measured_from = plan.warmup_cycles.saturating_sub(first_cycle).min(cycles);
+            if measured_from < cycles {
+                let bytes = read_back(device, queue, &peaks, u64::from(invocations) * u64::from(cycles) * 4)?;
+                let values: &[f32] = bytemuck::cast_slice(&bytes);
+                for (n, path_peaks) in chunk_peaks.iter_mut().enumerate() {
+                    let row = &values[n * cycles as usize..(n + 1) * cycles as usize];
+                    path_peaks.extend(row[measured_from as usize..].iter().map(|&p| f64::from(p)));
+                }
+            } else {
+                device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+            }
+            first_cycle += cycles;
+            work_done += u64::from(invocations) * u64::from(cycles);
+            progress(work_done, work_total);
+        }
+        let state_bytes = read_back(device, queue, &states, u64::from(invocations) * std::mem::size_of::<PathState>() as u64)?;
+        let final_states: &[PathState] = bytemuck::cast_slice(&state_bytes);
+        if let Some(short) = final_states.iter().position(|s| s.period != total_cycles) {
+            return Err(Error::Gpu(format!(
+                "the driver ended a dispatch early: path {short} completed {} of {total_cycles} cycles; \
+                 lower the steps per dispatch",
+                final_states[short].period
+            )));
+        }
+        for (peaks_m, state) in chunk_peaks.into_iter().zip(final_states) {
+            results.push(PathResult { peaks_m, stick_time_s: f64::from(state.stick_time_s) });
+        }
+    }
+    Ok(results)
+}
