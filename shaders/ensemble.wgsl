@@ -190,6 +190,23 @@ fn stick_or_slip(t_local_s: f32) -> i32 {
     return select(-1, 1, force > 0.0);
 }
 
+// Entering cos(θ) >= C+ happens at θ = 2πn − acos(C+); entering
+// cos(θ) <= C− at θ = 2πn + acos(C−). Keeps `best` unless this entry is earlier.
+fn earliest_entry(best: vec2<f32>, sign: f32, phase_a: f32, reach: f32, t_a: f32, t_b: f32) -> vec2<f32> {
+    let level = (path.x_m + sign * reach) / params.base_amplitude_m;
+    if (level < -1.0 || level > 1.0) {
+        return best;
+    }
+    let w = point.omega_rad_per_s;
+    let base = -sign * acos(level);
+    let n = ceil((phase_a - base) / TAU);
+    let t = (base + n * TAU) / w;
+    if (t <= t_b && (best.y == 0.0 || t < best.x)) {
+        return vec2<f32>(max(t, t_a), sign);
+    }
+    return best;
+}
+
 // Earliest (time, direction) of breakaway in [t_a, t_b]; direction 0 = none.
 fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
     let force = spring_force(t_a, path.x_m);
@@ -203,23 +220,11 @@ fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
     if (params.base_amplitude_m == 0.0) {
         return vec2<f32>(t_b, 0.0);
     }
-    let w = point.omega_rad_per_s;
-    let phase_a = w * t_a;
+    let phase_a = point.omega_rad_per_s * t_a;
     let reach = threshold / params.stiffness_n_per_m;
     var best = vec2<f32>(t_b, 0.0);
-    for (var j = 0; j < 2; j++) {
-        let sign = select(-1.0, 1.0, j == 0);
-        let level = (path.x_m + sign * reach) / params.base_amplitude_m;
-        if (level < -1.0 || level > 1.0) {
-            continue;
-        }
-        let base = -sign * acos(level);
-        let n = ceil((phase_a - base) / TAU);
-        let t = (base + n * TAU) / w;
-        if (t <= t_b && (best.y == 0.0 || t < best.x)) {
-            best = vec2<f32>(max(t, t_a), sign);
-        }
-    }
+    best = earliest_entry(best, 1.0, phase_a, reach, t_a, t_b);
+    best = earliest_entry(best, -1.0, phase_a, reach, t_a, t_b);
     return best;
 }
 
@@ -302,7 +307,11 @@ fn run_period(measuring: bool) {
             }
         }
     }
-    path.period += 1u;
+    // Counted only when the step loop really finished: a loop ended early by
+    // the driver leaves the count short, and the host refuses the result.
+    if (step == steps) {
+        path.period += 1u;
+    }
 }
 
 fn load_invocation(n: u32) {

@@ -25,18 +25,35 @@ fn mulhilo(a: u32, b: u32) -> vec2<u32> {
     return vec2<u32>(hi, lo);
 }
 
+fn philox_round(c: vec4<u32>, k: vec2<u32>) -> vec4<u32> {
+    let p0 = mulhilo(PHILOX_M0, c.x);
+    let p1 = mulhilo(PHILOX_M1, c.z);
+    return vec4<u32>(p1.x ^ c.y ^ k.x, p1.y, p0.x ^ c.w ^ k.y, p0.y);
+}
+
+// Ten rounds, unrolled: llvmpipe (lavapipe) ends every loop of an invocation
+// after 65535 iterations in total, so hot paths avoid loops.
 fn philox4x32_10(counter: vec4<u32>, key: vec2<u32>) -> vec4<u32> {
-    var c = counter;
-    var k = key;
-    for (var round = 0u; round < 10u; round++) {
-        if (round > 0u) {
-            k = k + vec2<u32>(PHILOX_W0, PHILOX_W1);
-        }
-        let p0 = mulhilo(PHILOX_M0, c.x);
-        let p1 = mulhilo(PHILOX_M1, c.z);
-        c = vec4<u32>(p1.x ^ c.y ^ k.x, p1.y, p0.x ^ c.w ^ k.y, p0.y);
-    }
-    return c;
+    let bump = vec2<u32>(PHILOX_W0, PHILOX_W1);
+    var c = philox_round(counter, key);
+    var k = key + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    c = philox_round(c, k);
+    k = k + bump;
+    return philox_round(c, k);
 }
 
 // Uniform on (0, 1) from the top 24 bits: exact in f32.

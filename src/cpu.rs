@@ -260,25 +260,25 @@ impl<'a> Path<'a> {
         if o.base_amplitude_m == 0.0 {
             return None;
         }
-        let w = o.omega_rad_per_s;
-        let phase_a = w * t_a;
+        let phase_a = o.omega_rad_per_s * t_a;
         let reach = threshold / o.stiffness_n_per_m;
-        let mut best: Option<(f64, i8)> = None;
-        // Entering cos(θ) >= C+ happens at θ = 2πn − acos(C+);
-        // entering cos(θ) <= C− happens at θ = 2πn + acos(C−).
-        for (level, sign) in [((self.x_m + reach) / o.base_amplitude_m, 1i8), ((self.x_m - reach) / o.base_amplitude_m, -1i8)] {
-            if !(-1.0..=1.0).contains(&level) {
-                continue;
-            }
-            let base = if sign > 0 { -level.acos() } else { level.acos() };
-            let n = ((phase_a - base) / std::f64::consts::TAU).ceil();
-            let phase = base + n * std::f64::consts::TAU;
-            let t = phase / w;
-            if t <= t_b && best.is_none_or(|(tb, _)| t < tb) {
-                best = Some((t.max(t_a), sign));
-            }
+        let best = self.earliest_entry(None, 1, phase_a, reach, t_b);
+        self.earliest_entry(best, -1, phase_a, reach, t_b).map(|(t, sign)| (t.max(t_a), sign))
+    }
+
+    /// Entering `cos(θ) >= C+` happens at `θ = 2πn − acos(C+)`; entering
+    /// `cos(θ) <= C−` at `θ = 2πn + acos(C−)`. Keeps `best` unless this
+    /// direction's entry is earlier.
+    fn earliest_entry(&self, best: Option<(f64, i8)>, sign: i8, phase_a: f64, reach: f64, t_b: f64) -> Option<(f64, i8)> {
+        let o = self.osc;
+        let level = (self.x_m + f64::from(sign) * reach) / o.base_amplitude_m;
+        if !(-1.0..=1.0).contains(&level) {
+            return best;
         }
-        best
+        let base = -f64::from(sign) * level.acos();
+        let n = ((phase_a - base) / std::f64::consts::TAU).ceil();
+        let t = (base + n * std::f64::consts::TAU) / o.omega_rad_per_s;
+        if t <= t_b && best.is_none_or(|(tb, _)| t < tb) { Some((t, sign)) } else { best }
     }
 
     /// Advances from `t_a` to `t_b` (local times in the period) with the
@@ -390,19 +390,18 @@ pub struct Sampler {
     pub interval_s: f64,
     /// Samples so far.
     pub samples: Vec<Sample>,
-    /// Samples before this time are not recorded, s.
+    /// Time of the first sample, s.
     pub start_s: f64,
 }
 
 impl Sampler {
-    /// A sampler recording from `start_s` onwards every `interval_s`.
+    /// A sampler recording at `start_s + i * interval_s`.
     pub fn new(interval_s: f64, start_s: f64) -> Self {
         Sampler { interval_s, samples: Vec::new(), start_s }
     }
 
     fn next_time_s(&self) -> f64 {
-        let first = (self.start_s / self.interval_s).ceil();
-        (first + self.samples.len() as f64) * self.interval_s
+        self.start_s + self.samples.len() as f64 * self.interval_s
     }
 
     fn push(&mut self, sample: Sample) {

@@ -21,10 +21,28 @@ pub const PHILOX_CHECK_WGSL: &str =
 pub const WORKGROUP_SIZE: u32 = 64;
 /// Most workgroups per dispatch dimension (WebGPU's guaranteed limit).
 const MAX_WORKGROUPS_PER_DIMENSION: u32 = 65_535;
+/// Estimated loop iterations one invocation may run per dispatch.
+///
+/// llvmpipe (lavapipe) bounds loops with a counter of 65535 iterations and
+/// then silently leaves every loop. The counter is not simply per
+/// invocation: divergent SIMD lanes and the invocations of a workgroup share
+/// it, so a dispatch of ~28 cycles at 7 Hz (≈ 9·10^3 estimated iterations per
+/// invocation) was cut short while ~25 cycles passed. Dispatches stay below
+/// 8192 estimated iterations, and every result is checked: each path counts
+/// only the periods whose step loop really finished, and the host refuses a
+/// dispatch with a short count.
+pub const LOOP_ITERATIONS_PER_DISPATCH: u64 = 8_192;
+
+/// Upper estimate of one invocation's loop iterations per excitation period:
+/// the step loop and the segment loop run once per step and per noise
+/// boundary, plus root finding at a few stick/slip events.
+pub fn loop_iterations_per_cycle(osc: &Oscillator) -> u64 {
+    let boundaries = (1u64 << 32).div_ceil(osc.noise_interval_fixed) + 1;
+    2 * (u64::from(osc.steps_per_period) + boundaries) + 400
+}
+
 /// Integration steps (invocations × steps) per dispatch. Keeps each
-/// submission near 0.1 s on lavapipe and far below desktop drivers'
-/// watchdogs. (lavapipe was seen to end a 1.8·10^7-step dispatch early
-/// without an error; [`run_ensemble`] checks every path's cycle count.)
+/// submission near 0.1 s on lavapipe and far below desktop drivers' watchdogs.
 pub const DEFAULT_STEPS_PER_DISPATCH: u64 = 1 << 22;
 
 /// Uniform parameters of `ensemble.wgsl` (struct `Params`).
@@ -490,7 +508,9 @@ pub fn run_ensemble(
     let mut work_done = 0u64;
     for chunk in request.points.chunks(points_per_chunk as usize){
         let invocations = (chunk.len() as u64 * rpp) as u32;
+        let loop_bound = chunk.iter().map(|p| loop_iterations_per_cycle(&p.oscillator)).max().unwrap_or(1);
         let cycles_per_dispatch = (request.steps_per_dispatch / (u64::from(invocations) * steps))
+            .min(LOOP_ITERATIONS_PER_DISPATCH / loop_bound)
             .clamp(1, u64::from(total_cycles.max(1)))
             .min(binding_limit / (4 * u64::from(invocations))) as u32;
         let mut params = params_for(&chunk[0].oscillator, request);

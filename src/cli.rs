@@ -1,0 +1,269 @@
+//! The command line (the only place that uses `anyhow`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::cpu::{self, RunPlan, Sampler};
+use crate::io;
+use crate::model::{Condition, Model, Oscillator};
+use crate::sweep::{self, Backend, BackendChoice, Grid, SweepSettings};
+
+#[derive(Parser, Debug)]
+#[command(name = "stickslip", version, about = "Ensembles of a stochastic stick-slip friction oscillator on the GPU, checked against an exact CPU reference")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Simulate one condition and write time-series records (run files + manifest.json).
+    Simulate(SimulateArgs),
+    /// Run a frequency × normal-force grid and write per-point peak statistics (sweep.csv).
+    Sweep(SweepArgs),
+}
+
+#[derive(Args, Debug)]
+struct ModelArgs {
+    /// Model file (TOML); without it, the embedded paper rig.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Override one model parameter by its dotted key, e.g. friction.a=0.3 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+impl ModelArgs {
+    fn load(&self) -> Result<Model> {
+        Ok(match &self.config {
+            Some(path) => Model::from_file(path, &self.set)?,
+            None => Model::paper_rig(&self.set)?,
+        })
+    }
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum BackendArg {
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+impl From<BackendArg> for BackendChoice {
+    fn from(b: BackendArg) -> Self {
+        match b {
+            BackendArg::Auto => BackendChoice::Auto,
+            BackendArg::Gpu => BackendChoice::Gpu,
+            BackendArg::Cpu => BackendChoice::Cpu,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+struct SimulateArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Excitation frequency, Hz.
+    #[arg(long, default_value_t = 7.0)]
+    frequency: f64,
+    /// Nominal normal force, N.
+    #[arg(long, default_value_t = 16.39)]
+    normal_force: f64,
+    /// Number of realisations (one run file each).
+    #[arg(long, default_value_t = 3)]
+    realisations: u32,
+    /// Record length after warm-up, s.
+    #[arg(long, default_value_t = 50.0)]
+    duration: f64,
+    /// Sampling rate of the records, Hz.
+    #[arg(long, default_value_t = 600.0)]
+    sample_rate: f64,
+    /// Excitation periods discarded before recording.
+    #[arg(long, default_value_t = 100)]
+    warmup_cycles: u32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory (created; run files and manifest.json go here).
+    #[arg(long, default_value = "out/simulate")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct SweepArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Excitation frequencies, Hz: a comma list or START:STOP:COUNT.
+    #[arg(long, default_value = "5:15:41")]
+    frequencies: String,
+    /// Nominal normal forces, N: a comma list or START:STOP:COUNT.
+    #[arg(long, default_value = "4,8,12,16.39")]
+    normal_forces: String,
+    /// Realisations per grid point.
+    #[arg(long, default_value_t = 64)]
+    realisations: u32,
+    /// Excitation periods discarded before measuring.
+    #[arg(long, default_value_t = 100)]
+    warmup_cycles: u32,
+    /// Measured excitation periods per realisation (one peak each).
+    #[arg(long, default_value_t = 100)]
+    cycles: u32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory.
+    #[arg(long, default_value = "out/sweep")]
+    out: PathBuf,
+    /// Where to run: a GPU if there is one (else lavapipe, else the CPU), a GPU, or the CPU reference.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+    /// Integration steps per GPU dispatch (bounds each submission's run time).
+    #[arg(long, default_value_t = crate::gpu::DEFAULT_STEPS_PER_DISPATCH)]
+    steps_per_dispatch: u64,
+}
+
+/// Runs the command line; returns the process exit code.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(args) => simulate(args),
+        Command::Sweep(args) => run_sweep(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn progress_bar(total: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
+
+fn simulate(args: SimulateArgs) -> Result<()> {
+    let model = args.model.load()?;
+    let condition = Condition { excitation_frequency_hz: args.frequency, normal_force_n: args.normal_force };
+    let osc = Oscillator::new(&model, condition)?;
+    if args.realisations == 0 {
+        anyhow::bail!("invalid --realisations: must be at least 1");
+    }
+    if !(args.duration.is_finite() && args.duration > 0.0) {
+        anyhow::bail!("invalid --duration {}: must be > 0 s", args.duration);
+    }
+    if !(args.sample_rate.is_finite() && args.sample_rate > 0.0) {
+        anyhow::bail!("invalid --sample-rate {}: must be > 0 Hz", args.sample_rate);
+    }
+    let samples_per_run = (args.duration * args.sample_rate).floor() as usize;
+    let measured_cycles = (args.duration * args.frequency).ceil() as u32 + 1;
+    let plan = RunPlan { warmup_cycles: args.warmup_cycles, measured_cycles };
+    let record_start_s = f64::from(args.warmup_cycles) * osc.period_s;
+    io::create_dir(&args.out)?;
+    let initial = sweep::initial_state(&model, condition);
+    let mut runs = Vec::new();
+    for r in 0..args.realisations {
+        let mut sampler = Sampler::new(1.0 / args.sample_rate, record_start_s);
+        cpu::simulate_path(&osc, args.seed, r, plan, initial, Some(&mut sampler));
+        let mut samples = sampler.samples;
+        samples.truncate(samples_per_run);
+        for s in &mut samples {
+            s.t_s -= record_start_s;
+        }
+        let file = format!("run-{:.3}hz-{:.3}n-r{r:03}.csv", args.frequency, args.normal_force);
+        io::write_run_file(&args.out.join(&file), &samples)?;
+        runs.push(io::RunEntry {
+            file,
+            excitation_frequency_hz: args.frequency,
+            excitation_amplitude_m: model.excitation.amplitude_m,
+            normal_force_n: args.normal_force,
+        });
+    }
+    let description = format!("simulated by stickslip {} (CPU f64 reference), seed {}", env!("CARGO_PKG_VERSION"), args.seed);
+    io::write_manifest(&args.out, &description, &model, &runs)?;
+    io::write_atomically(&args.out.join("model.toml"), |w| w.write_all(model.to_toml_string().as_bytes()))?;
+    println!("wrote {} run files of {samples_per_run} samples to {}", runs.len(), args.out.display());
+    Ok(())
+}
+
+fn run_sweep(args: SweepArgs) -> Result<()> {
+    let model = args.model.load()?;
+    let grid = Grid {
+        frequencies_hz: sweep::parse_list("--frequencies", &args.frequencies)?,
+        normal_forces_n: sweep::parse_list("--normal-forces", &args.normal_forces)?,
+    };
+    let conditions = grid.conditions();
+    for c in &conditions {
+        Oscillator::new(&model, *c)?;
+    }
+    let settings = SweepSettings {
+        realisations: args.realisations,
+        plan: RunPlan { warmup_cycles: args.warmup_cycles, measured_cycles: args.cycles },
+        seed: args.seed,
+        steps_per_dispatch: args.steps_per_dispatch,
+    };
+    settings.validate()?;
+    let (backend, description) = Backend::open(args.backend.into())?;
+    eprintln!("backend: {description}");
+    let started = Instant::now();
+    let bar = progress_bar(1, "sweep");
+    let stats = sweep::run_sweep(&model, &conditions, &settings, &backend, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    io::create_dir(&args.out)?;
+    let csv = args.out.join("sweep.csv");
+    sweep::write_sweep_csv(&csv, &stats)?;
+    write_sidecar(&args.out.join("sweep.json"), &model, &grid, &settings, &backend, &description, elapsed)?;
+    eprintln!(
+        "{} grid points × {} realisations × {} cycles in {elapsed:.1} s; wrote {}",
+        conditions.len(),
+        settings.realisations,
+        settings.plan.measured_cycles,
+        csv.display()
+    );
+    Ok(())
+}
+
+fn write_sidecar(
+    path: &Path,
+    model: &Model,
+    grid: &Grid,
+    settings: &SweepSettings,
+    backend: &Backend,
+    description: &str,
+    elapsed_s: f64,
+) -> Result<()> {
+    let sidecar = serde_json::json!({
+        "format": "stickslip-sweep/1",
+        "stickslip_version": env!("CARGO_PKG_VERSION"),
+        "model": model,
+        "model_toml": model.to_toml_string(),
+        "frequencies_hz": grid.frequencies_hz,
+        "normal_forces_n": grid.normal_forces_n,
+        "realisations": settings.realisations,
+        "warmup_cycles": settings.plan.warmup_cycles,
+        "measured_cycles": settings.plan.measured_cycles,
+        "seed": settings.seed,
+        "backend": backend.name(),
+        "adapter": description,
+        "timings": { "run_s": elapsed_s },
+    });
+    io::write_atomically(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &sidecar)?;
+        writeln!(w)
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
