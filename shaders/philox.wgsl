@@ -56,9 +56,9 @@ fn philox4x32_10(counter: vec4<u32>, key: vec2<u32>) -> vec4<u32> {
     return philox_round(c, k);
 }
 
-// Uniform on (0, 1) from the top 24 bits: exact in f32.
+// Uniform on (0, 1) from the top 23 bits: 24 significant bits, exact in f32.
 fn uniform_open(word: u32) -> f32 {
-    return (f32(word >> 8u) + 0.5) * (1.0 / 16777216.0);
+    return (f32(word >> 9u) + 0.5) * (1.0 / 8388608.0);
 }
 
 fn box_muller(u1: f32, u2: f32) -> f32 {

@@ -12,7 +12,7 @@ struct CheckParams {
 @group(0) @binding(1) var<storage, read_write> words: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read_write> normals: array<f32>;
 
-// The counter/key of check index i; src/gpu.rs::philox_check_key is the same.
+// The counter/key of check index i; src/gpu.rs::philox_check_input is the same.
 fn check_counter(i: u32) -> vec4<u32> {
     return vec4<u32>(i, i * 0x9E3779B9u, ~i, i ^ 0x85EBCA6Bu);
 }

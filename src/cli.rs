@@ -127,6 +127,12 @@ struct SweepArgs {
 
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // Mesa's Vulkan loader probes Wayland and prints a misleading
+        // "error: XDG_RUNTIME_DIR is invalid" on headless machines.
+        // SAFETY: no other thread exists yet.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate(args),

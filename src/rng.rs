@@ -51,11 +51,12 @@ pub fn noise_counter(realisation: u32, stream: u32, interval: u64) -> [u32; 4] {
     [interval as u32, (interval >> 32) as u32, realisation, stream]
 }
 
-/// Uniform on the open interval (0, 1) from the top 24 bits of a word:
-/// `(w >> 8) + 0.5` over 2^24. Exact in f32 and f64, so CPU and GPU agree bit for bit.
+/// Uniform on the open interval (0, 1) from the top 23 bits of a word:
+/// `(w >> 9) + 0.5` over 2^23. The value needs 24 significant bits, so it is
+/// exact in f32 as in f64: CPU and GPU agree bit for bit, and 1.0 never occurs.
 #[inline]
 pub fn uniform_open(word: u32) -> f64 {
-    ((word >> 8) as f64 + 0.5) * (1.0 / 16_777_216.0)
+    ((word >> 9) as f64 + 0.5) * (1.0 / 8_388_608.0)
 }
 
 /// Standard Gaussian from two uniforms (Box–Muller, cosine branch).
