@@ -28,6 +28,9 @@ struct Params {
     first_cycle: u32,
     cycles: u32,
     point_offset: u32,
+    // 1: also write every measured peak to `peaks` (for path-by-path checks).
+    record_peaks: u32,
+    histogram_bins: u32,
 }
 
 struct GridPoint {
@@ -38,6 +41,12 @@ struct GridPoint {
     noise_interval_frac: u32,
     initial_x_m: f32,
     initial_v_m_per_s: f32,
+    // Reduction: peaks are quantised as round((x − centre) · inv_quantum)
+    // and binned from histogram_lo_m at histogram_bins_per_m (src/reduce.rs).
+    peak_centre_m: f32,
+    inv_quantum_per_m: f32,
+    histogram_lo_m: f32,
+    histogram_bins_per_m: f32,
     _pad: u32,
 }
 
@@ -60,6 +69,14 @@ struct PathState {
 @group(0) @binding(1) var<storage, read> points: array<GridPoint>;
 @group(0) @binding(2) var<storage, read_write> states: array<PathState>;
 @group(0) @binding(3) var<storage, read_write> peaks: array<f32>;
+// Per grid point: ACCUMULATOR_WORDS words of exact integer sums.
+@group(0) @binding(4) var<storage, read_write> accumulators: array<atomic<u32>>;
+// Per grid point: histogram_bins counts (first: below range, last: above).
+@group(0) @binding(5) var<storage, read_write> histograms: array<atomic<u32>>;
+
+// Accumulator words: 0-1 peaks (u64), 2-3 Σ(q + 2^31) (u64), 4-6 Σq² (u96),
+// 7-8 stuck time in T/2^20 (u64), 9 clamped peaks, 10-11 unused.
+const ACCUMULATOR_WORDS: u32 = 12u;
 
 const MODE_STICK: i32 = 0;
 const MAX_EVENTS_PER_SEGMENT: u32 = 16u;
@@ -314,9 +331,94 @@ fn run_period(measuring: bool) {
     }
 }
 
+// This invocation's sums over the dispatch, flushed once at its end.
+struct Tally {
+    peaks: u32,
+    sum_biased: vec2<u32>,
+    sum_squares: vec3<u32>,
+    stick_units: vec2<u32>,
+    clamped: u32,
+}
+
+var<private> tally: Tally;
+var<private> point_index: u32;
+
+fn add_u64(a: vec2<u32>, b: u32) -> vec2<u32> {
+    let lo = a.x + b;
+    return vec2<u32>(lo, a.y + select(0u, 1u, lo < b));
+}
+
+// a (96 bits) + b (64 bits: lo, hi)
+fn add_u96(a: vec3<u32>, b: vec2<u32>) -> vec3<u32> {
+    let lo = a.x + b.x;
+    let carry0 = select(0u, 1u, lo < b.x);
+    let mid0 = a.y + b.y;
+    let carry1 = select(0u, 1u, mid0 < b.y);
+    let mid = mid0 + carry0;
+    let carry2 = select(0u, 1u, mid < carry0);
+    return vec3<u32>(lo, mid, a.z + carry1 + carry2);
+}
+
+// The histogram bin of a peak; mirrors PeakRange::bin.
+fn histogram_bin(peak_m: f32) -> u32 {
+    let inner = params.histogram_bins - 2u;
+    let position = (peak_m - point.histogram_lo_m) * point.histogram_bins_per_m;
+    if (position < 0.0) {
+        return 0u;
+    }
+    if (position >= f32(inner)) {
+        return inner + 1u;
+    }
+    return u32(position) + 1u;
+}
+
+// Quantises and tallies one measured period; mirrors PointAccumulator::add_period.
+fn tally_period(peak_m: f32, stuck_share: f32) {
+    let limit = 2147483520.0;
+    let q_real = round((peak_m - point.peak_centre_m) * point.inv_quantum_per_m);
+    let q = i32(clamp(q_real, -limit, limit));
+    tally.peaks += 1u;
+    tally.sum_biased = add_u64(tally.sum_biased, bitcast<u32>(q) ^ 0x80000000u);
+    let magnitude = u32(abs(q));
+    let square = mulhilo(magnitude, magnitude);
+    tally.sum_squares = add_u96(tally.sum_squares, vec2<u32>(square.y, square.x));
+    tally.stick_units = add_u64(tally.stick_units, u32(round(stuck_share * 1048576.0)));
+    tally.clamped += select(0u, 1u, abs(q_real) > limit);
+    atomicAdd(&histograms[point_index * params.histogram_bins + histogram_bin(peak_m)], 1u);
+}
+
+// Exact multi-word atomic addition: each word's carry is added to the next.
+fn atomic_add_u64(word: u32, value: vec2<u32>) {
+    let old = atomicAdd(&accumulators[word], value.x);
+    let carry = select(0u, 1u, old + value.x < old);
+    atomicAdd(&accumulators[word + 1u], value.y + carry);
+}
+
+fn atomic_add_u96(word: u32, value: vec3<u32>) {
+    let old0 = atomicAdd(&accumulators[word], value.x);
+    let carry0 = select(0u, 1u, old0 + value.x < old0);
+    let mid = value.y + carry0;
+    let carry_mid = select(0u, 1u, mid < carry0);
+    let old1 = atomicAdd(&accumulators[word + 1u], mid);
+    let carry1 = select(0u, 1u, old1 + mid < old1) + carry_mid;
+    atomicAdd(&accumulators[word + 2u], value.z + carry1);
+}
+
+fn flush_tally() {
+    if (tally.peaks == 0u) {
+        return;
+    }
+    let base = point_index * ACCUMULATOR_WORDS;
+    atomic_add_u64(base, vec2<u32>(tally.peaks, 0u));
+    atomic_add_u64(base + 2u, tally.sum_biased);
+    atomic_add_u96(base + 4u, tally.sum_squares);
+    atomic_add_u64(base + 7u, tally.stick_units);
+    atomicAdd(&accumulators[base + 9u], tally.clamped);
+}
+
 fn load_invocation(n: u32) {
-    let p = params.point_offset + n / params.realisations_per_point;
-    point = points[p];
+    point_index = n / params.realisations_per_point;
+    point = points[params.point_offset + point_index];
     realisation = params.realisation_offset + n % params.realisations_per_point;
     key = vec2<u32>(params.seed_lo, params.seed_hi);
 }
@@ -358,14 +460,19 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = states[n];
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s, 0.0, 0.0);
+    tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u);
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;
         run_period(measuring);
         if (measuring) {
-            peaks[n * params.cycles + c] = path.period_max_x_m;
+            if (params.record_peaks != 0u) {
+                peaks[n * params.cycles + c] = path.period_max_x_m;
+            }
+            tally_period(path.period_max_x_m, path.period_stick_s / point.period_s);
             path.stick_time_s += path.period_stick_s;
         }
     }
+    flush_tally();
     states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
         path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
         path.normal_force_n, path.stick_time_s, 0u, 0u);

@@ -223,7 +223,7 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
     eprintln!("backend: {description}");
     let started = Instant::now();
     let bar = progress_bar(1, "sweep");
-    let stats = sweep::run_sweep(&model, &conditions, &settings, &backend, &mut |done, total| {
+    let result = sweep::run_sweep(&model, &conditions, &settings, &backend, &mut |done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })?;
@@ -231,7 +231,7 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
     let elapsed = started.elapsed().as_secs_f64();
     io::create_dir(&args.out)?;
     let csv = args.out.join("sweep.csv");
-    sweep::write_sweep_csv(&csv, &stats)?;
+    sweep::write_sweep_csv(&csv, &result.rows())?;
     write_sidecar(&args.out.join("sweep.json"), &model, &grid, &settings, &backend, &description, elapsed)?;
     eprintln!(
         "{} grid points × {} realisations × {} cycles in {elapsed:.1} s; wrote {}",

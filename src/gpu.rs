@@ -10,6 +10,7 @@ use wgpu::util::DeviceExt;
 use crate::cpu::{InitialState, PathResult, RunPlan};
 use crate::error::{Error, Result};
 use crate::model::Oscillator;
+use crate::reduce::{PeakRange, PointAccumulator, HISTOGRAM_BINS};
 
 /// The ensemble kernel: Philox plus the oscillator.
 pub const ENSEMBLE_WGSL: &str = concat!(include_str!("../shaders/philox.wgsl"), include_str!("../shaders/ensemble.wgsl"));
@@ -84,6 +85,10 @@ pub struct Params {
     pub cycles: u32,
     /// Index into the grid-point buffer of this dispatch's first point.
     pub point_offset: u32,
+    /// 1: also write every measured peak to the peaks buffer.
+    pub record_peaks: u32,
+    /// Histogram bins per point ([`crate::reduce::HISTOGRAM_BINS`]).
+    pub histogram_bins: u32,
 }
 
 /// One grid point as the kernel sees it (struct `GridPoint`).
@@ -104,6 +109,14 @@ pub struct GridPoint {
     pub initial_x_m: f32,
     /// m/s
     pub initial_v_m_per_s: f32,
+    /// Centre of the peak range, m.
+    pub peak_centre_m: f32,
+    /// 1 / quantisation step, 1/m.
+    pub inv_quantum_per_m: f32,
+    /// Lower edge of the first inner histogram bin, m.
+    pub histogram_lo_m: f32,
+    /// Inner histogram bins per metre, 1/m.
+    pub histogram_bins_per_m: f32,
     pub _pad: u32,
 }
 
@@ -201,7 +214,14 @@ impl Kernels {
         });
         let ensemble_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ensemble"),
-            entries: &[uniform_entry(0), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
+            entries: &[
+                uniform_entry(0),
+                storage_entry(1, true),
+                storage_entry(2, false),
+                storage_entry(3, false),
+                storage_entry(4, false),
+                storage_entry(5, false),
+            ],
         });
         let check = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("philox_check.wgsl"),
@@ -389,6 +409,17 @@ pub fn philox_check(
 pub struct PointSpec {
     pub oscillator: Oscillator,
     pub initial: InitialState,
+    /// Where the point's peaks are binned and quantised.
+    pub range: PeakRange,
+}
+
+/// What an ensemble produced.
+#[derive(Clone, Debug)]
+pub struct EnsembleOutput {
+    /// Every path's peaks, in invocation order, when the request asked for them.
+    pub paths: Option<Vec<PathResult>>,
+    /// Exact per-point sums, in point order.
+    pub points: Vec<PointAccumulator>,
 }
 
 /// What to run: points × realisations, all with the same rig and friction law.
@@ -402,6 +433,8 @@ pub struct EnsembleRequest<'a> {
     pub plan: RunPlan,
     /// Budget of integration steps per dispatch.
     pub steps_per_dispatch: u64,
+    /// Also return every path's per-cycle peaks (memory grows with the run).
+    pub record_peaks: bool,
 }
 
 fn params_for(osc: &Oscillator, request: &EnsembleRequest<'_>) -> Params {
@@ -427,6 +460,8 @@ fn params_for(osc: &Oscillator, request: &EnsembleRequest<'_>) -> Params {
         first_cycle: 0,
         cycles: 0,
         point_offset: 0,
+        record_peaks: u32::from(request.record_peaks),
+        histogram_bins: HISTOGRAM_BINS,
     }
 }
 
@@ -441,6 +476,10 @@ impl GridPoint {
             noise_interval_frac: o.noise_interval_fixed as u32,
             initial_x_m: spec.initial.x_m as f32,
             initial_v_m_per_s: spec.initial.v_m_per_s as f32,
+            peak_centre_m: spec.range.centre_f32(),
+            inv_quantum_per_m: spec.range.inv_quantum_f32(),
+            histogram_lo_m: spec.range.lo_m as f32,
+            histogram_bins_per_m: spec.range.bins_per_m_f32(),
             _pad: 0,
         }
     }
@@ -454,6 +493,9 @@ fn validate_request(request: &EnsembleRequest<'_>) -> Result<()> {
         return Err(Error::setting("realisations", "must be at least 1"));
     }
     let cycles = u64::from(request.plan.warmup_cycles) + u64::from(request.plan.measured_cycles);
+    if u64::from(request.realisations_per_point) * u64::from(request.plan.measured_cycles) >= 1 << 32 {
+        return Err(Error::setting("run size", "realisations × measured cycles per point must stay below 2^32"));
+    }
     for spec in request.points {
         let o = &spec.oscillator;
         let same_model = Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, ..o.clone() }
@@ -475,15 +517,38 @@ fn validate_request(request: &EnsembleRequest<'_>) -> Result<()> {
     Ok(())
 }
 
-/// Runs an ensemble on the GPU. Results are in invocation order: point-major,
-/// then realisation. `progress(done, total)` counts integrated cycles × paths.
+/// Words of one point's accumulator in `ensemble.wgsl`.
+const ACCUMULATOR_WORDS: usize = 12;
+
+/// Decodes one point's accumulator words and histogram.
+fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histogram: &[u32]) -> PointAccumulator {
+    let wide = |w: &[u32]| w.iter().rev().fold(0u128, |acc, &x| (acc << 32) | u128::from(x));
+    let peaks = wide(&words[0..2]) as u64;
+    let mut acc = PointAccumulator::new(range);
+    acc.realisations = u64::from(realisations);
+    acc.peaks = peaks;
+    acc.sum_q = wide(&words[2..4]) as i128 - (i128::from(peaks) << 31);
+    acc.sum_q2 = wide(&words[4..7]);
+    acc.stick_units = wide(&words[7..9]) as u64;
+    acc.clamped = u64::from(words[9]);
+    acc.histogram = histogram.iter().map(|&c| u64::from(c)).collect();
+    acc
+}
+
+/// Runs an ensemble on the GPU and reduces it per point, exactly, on the
+/// GPU. Paths (when recorded) are in invocation order: point-major, then
+/// realisation. `progress(done, total)` counts integrated cycles × paths.
+///
+/// Memory: points are processed in chunks of at most 2^20 invocations, so
+/// the GPU holds at most 48 MiB of path state plus 8 KiB of histogram and
+/// 48 B of sums per point of the chunk, whatever the grid size.
 pub fn run_ensemble(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     kernels: &Kernels,
     request: &EnsembleRequest<'_>,
     progress: &mut dyn FnMut(u64, u64),
-) -> Result<Vec<PathResult>> {
+) -> Result<EnsembleOutput> {
     validate_request(request)?;
     let limits = device.limits();
     let rpp = u64::from(request.realisations_per_point);
@@ -493,17 +558,19 @@ pub fn run_ensemble(
     let steps = u64::from(request.points[0].oscillator.steps_per_period);
     let binding_limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
     // Invocations per chunk: whole points, within the dispatch and binding limits.
-    let max_invocations = (u64::from(MAX_WORKGROUPS_PER_DIMENSION) * u64::from(WORKGROUP_SIZE))
+    let max_invocations = (1u64 << 20)
         .min(binding_limit / std::mem::size_of::<PathState>() as u64)
         .min(binding_limit / 4);
-    let points_per_chunk = (max_invocations / rpp).max(1);
+    let bytes_per_point = u64::from(HISTOGRAM_BINS) * 4;
+    let points_per_chunk = (max_invocations / rpp).max(1).min(binding_limit / bytes_per_point);
     if rpp > max_invocations {
         return Err(Error::setting(
             "realisations",
             format!("{rpp} realisations per point exceed one dispatch ({max_invocations}); split them with --shard"),
         ));
     }
-    let mut results = Vec::with_capacity(total_invocations as usize);
+    let mut results = Vec::with_capacity(if request.record_peaks { total_invocations as usize } else { 0 });
+    let mut accumulators = Vec::with_capacity(request.points.len());
     let work_total = total_invocations * u64::from(total_cycles);
     let mut work_done = 0u64;
     for chunk in request.points.chunks(points_per_chunk as usize){
@@ -528,8 +595,12 @@ pub fn run_ensemble(
             mapped_at_creation: false,
         });
         let states = storage_buffer(device, "path states", u64::from(invocations) * std::mem::size_of::<PathState>() as u64);
-        let peaks_len = u64::from(invocations) * u64::from(cycles_per_dispatch);
+        let peaks_len = if request.record_peaks { u64::from(invocations) * u64::from(cycles_per_dispatch) } else { 1 };
         let peaks = storage_buffer(device, "peaks", peaks_len * 4);
+        let sums_bytes = (chunk.len() * ACCUMULATOR_WORDS * 4) as u64;
+        let sums = storage_buffer(device, "point sums", sums_bytes);
+        let histogram_bytes = chunk.len() as u64 * bytes_per_point;
+        let histograms = storage_buffer(device, "histograms", histogram_bytes);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("ensemble"),
             layout: &kernels.ensemble_layout,
@@ -538,6 +609,8 @@ pub fn run_ensemble(
                 wgpu::BindGroupEntry { binding: 1, resource: points_buffer.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: states.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: peaks.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: sums.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: histograms.as_entire_binding() },
             ],
         });
         let dispatch = |pipeline: &wgpu::ComputePipeline, params: &Params| {
@@ -552,7 +625,11 @@ pub fn run_ensemble(
             queue.submit([encoder.finish()]);
         };
         dispatch(&kernels.init_paths, &params);
-        let mut chunk_peaks: Vec<Vec<f64>> = vec![Vec::with_capacity(plan.measured_cycles as usize); invocations as usize];
+        let mut chunk_peaks: Vec<Vec<f64>> = if request.record_peaks {
+            vec![Vec::with_capacity(plan.measured_cycles as usize); invocations as usize]
+        } else {
+            Vec::new()
+        };
         let mut first_cycle = 0;
         while first_cycle < total_cycles {
             let cycles = cycles_per_dispatch.min(total_cycles - first_cycle);
@@ -560,7 +637,7 @@ pub fn run_ensemble(
             params.cycles = cycles;
             dispatch(&kernels.run_cycles, &params);
             let measured_from = plan.warmup_cycles.saturating_sub(first_cycle).min(cycles);
-            if measured_from < cycles {
+            if request.record_peaks && measured_from < cycles {
                 let bytes = read_back(device, queue, &peaks, u64::from(invocations) * u64::from(cycles) * 4)?;
                 let values: &[f32] = bytemuck::cast_slice(&bytes);
                 for (n, path_peaks) in chunk_peaks.iter_mut().enumerate() {
@@ -583,9 +660,23 @@ pub fn run_ensemble(
                 final_states[short].period
             )));
         }
-        for (peaks_m, state) in chunk_peaks.into_iter().zip(final_states) {
-            results.push(PathResult { peaks_m, stick_time_s: f64::from(state.stick_time_s) });
+        if request.record_peaks {
+            for (peaks_m, state) in chunk_peaks.into_iter().zip(final_states) {
+                results.push(PathResult { peaks_m, stick_time_s: f64::from(state.stick_time_s) });
+            }
+        }
+        let sum_words = read_back(device, queue, &sums, sums_bytes)?;
+        let sum_words: &[u32] = bytemuck::cast_slice(&sum_words);
+        let histogram_words = read_back(device, queue, &histograms, histogram_bytes)?;
+        let histogram_words: &[u32] = bytemuck::cast_slice(&histogram_words);
+        for (i, spec) in chunk.iter().enumerate() {
+            accumulators.push(decode_accumulator(
+                spec.range,
+                request.realisations_per_point,
+                &sum_words[i * ACCUMULATOR_WORDS..(i + 1) * ACCUMULATOR_WORDS],
+                &histogram_words[i * HISTOGRAM_BINS as usize..(i + 1) * HISTOGRAM_BINS as usize],
+            ));
         }
     }
-    Ok(results)
+    Ok(EnsembleOutput { paths: request.record_peaks.then_some(results), points: accumulators })
 }

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::cpu::{self, InitialState, PathResult, RunPlan};
+use crate::cpu::{self, InitialState, RunPlan};
+use crate::reduce::{PeakRange, PointAccumulator};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuContext};
 use crate::io::write_atomically;
@@ -158,35 +159,6 @@ pub struct PointStats {
     pub stick_fraction: f64,
 }
 
-/// Linear-interpolation quantile of sorted data (type 7).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let h = (sorted.len() - 1) as f64 * q;
-    let (lo, frac) = (h.floor() as usize, h - h.floor());
-    if lo + 1 < sorted.len() { sorted[lo] + frac * (sorted[lo + 1] - sorted[lo]) } else { sorted[lo] }
-}
-
-/// Reduces one point's paths to statistics.
-pub fn point_stats(condition: Condition, paths: &[PathResult], measured_time_s: f64) -> PointStats {
-    let mut all: Vec<f64> = paths.iter().flat_map(|p| p.peaks_m.iter().copied()).collect();
-    let n = all.len() as f64;
-    let mean = all.iter().sum::<f64>() / n;
-    let var = if all.len() > 1 { all.iter().map(|p| (p - mean) * (p - mean)).sum::<f64>() / (n - 1.0) } else { 0.0 };
-    all.sort_by(f64::total_cmp);
-    let stick: f64 = paths.iter().map(|p| p.stick_time_s).sum();
-    PointStats {
-        excitation_frequency_hz: condition.excitation_frequency_hz,
-        normal_force_n: condition.normal_force_n,
-        realisations: paths.len() as u32,
-        peaks: all.len() as u64,
-        peak_mean_m: mean,
-        peak_var_m2: var,
-        peak_p05_m: quantile(&all, 0.05),
-        peak_p50_m: quantile(&all, 0.50),
-        peak_p95_m: quantile(&all, 0.95),
-        stick_fraction: stick / (measured_time_s * paths.len() as f64),
-    }
-}
-
 /// The default initial state at a grid point: the frictionless steady state.
 pub fn initial_state(model: &Model, condition: Condition) -> InitialState {
     let (x_m, v_m_per_s) = model.linear_steady_state_at_zero(condition.excitation_frequency_hz);
@@ -200,16 +172,19 @@ pub fn run_sweep(
     settings: &SweepSettings,
     backend: &Backend,
     progress: &mut dyn FnMut(u64, u64),
-) -> Result<Vec<PointStats>> {
+) -> Result<SweepResult> {
     settings.validate()?;
     let oscillators = conditions.iter().map(|&c| Oscillator::new(model, c)).collect::<Result<Vec<_>>>()?;
-    let rpp = settings.realisations as usize;
-    let paths: Vec<PathResult> = match backend {
+    let accumulators: Vec<PointAccumulator> = match backend {
         Backend::Gpu(ctx) => {
             let specs: Vec<gpu::PointSpec> = oscillators
                 .iter()
                 .zip(conditions)
-                .map(|(o, &c)| gpu::PointSpec { oscillator: o.clone(), initial: initial_state(model, c) })
+                .map(|(o, &c)| gpu::PointSpec {
+                    oscillator: o.clone(),
+                    initial: initial_state(model, c),
+                    range: PeakRange::for_point(model, c),
+                })
                 .collect();
             let request = gpu::EnsembleRequest {
                 points: &specs,
@@ -218,25 +193,42 @@ pub fn run_sweep(
                 seed: settings.seed,
                 plan: settings.plan,
                 steps_per_dispatch: settings.steps_per_dispatch,
+                record_peaks: false,
             };
-            gpu::run_ensemble(&ctx.device, &ctx.queue, &ctx.kernels, &request, progress)?
+            gpu::run_ensemble(&ctx.device, &ctx.queue, &ctx.kernels, &request, progress)?.points
         }
         Backend::Cpu => {
-            let total = (conditions.len() * rpp) as u64 * u64::from(settings.plan.warmup_cycles + settings.plan.measured_cycles);
-            let mut out = Vec::with_capacity(conditions.len() * rpp);
+            let total = conditions.len() as u64
+                * u64::from(settings.realisations)
+                * u64::from(settings.plan.warmup_cycles + settings.plan.measured_cycles);
+            let mut out = Vec::with_capacity(conditions.len());
             for (i, (o, &c)) in oscillators.iter().zip(conditions).enumerate() {
-                out.extend(cpu::simulate_ensemble(o, settings.seed, 0..settings.realisations, settings.plan, initial_state(model, c)));
+                let paths = cpu::simulate_ensemble(o, settings.seed, 0..settings.realisations, settings.plan, initial_state(model, c));
+                let mut acc = PointAccumulator::new(PeakRange::for_point(model, c));
+                for p in &paths {
+                    acc.add_path(&p.peaks_m, p.stick_time_s, o.period_s);
+                }
+                out.push(acc);
                 progress(total * (i as u64 + 1) / conditions.len() as u64, total);
             }
             out
         }
     };
-    Ok(conditions
-        .iter()
-        .zip(&oscillators)
-        .zip(paths.chunks(rpp))
-        .map(|((&c, o), chunk)| point_stats(c, chunk, f64::from(settings.plan.measured_cycles) * o.period_s))
-        .collect())
+    Ok(SweepResult { conditions: conditions.to_vec(), accumulators })
+}
+
+/// A finished sweep: per point, its condition and exact sums.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepResult {
+    pub conditions: Vec<Condition>,
+    pub accumulators: Vec<PointAccumulator>,
+}
+
+impl SweepResult {
+    /// The `sweep.csv` rows.
+    pub fn rows(&self) -> Vec<PointStats> {
+        self.conditions.iter().zip(&self.accumulators).map(|(&c, a)| a.stats(c)).collect()
+    }
 }
 
 /// The columns of `sweep.csv` (`interfaces.md`).
@@ -289,10 +281,4 @@ mod tests {
         assert!(parse_list("--normal-forces", "4,x").unwrap_err().to_string().contains("`x`"));
     }
 
-    #[test]
-    fn quantiles_interpolate() {
-        let data = [1.0, 2.0, 3.0, 4.0, 5.0];
-        assert_eq!(quantile(&data, 0.5), 3.0);
-        assert_eq!(quantile(&data, 0.05), 1.2);
-    }
 }

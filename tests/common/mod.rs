@@ -16,7 +16,8 @@ pub fn gpu() -> &'static GpuContext {
 /// Runs `realisations` paths of one point on the GPU.
 pub fn gpu_paths(osc: &Oscillator, initial: InitialState, seed: u64, realisations: u32, plan: RunPlan) -> Vec<PathResult> {
     let ctx = gpu();
-    let points = [PointSpec { oscillator: osc.clone(), initial }];
+    let range = stickslip::reduce::PeakRange { lo_m: -0.01, hi_m: 0.01 };
+    let points = [PointSpec { oscillator: osc.clone(), initial, range }];
     let request = gpu::EnsembleRequest {
         points: &points,
         realisations_per_point: realisations,
@@ -24,6 +25,10 @@ pub fn gpu_paths(osc: &Oscillator, initial: InitialState, seed: u64, realisation
         seed,
         plan,
         steps_per_dispatch: gpu::DEFAULT_STEPS_PER_DISPATCH,
+        record_peaks: true,
     };
-    gpu::run_ensemble(&ctx.device, &ctx.queue, &ctx.kernels, &request, &mut |_, _| {}).expect("GPU ensemble runs")
+    gpu::run_ensemble(&ctx.device, &ctx.queue, &ctx.kernels, &request, &mut |_, _| {})
+        .expect("GPU ensemble runs")
+        .paths
+        .expect("recorded paths")
 }
