@@ -11,7 +11,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::cpu::{self, RunPlan, Sampler};
 use crate::io;
 use crate::model::{Condition, Model, Oscillator};
-use crate::sweep::{self, Backend, BackendChoice, Grid, SweepSettings};
+use crate::plot;
+use crate::sweep::{self, Backend, BackendChoice, Grid, RunIdentity, Shard, SweepResult, SweepSettings};
 
 #[derive(Parser, Debug)]
 #[command(name = "stickslip", version, about = "Ensembles of a stochastic stick-slip friction oscillator on the GPU, checked against an exact CPU reference")]
@@ -24,8 +25,23 @@ struct Cli {
 enum Command {
     /// Simulate one condition and write time-series records (run files + manifest.json).
     Simulate(SimulateArgs),
-    /// Run a frequency × normal-force grid and write per-point peak statistics (sweep.csv).
+    /// Run a frequency × normal-force grid and write per-point peak statistics (sweep.csv) and plots.
     Sweep(SweepArgs),
+    /// Combine the outputs of `sweep --shard K/N` runs into what the unsharded run writes.
+    Merge(MergeArgs),
+}
+
+#[derive(Args, Debug)]
+struct MergeArgs {
+    /// Output directory for the merged result.
+    #[arg(long)]
+    out: PathBuf,
+    /// The shard output directories (any order).
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
+    #[arg(long, default_value_t = 7.0)]
+    fig8_frequency: f64,
 }
 
 #[derive(Args, Debug)]
@@ -123,6 +139,15 @@ struct SweepArgs {
     /// Integration steps per GPU dispatch (bounds each submission's run time).
     #[arg(long, default_value_t = crate::gpu::DEFAULT_STEPS_PER_DISPATCH)]
     steps_per_dispatch: u64,
+    /// Run only part K/N of the grid (zero-based); combine parts with `stickslip merge`.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
+    #[arg(long, default_value_t = 7.0)]
+    fig8_frequency: f64,
+    /// Skip the PNG/SVG plots.
+    #[arg(long)]
+    no_plots: bool,
 }
 
 /// Runs the command line; returns the process exit code.
@@ -137,6 +162,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(args) => simulate(args),
         Command::Sweep(args) => run_sweep(args),
+        Command::Merge(args) => merge(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -208,10 +234,15 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
         frequencies_hz: sweep::parse_list("--frequencies", &args.frequencies)?,
         normal_forces_n: sweep::parse_list("--normal-forces", &args.normal_forces)?,
     };
-    let conditions = grid.conditions();
-    for c in &conditions {
+    let shard = match &args.shard {
+        Some(text) => Shard::parse(text)?,
+        None => Shard::WHOLE,
+    };
+    let all_conditions = grid.conditions();
+    for c in &all_conditions {
         Oscillator::new(&model, *c)?;
     }
+    let conditions = &all_conditions[shard.points(all_conditions.len())];
     let settings = SweepSettings {
         realisations: args.realisations,
         plan: RunPlan { warmup_cycles: args.warmup_cycles, measured_cycles: args.cycles },
@@ -221,53 +252,91 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
     settings.validate()?;
     let (backend, description) = Backend::open(args.backend.into())?;
     eprintln!("backend: {description}");
+    if shard != Shard::WHOLE {
+        eprintln!("shard {}/{}: {} of {} grid points", shard.index, shard.count, conditions.len(), all_conditions.len());
+    }
     let started = Instant::now();
     let bar = progress_bar(1, "sweep");
-    let result = sweep::run_sweep(&model, &conditions, &settings, &backend, &mut |done, total| {
+    let result = sweep::run_sweep(&model, conditions, &settings, &backend, &mut |done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })?;
     bar.finish_and_clear();
-    let elapsed = started.elapsed().as_secs_f64();
-    io::create_dir(&args.out)?;
-    let csv = args.out.join("sweep.csv");
-    sweep::write_sweep_csv(&csv, &result.rows())?;
-    write_sidecar(&args.out.join("sweep.json"), &model, &grid, &settings, &backend, &description, elapsed)?;
+    let run_s = started.elapsed().as_secs_f64();
+    let identity = RunIdentity {
+        model_toml: model.to_toml_string(),
+        frequencies_hz: grid.frequencies_hz.clone(),
+        normal_forces_n: grid.normal_forces_n.clone(),
+        realisations: settings.realisations,
+        warmup_cycles: settings.plan.warmup_cycles,
+        measured_cycles: settings.plan.measured_cycles,
+        seed: settings.seed,
+        backend: backend.name().to_string(),
+    };
+    let timings = serde_json::json!({ "run_s": run_s });
+    write_outputs(&args.out, &model, &identity, shard, &result, &description, timings, (!args.no_plots).then_some(args.fig8_frequency))?;
     eprintln!(
-        "{} grid points × {} realisations × {} cycles in {elapsed:.1} s; wrote {}",
+        "{} grid points × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
         conditions.len(),
         settings.realisations,
         settings.plan.measured_cycles,
-        csv.display()
+        args.out.join("sweep.csv").display()
     );
     Ok(())
 }
 
-fn write_sidecar(
-    path: &Path,
+fn merge(args: MergeArgs) -> Result<()> {
+    let (identity, result) = sweep::merge_shards(&args.shards)?;
+    let model = Model::from_toml_str(&identity.model_toml, "merged shards", &[])?;
+    let description = format!("merged from {} shards", args.shards.len());
+    let timings = serde_json::json!({ "merged_shards": args.shards.len() });
+    write_outputs(&args.out, &model, &identity, Shard::WHOLE, &result, &description, timings, Some(args.fig8_frequency))?;
+    eprintln!("merged {} shards ({} grid points) into {}", args.shards.len(), result.conditions.len(), args.out.display());
+    Ok(())
+}
+
+/// Writes everything a sweep (or a merge) produces into `out`: sweep.csv,
+/// histograms.csv, accumulators.json, sweep.json and (optionally) the plots.
+#[allow(clippy::too_many_arguments)]
+fn write_outputs(
+    out: &Path,
     model: &Model,
-    grid: &Grid,
-    settings: &SweepSettings,
-    backend: &Backend,
+    identity: &RunIdentity,
+    shard: Shard,
+    result: &SweepResult,
     description: &str,
-    elapsed_s: f64,
+    timings: serde_json::Value,
+    plots_at_hz: Option<f64>,
 ) -> Result<()> {
+    io::create_dir(out)?;
+    sweep::write_sweep_csv(&out.join("sweep.csv"), &result.rows())?;
+    sweep::write_histograms_csv(&out.join("histograms.csv"), result)?;
+    sweep::write_accumulators(&out.join("accumulators.json"), &result.to_file(identity, shard))?;
+    let mut files = vec!["sweep.csv".to_string(), "histograms.csv".into(), "accumulators.json".into()];
+    if let Some(f) = plots_at_hz {
+        for path in plot::write_sweep_plots(out, result, f)? {
+            files.push(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        }
+    }
     let sidecar = serde_json::json!({
         "format": "stickslip-sweep/1",
         "stickslip_version": env!("CARGO_PKG_VERSION"),
         "model": model,
-        "model_toml": model.to_toml_string(),
-        "frequencies_hz": grid.frequencies_hz,
-        "normal_forces_n": grid.normal_forces_n,
-        "realisations": settings.realisations,
-        "warmup_cycles": settings.plan.warmup_cycles,
-        "measured_cycles": settings.plan.measured_cycles,
-        "seed": settings.seed,
-        "backend": backend.name(),
+        "model_toml": identity.model_toml,
+        "frequencies_hz": identity.frequencies_hz,
+        "normal_forces_n": identity.normal_forces_n,
+        "realisations": identity.realisations,
+        "warmup_cycles": identity.warmup_cycles,
+        "measured_cycles": identity.measured_cycles,
+        "seed": identity.seed,
+        "backend": identity.backend,
         "adapter": description,
-        "timings": { "run_s": elapsed_s },
+        "shard": shard,
+        "files": files,
+        "timings": timings,
     });
-    io::write_atomically(path, |w| {
+    let path = out.join("sweep.json");
+    io::write_atomically(&path, |w| {
         serde_json::to_writer_pretty(&mut *w, &sidecar)?;
         writeln!(w)
     })

@@ -262,10 +262,16 @@ impl GpuContext {
     /// Opens the best adapter: a hardware GPU if there is one, otherwise a
     /// software one (lavapipe) when `allow_software` is set.
     pub fn new(allow_software: bool) -> Result<GpuContext> {
-        pollster::block_on(Self::new_async(allow_software))
+        pollster::block_on(Self::new_async(allow_software, None))
     }
 
-    async fn new_async(allow_software: bool) -> Result<GpuContext> {
+    /// Like [`GpuContext::new`], but the device gets `limits` instead of
+    /// everything the adapter offers (tests use this to force chunking).
+    pub fn with_limits(allow_software: bool, limits: wgpu::Limits) -> Result<GpuContext> {
+        pollster::block_on(Self::new_async(allow_software, Some(limits)))
+    }
+
+    async fn new_async(allow_software: bool, limits: Option<wgpu::Limits>) -> Result<GpuContext> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
         let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
         let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
@@ -288,7 +294,7 @@ impl GpuContext {
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("stickslip"),
-                required_limits: adapter.limits(),
+                required_limits: limits.unwrap_or_else(|| adapter.limits()),
                 ..Default::default()
             })
             .await

@@ -7,6 +7,7 @@ pub mod error;
 pub mod gpu;
 pub mod io;
 pub mod model;
+pub mod plot;
 pub mod reduce;
 pub mod rng;
 pub mod sweep;

@@ -118,3 +118,86 @@ fn simulate_writes_a_measurement_set() {
     assert!(times.windows(2).all(|w| ((w[1] - w[0]) * 600.0 - 1.0).abs() < 1e-9), "uniform sampling");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+fn sweep_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut v = vec![
+        "sweep", "--out", out, "--frequencies", "6:8:5", "--normal-forces", "4,12,16.39", "--realisations", "16", "--cycles", "10",
+        "--warmup-cycles", "10",
+    ];
+    if !extra.contains(&"--seed") {
+        v.extend_from_slice(&["--seed", "9"]);
+    }
+    v.extend_from_slice(extra);
+    v
+}
+
+fn same_bytes(a: &Path, b: &Path, file: &str) {
+    let (x, y) = (std::fs::read(a.join(file)).unwrap(), std::fs::read(b.join(file)).unwrap());
+    assert!(x == y, "{file} differs between {} and {}", a.display(), b.display());
+}
+
+/// Shards merged equal the unsharded run byte for byte; plots are written.
+#[test]
+fn shards_merge_into_the_unsharded_run() {
+    let dir = scratch("shards");
+    let whole = dir.join("whole");
+    let (ok, err) = stickslip(&sweep_args(whole.to_str().unwrap(), &["--backend", "gpu"]));
+    assert!(ok, "{err}");
+    let mut shard_dirs = Vec::new();
+    for k in [2, 0, 1] {
+        let d = dir.join(format!("shard-{k}"));
+        let shard = format!("{k}/3");
+        let (ok, err) = stickslip(&sweep_args(d.to_str().unwrap(), &["--backend", "gpu", "--shard", &shard, "--no-plots"]));
+        assert!(ok, "{err}");
+        shard_dirs.push(d);
+    }
+    let merged = dir.join("merged");
+    let mut args = vec!["merge", "--out", merged.to_str().unwrap()];
+    args.extend(shard_dirs.iter().map(|d| d.to_str().unwrap()));
+    let (ok, err) = stickslip(&args);
+    assert!(ok, "{err}");
+    for f in ["sweep.csv", "histograms.csv", "accumulators.json"] {
+        same_bytes(&whole, &merged, f);
+    }
+    for f in ["fig9a.png", "fig9b.png", "fig8.png", "fig9a.svg", "fig9b.svg", "fig8.svg"] {
+        let bytes = std::fs::read(merged.join(f)).unwrap_or_else(|_| panic!("{f} written"));
+        assert!(bytes.len() > 1000, "{f} is only {} bytes", bytes.len());
+        if f.ends_with(".png") {
+            assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{f} is a PNG");
+        } else {
+            assert!(String::from_utf8_lossy(&bytes).contains("<svg"), "{f} is an SVG");
+        }
+    }
+    // A missing shard and a shard of another run are refused, naming the problem.
+    let (ok, err) = stickslip(&["merge", "--out", dir.join("m2").to_str().unwrap(), shard_dirs[0].to_str().unwrap(), shard_dirs[1].to_str().unwrap()]);
+    assert!(!ok && err.contains("missing"), "{err}");
+    let other = dir.join("other-seed");
+    let (ok, err) = stickslip(&sweep_args(other.to_str().unwrap(), &["--backend", "gpu", "--shard", "1/3", "--no-plots", "--seed", "10"]));
+    assert!(ok, "{err}");
+    let (ok, err) = stickslip(&["merge", "--out", dir.join("m3").to_str().unwrap(), shard_dirs[1].to_str().unwrap(), other.to_str().unwrap(), shard_dirs[2].to_str().unwrap()]);
+    assert!(!ok && err.contains("seed"), "{err}");
+    let other_model = dir.join("other-model");
+    let (ok, err) = stickslip(&sweep_args(other_model.to_str().unwrap(), &["--backend", "gpu", "--shard", "1/3", "--no-plots", "--set", "friction.a=0.4"]));
+    assert!(ok, "{err}");
+    let (ok, err) = stickslip(&["merge", "--out", dir.join("m4").to_str().unwrap(), shard_dirs[1].to_str().unwrap(), other_model.to_str().unwrap(), shard_dirs[2].to_str().unwrap()]);
+    assert!(!ok && err.contains("model"), "{err}");
+    assert!(!dir.join("m2").exists() && !dir.join("m3").exists() && !dir.join("m4").exists(), "a refused merge wrote nothing");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The CPU backend's output does not depend on the number of threads.
+#[test]
+fn cpu_sweep_is_identical_whatever_the_thread_count() {
+    let dir = scratch("threads");
+    let mut outs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.join(format!("t{threads}"));
+        let args = sweep_args(out.to_str().unwrap(), &["--backend", "cpu", "--no-plots"]);
+        let o = Command::new(env!("CARGO_BIN_EXE_stickslip")).args(&args).env("RAYON_NUM_THREADS", threads).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        outs.push(out);
+    }
+    same_bytes(&outs[0], &outs[1], "sweep.csv");
+    same_bytes(&outs[0], &outs[1], "histograms.csv");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
