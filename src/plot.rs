@@ -94,6 +94,26 @@ fn colour(i: usize) -> RGBColor {
     COLOURS[i % COLOURS.len()]
 }
 
+/// The legend: white box, black border, font of `size` px.
+fn legend_box<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    size: u32,
+    position: SeriesLabelPosition,
+    what: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .label_font((FONT, size))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(position)
+        .draw()
+        .map_err(|e| plot_error(what, e))
+}
+
 fn frequency_span(result: &SweepResult) -> (f64, f64) {
     let (lo, hi) = result
         .conditions
@@ -141,15 +161,7 @@ where
             .label(format!("N0 = {n} N"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 15))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(e)?;
-    Ok(())
+    legend_box(&mut chart, 15, SeriesLabelPosition::UpperRight, "fig9")
 }
 
 fn figure9b<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, result: &SweepResult, title: &str) -> Result<()>
@@ -192,15 +204,7 @@ where
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
         chart.draw_series(line.into_iter().map(|p| Circle::new(p, 3, c.filled()))).map_err(e)?;
     }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 15))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(e)?;
-    Ok(())
+    legend_box(&mut chart, 15, SeriesLabelPosition::UpperRight, "fig9")
 }
 
 /// Density bars (mm, 1/mm) over about `mean ± 4σ`. Each bar is a whole
@@ -279,14 +283,7 @@ where
             .map_err(e)?
             .label("Gaussian, same mean and variance")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 12))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(e)?;
+        legend_box(&mut chart, 12, SeriesLabelPosition::UpperLeft, "fig8")?;
     }
     Ok(())
 }
