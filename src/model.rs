@@ -379,7 +379,8 @@ impl Oscillator {
         let period_s = 1.0 / condition.excitation_frequency_hz;
         let periods_per_interval = model.noise.interval_s / period_s;
         let noise_interval_fixed = (periods_per_interval * 4_294_967_296.0).round();
-        if !(noise_interval_fixed >= 1.0 && noise_interval_fixed < 2f64.powi(63)) {
+        let noiseless = model.friction.sigma == 0.0 && model.normal_force.sigma == 0.0;
+        if !noiseless && !(noise_interval_fixed >= 1.0 && noise_interval_fixed < 2f64.powi(63)) {
             return Err(Error::InvalidParameter {
                 key: "noise.interval_s".into(),
                 value: model.noise.interval_s.to_string(),
@@ -405,9 +406,14 @@ impl Oscillator {
             normal_force_mean_n: condition.normal_force_n,
             normal_force_sigma_n: model.normal_force.sigma,
             steps_per_period: model.solver.steps_per_period,
-            noise_interval_fixed: noise_interval_fixed as u64,
+            // Without noise there is nothing to hold: no boundaries split the steps.
+            noise_interval_fixed: if noiseless { Self::NOISELESS_INTERVAL } else { noise_interval_fixed as u64 },
         })
     }
+
+    /// The noise interval of a noiseless model: 2^31 − 1 periods, longer
+    /// than any run, so no boundary ever splits a step.
+    pub const NOISELESS_INTERVAL: u64 = ((1 << 31) - 1) << 32;
 
     /// How many noise intervals a run of `periods` excitation periods spans.
     pub fn noise_intervals_in(&self, periods: u64) -> u128 {
