@@ -33,6 +33,35 @@ struct Params {
     histogram_bins: u32,
 }
 
+// The effects (src/effects.rs); forms are 0 = the candidate form. All
+// strengths zero reduces every formula to the baseline's arithmetic.
+struct Effects {
+    harmonic_form: u32,
+    harmonic_shape: f32,
+    harmonic_shape_mean: f32,
+    non_gaussian_form: u32,
+    harmonic_amplitude_1_n: f32,
+    harmonic_amplitude_2_n: f32,
+    harmonic_amplitude_3_n: f32,
+    harmonic_amplitude_4_n: f32,
+    harmonic_phase_1_rad: f32,
+    harmonic_phase_2_rad: f32,
+    harmonic_phase_3_rad: f32,
+    harmonic_phase_4_rad: f32,
+    hysteresis_form: u32,
+    hysteresis_length_m: f32,
+    colour_form: u32,
+    colour_rho: f32,
+    colour_hold_intervals: u32,
+    stiction_form: u32,
+    stiction_excess: f32,
+    drift_form: u32,
+    drift_rate_per_s: f32,
+    noise_interval_s: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 struct GridPoint {
     omega_rad_per_s: f32,
     period_s: f32,
@@ -47,7 +76,10 @@ struct GridPoint {
     inv_quantum_per_m: f32,
     histogram_lo_m: f32,
     histogram_bins_per_m: f32,
-    _pad: u32,
+    // Load-dependent friction offset Δa at this point's N0, –.
+    friction_offset: f32,
+    // Non-Gaussian strength at this point's N0, –.
+    non_gaussian_strength: f32,
 }
 
 struct PathState {
@@ -61,8 +93,10 @@ struct PathState {
     friction_noise: f32,
     normal_force_n: f32,
     stick_time_s: f32,
-    _pad0: u32,
-    _pad1: u32,
+    slip_start_x_m: f32,
+    colour_state: f32,
+    interval_phase: f32,
+    stiction_excess: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -73,6 +107,7 @@ struct PathState {
 @group(0) @binding(4) var<storage, read_write> accumulators: array<atomic<u32>>;
 // Per grid point: histogram_bins counts (first: below range, last: above).
 @group(0) @binding(5) var<storage, read_write> histograms: array<atomic<u32>>;
+@group(0) @binding(6) var<uniform> effects: Effects;
 
 // Accumulator words: 0-1 peaks (u64), 2-3 Σ(q + 2^31) (u64), 4-6 Σq² (u96),
 // 7-8 stuck time in T/2^20 (u64), 9 clamped peaks, 10-11 unused.
@@ -95,6 +130,10 @@ struct Path {
     friction_noise: f32,
     normal_force_n: f32,
     stick_time_s: f32,
+    slip_start_x_m: f32,
+    colour_state: f32,
+    interval_phase: f32,
+    stiction_excess: f32,
     period_max_x_m: f32,
     period_stick_s: f32,
 }
@@ -104,30 +143,121 @@ var<private> point: GridPoint;
 var<private> realisation: u32;
 var<private> key: vec2<u32>;
 
+fn harmonic_wave(c: f32) -> f32 {
+    if (effects.harmonic_form == 1u) {
+        return pow(max(c, 0.0), effects.harmonic_shape) - effects.harmonic_shape_mean;
+    }
+    if (effects.harmonic_form == 2u) {
+        return tanh(effects.harmonic_shape * c) / tanh(effects.harmonic_shape);
+    }
+    return c;
+}
+
+fn harmonic_term(amplitude_n: f32, phase_rad: f32, multiple: f32, theta: f32) -> f32 {
+    if (amplitude_n == 0.0) {
+        return 0.0;
+    }
+    return amplitude_n * harmonic_wave(cos(multiple * theta + phase_rad));
+}
+
+fn non_gaussian(s: f32, g: f32, g2: f32) -> f32 {
+    if (effects.non_gaussian_form == 1u) {
+        if (s == 0.0) {
+            return g;
+        }
+        let v = s * s;
+        return (exp(s * g) - exp(0.5 * v)) / sqrt((exp(v) - 1.0) * exp(v));
+    }
+    if (effects.non_gaussian_form == 2u) {
+        return g * exp(0.5 * s * g * g) * pow(1.0 - 2.0 * s, 0.75);
+    }
+    return (g + s * (g2 * g2 - 1.0) * 0.7071067811865476) / sqrt(1.0 + s * s);
+}
+
+fn hysteresis_factor(slipped_m: f32) -> f32 {
+    let length = effects.hysteresis_length_m;
+    if (length == 0.0) {
+        return 1.0;
+    }
+    let r = slipped_m / length;
+    if (effects.hysteresis_form == 1u) {
+        return tanh(r);
+    }
+    if (effects.hysteresis_form == 2u) {
+        return r / (r + 1.0);
+    }
+    return 1.0 - exp(-r);
+}
+
+fn drift_factor(t_s: f32) -> f32 {
+    let rate = effects.drift_rate_per_s;
+    if (effects.drift_form == 1u) {
+        return 1.0 + rate * 20.0 * (1.0 - exp(-t_s / 20.0));
+    }
+    if (effects.drift_form == 2u) {
+        return 1.0 + rate * 15.0 * sin(t_s / 15.0);
+    }
+    return 1.0 + rate * t_s;
+}
+
 fn draw_noise() {
-    let xi_mu = gaussian(key, realisation, STREAM_FRICTION, path.interval);
-    let xi_n = gaussian(key, realisation, STREAM_NORMAL_FORCE, path.interval);
+    var friction_interval = path.interval;
+    if (effects.colour_form == 1u) {
+        friction_interval = path.interval / effects.colour_hold_intervals;
+    }
+    let z = gaussian_pair(key, realisation, STREAM_FRICTION, friction_interval);
+    let innovation = sqrt(1.0 - effects.colour_rho * effects.colour_rho);
+    var g = z.x;
+    if (effects.colour_form == 2u && effects.colour_rho > 0.0) {
+        let slow = gaussian_pair(key, realisation, STREAM_COLOUR, path.interval).x;
+        path.colour_state = select(effects.colour_rho * path.colour_state + innovation * slow, slow, path.interval == 0u);
+        g = 0.7071067811865476 * (z.x + path.colour_state);
+    } else if (effects.colour_form == 0u) {
+        path.colour_state = select(effects.colour_rho * path.colour_state + innovation * z.x, z.x, path.interval == 0u);
+        g = path.colour_state;
+    }
+    let xi_mu = non_gaussian(point.non_gaussian_strength, g, z.y);
     path.friction_noise = params.friction_sigma * xi_mu;
-    path.normal_force_n = max(point.normal_force_mean_n + params.normal_force_sigma_n * xi_n, 0.0);
+    let xi_n = gaussian_pair(key, realisation, STREAM_NORMAL_FORCE, path.interval).x;
+    let t_s = f32(path.interval) * effects.noise_interval_s;
+    let mean_n = point.normal_force_mean_n * drift_factor(t_s);
+    let theta = TAU * path.interval_phase;
+    let harmonics_n = harmonic_term(effects.harmonic_amplitude_1_n, effects.harmonic_phase_1_rad, 1.0, theta)
+        + harmonic_term(effects.harmonic_amplitude_2_n, effects.harmonic_phase_2_rad, 2.0, theta)
+        + harmonic_term(effects.harmonic_amplitude_3_n, effects.harmonic_phase_3_rad, 3.0, theta)
+        + harmonic_term(effects.harmonic_amplitude_4_n, effects.harmonic_phase_4_rad, 4.0, theta);
+    path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonics_n, 0.0);
+    path.stiction_excess = effects.stiction_excess;
+    if (effects.stiction_form == 1u) {
+        let zs = gaussian_pair(key, realisation, STREAM_STICTION, path.interval).x;
+        path.stiction_excess = effects.stiction_excess * max(1.0 + 0.5 * zs, 0.0);
+    }
 }
 
 fn spring_force(t_local_s: f32, x_m: f32) -> f32 {
     return params.stiffness_n_per_m * (params.base_amplitude_m * cos(point.omega_rad_per_s * t_local_s) - x_m);
 }
 
-fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
-    return max(params.friction_a
+fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32) -> f32 {
+    let slipped_m = abs(x_m - path.slip_start_x_m);
+    let law = params.friction_a + point.friction_offset
         + params.friction_b / (1.0 + params.friction_c_s_per_m * speed_m_per_s)
         + params.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
-        + path.friction_noise, 0.0);
+        + path.friction_noise;
+    var mu = law * hysteresis_factor(slipped_m);
+    if (effects.stiction_form == 2u) {
+        mu += path.stiction_excess * exp(-slipped_m / 1e-4);
+    }
+    return max(mu, 0.0);
 }
 
 fn breakaway_force() -> f32 {
-    return friction_coefficient(0.0, 0.0) * path.normal_force_n;
+    let mu_static = params.friction_a + point.friction_offset + params.friction_b + path.friction_noise + path.stiction_excess;
+    return max(mu_static, 0.0) * path.normal_force_n;
 }
 
 fn slip_acceleration(t_local_s: f32, x_m: f32, v_m_per_s: f32, sign: f32) -> f32 {
-    let friction = sign * friction_coefficient(sign * v_m_per_s, v_m_per_s) * path.normal_force_n;
+    let friction = sign * friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * path.normal_force_n;
     return (spring_force(t_local_s, x_m) - params.damping_n_s_per_m * v_m_per_s - friction) / params.mass_kg;
 }
 
@@ -262,6 +392,7 @@ fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
                 path.period_stick_s += t_end - t_a;
             }
             path.mode = i32(until.y);
+            path.slip_start_x_m = path.x_m;
             t_a = t_end;
             events += 1u;
         } else {
@@ -285,6 +416,7 @@ fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
                 } else {
                     path.mode = MODE_STICK;
                 }
+                path.slip_start_x_m = path.x_m;
                 events += 1u;
             }
         }
@@ -310,6 +442,7 @@ fn run_period(measuring: bool) {
         advance_segment(t, target_t, measuring);
         t = target_t;
         if (noise_t <= target_t) {
+            path.interval_phase = f32(path.next_boundary_frac) * FIXED_ONE_INV;
             path.interval += 1u;
             let frac = path.next_boundary_frac + point.noise_interval_frac;
             let carry = select(0u, 1u, frac < path.next_boundary_frac);
@@ -423,6 +556,13 @@ fn load_invocation(n: u32) {
     key = vec2<u32>(params.seed_lo, params.seed_hi);
 }
 
+fn store_path(n: u32) {
+    states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
+        path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
+        path.normal_force_n, path.stick_time_s, path.slip_start_x_m, path.colour_state,
+        path.interval_phase, path.stiction_excess);
+}
+
 @compute @workgroup_size(64)
 fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = gid.x + gid.y * 65535u * 64u;
@@ -437,6 +577,9 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     path.next_boundary_whole = point.noise_interval_whole;
     path.next_boundary_frac = point.noise_interval_frac;
     path.stick_time_s = 0.0;
+    path.slip_start_x_m = path.x_m;
+    path.colour_state = 0.0;
+    path.interval_phase = 0.0;
     draw_noise();
     if (path.v_m_per_s > 0.0) {
         path.mode = 1;
@@ -445,9 +588,7 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         path.mode = stick_or_slip(0.0);
     }
-    states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
-        path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
-        path.normal_force_n, path.stick_time_s, 0u, 0u);
+    store_path(n);
 }
 
 @compute @workgroup_size(64)
@@ -459,7 +600,8 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     load_invocation(n);
     let s = states[n];
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
-        s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s, 0.0, 0.0);
+        s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
+        s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, 0.0, 0.0);
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u);
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;
@@ -473,7 +615,5 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     flush_tally();
-    states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
-        path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
-        path.normal_force_n, path.stick_time_s, 0u, 0u);
+    store_path(n);
 }

@@ -8,6 +8,8 @@ const PHILOX_W1: u32 = 0xBB67AE85u;
 
 const STREAM_FRICTION: u32 = 0u;
 const STREAM_NORMAL_FORCE: u32 = 1u;
+const STREAM_COLOUR: u32 = 2u;
+const STREAM_STICTION: u32 = 3u;
 
 // 32 × 32 → 64-bit product as (hi, lo), from 16-bit halves.
 fn mulhilo(a: u32, b: u32) -> vec2<u32> {
@@ -70,4 +72,10 @@ fn box_muller(u1: f32, u2: f32) -> f32 {
 fn gaussian(key: vec2<u32>, realisation: u32, stream: u32, interval: u32) -> f32 {
     let w = philox4x32_10(vec4<u32>(interval, 0u, realisation, stream), key);
     return box_muller(uniform_open(w.x), uniform_open(w.y));
+}
+
+// Both standard Gaussians of a key: words 0–1 and words 2–3 of its block.
+fn gaussian_pair(key: vec2<u32>, realisation: u32, stream: u32, interval: u32) -> vec2<f32> {
+    let w = philox4x32_10(vec4<u32>(interval, 0u, realisation, stream), key);
+    return vec2<f32>(box_muller(uniform_open(w.x), uniform_open(w.y)), box_muller(uniform_open(w.z), uniform_open(w.w)));
 }

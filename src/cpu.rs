@@ -14,6 +14,7 @@
 
 use rayon::prelude::*;
 
+use crate::effects;
 use crate::model::Oscillator;
 use crate::rng;
 
@@ -92,6 +93,14 @@ struct Path<'a> {
     friction_noise: f64,
     /// Normal force in the current interval, N.
     normal_force_n: f64,
+    /// x where the current slip began, m (hysteresis, decaying stiction).
+    slip_start_x_m: f64,
+    /// Coloured noise state: the previous ξ (ar1) or the slow part (two_scale), –.
+    colour_state: f64,
+    /// Start of the current noise interval within its period, in periods.
+    interval_phase: f64,
+    /// Static-friction excess in the current interval, –.
+    stiction_excess: f64,
     /// Largest x so far in the current period, m.
     period_max_x_m: f64,
     /// Time stuck so far in the current period, s.
@@ -112,6 +121,10 @@ impl<'a> Path<'a> {
             next_boundary: osc.noise_interval_fixed,
             friction_noise: 0.0,
             normal_force_n: 0.0,
+            slip_start_x_m: initial.x_m,
+            colour_state: 0.0,
+            interval_phase: 0.0,
+            stiction_excess: 0.0,
             period_max_x_m: initial.x_m,
             period_stick_s: 0.0,
         };
@@ -126,13 +139,43 @@ impl<'a> Path<'a> {
         path
     }
 
-    /// Noise values of the current interval.
+    /// Noise values (and everything else held per interval) of the current interval.
     fn draw_noise(&mut self) {
         let o = self.osc;
-        let xi_mu = rng::gaussian(self.key, self.realisation, rng::STREAM_FRICTION, self.interval);
-        let xi_n = rng::gaussian(self.key, self.realisation, rng::STREAM_NORMAL_FORCE, self.interval);
+        let e = &o.effects;
+        let friction_interval = if e.colour_form == 1 { self.interval / u64::from(e.colour_hold_intervals) } else { self.interval };
+        let (z, z2) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_FRICTION, friction_interval);
+        let innovation = (1.0 - e.colour_rho * e.colour_rho).sqrt();
+        let g = if e.colour_form == 2 && e.colour_rho > 0.0 {
+            let (slow, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
+            self.colour_state = if self.interval == 0 { slow } else { e.colour_rho * self.colour_state + innovation * slow };
+            std::f64::consts::FRAC_1_SQRT_2 * (z + self.colour_state)
+        } else if e.colour_form == 0 {
+            self.colour_state = if self.interval == 0 { z } else { e.colour_rho * self.colour_state + innovation * z };
+            self.colour_state
+        } else {
+            z
+        };
+        let xi_mu = effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, z2);
         self.friction_noise = o.friction_sigma * xi_mu;
-        self.normal_force_n = (o.normal_force_mean_n + o.normal_force_sigma_n * xi_n).max(0.0);
+        let (xi_n, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_NORMAL_FORCE, self.interval);
+        let t_s = self.interval as f64 * o.noise_interval_s;
+        let mean_n = o.normal_force_mean_n * effects::drift_factor(e.drift_form, e.drift_rate_per_s, t_s);
+        let theta = std::f64::consts::TAU * self.interval_phase;
+        let mut harmonics_n = 0.0;
+        for k in 0..4 {
+            if e.harmonic_amplitudes_n[k] != 0.0 {
+                let c = ((k + 1) as f64 * theta + e.harmonic_phases_rad[k]).cos();
+                harmonics_n += e.harmonic_amplitudes_n[k] * effects::harmonic_wave(e.harmonic_form, c, e.harmonic_shape, e.harmonic_shape_mean);
+            }
+        }
+        self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
+        self.stiction_excess = if e.stiction_form == 1 {
+            let (zs, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_STICTION, self.interval);
+            e.stiction_excess * (1.0 + 0.5 * zs).max(0.0)
+        } else {
+            e.stiction_excess
+        };
     }
 
     /// Force of springs and damper on the block at rest, `k (u(t) − x)`, N.
@@ -141,25 +184,34 @@ impl<'a> Path<'a> {
         o.stiffness_n_per_m * (o.base_amplitude_m * (o.omega_rad_per_s * t_local_s).cos() - x_m)
     }
 
-    /// Friction coefficient while slipping with speed `speed` (m/s), clipped at 0.
-    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+    /// Friction coefficient while slipping with speed `speed` (m/s) at
+    /// displacement `x_m`, clipped at 0.
+    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64) -> f64 {
         let o = self.osc;
-        (o.friction_a
+        let e = &o.effects;
+        let slipped_m = (x_m - self.slip_start_x_m).abs();
+        let law = o.friction_a + e.friction_offset
             + o.friction_b / (1.0 + o.friction_c_s_per_m * speed_m_per_s)
             + o.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
-            + self.friction_noise)
-            .max(0.0)
+            + self.friction_noise;
+        let mut mu = law * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m);
+        if e.stiction_form == 2 {
+            mu += self.stiction_excess * (-slipped_m / effects::STICTION_DECAY_M).exp();
+        }
+        mu.max(0.0)
     }
 
-    /// Breakaway force `μ_s N`, N.
+    /// Breakaway force `μ_s N` with `μ_s = μ(0) + stiction excess`, N.
     fn breakaway_force(&self) -> f64 {
-        self.friction_coefficient(0.0, 0.0) * self.normal_force_n
+        let o = self.osc;
+        let mu_static = o.friction_a + o.effects.friction_offset + o.friction_b + self.friction_noise + self.stiction_excess;
+        mu_static.max(0.0) * self.normal_force_n
     }
 
     /// Acceleration while slipping in direction `sign`, m/s².
     fn slip_acceleration(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, sign: f64) -> f64 {
         let o = self.osc;
-        let friction = sign * self.friction_coefficient(sign * v_m_per_s, v_m_per_s) * self.normal_force_n;
+        let friction = sign * self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * self.normal_force_n;
         (self.spring_force(t_local_s, x_m) - o.damping_n_s_per_m * v_m_per_s - friction) / o.mass_kg
     }
 
@@ -297,6 +349,7 @@ impl<'a> Path<'a> {
                         self.period_stick_s += t_end - t_a;
                     }
                     self.mode = next;
+                    self.slip_start_x_m = self.x_m;
                     t_a = t_end;
                     events += 1;
                 }
@@ -317,6 +370,7 @@ impl<'a> Path<'a> {
                         self.period_max_x_m = self.period_max_x_m.max(x_zero);
                         t_a += h_zero;
                         self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(t_a) } else { Mode::Stick };
+                        self.slip_start_x_m = self.x_m;
                         events += 1;
                     }
                 }
@@ -330,7 +384,7 @@ impl<'a> Path<'a> {
             Mode::Stick => -self.spring_force(t_local_s, self.x_m),
             Mode::Slip(s) => {
                 let sign = f64::from(s);
-                -sign * self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s) * self.normal_force_n
+                -sign * self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s, self.x_m) * self.normal_force_n
             }
         }
     }
@@ -358,6 +412,7 @@ impl<'a> Path<'a> {
             self.advance_segment(t, target, measuring);
             t = target;
             if noise_t <= target {
+                self.interval_phase = (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
                 self.interval += 1;
                 self.next_boundary += o.noise_interval_fixed;
                 self.draw_noise();

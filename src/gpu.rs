@@ -91,6 +91,73 @@ pub struct Params {
     pub histogram_bins: u32,
 }
 
+/// The effects as the kernel sees them (struct `Effects`, uniform).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Effects {
+    pub harmonic_form: u32,
+    pub harmonic_shape: f32,
+    pub harmonic_shape_mean: f32,
+    pub non_gaussian_form: u32,
+    /// N
+    pub harmonic_amplitude_1_n: f32,
+    pub harmonic_amplitude_2_n: f32,
+    pub harmonic_amplitude_3_n: f32,
+    pub harmonic_amplitude_4_n: f32,
+    /// rad
+    pub harmonic_phase_1_rad: f32,
+    pub harmonic_phase_2_rad: f32,
+    pub harmonic_phase_3_rad: f32,
+    pub harmonic_phase_4_rad: f32,
+    pub hysteresis_form: u32,
+    /// m
+    pub hysteresis_length_m: f32,
+    pub colour_form: u32,
+    pub colour_rho: f32,
+    pub colour_hold_intervals: u32,
+    pub stiction_form: u32,
+    pub stiction_excess: f32,
+    pub drift_form: u32,
+    /// 1/s
+    pub drift_rate_per_s: f32,
+    /// s
+    pub noise_interval_s: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+impl Effects {
+    fn from_oscillator(o: &Oscillator) -> Effects {
+        let e = &o.effects;
+        Effects {
+            harmonic_form: e.harmonic_form,
+            harmonic_shape: e.harmonic_shape as f32,
+            harmonic_shape_mean: e.harmonic_shape_mean as f32,
+            non_gaussian_form: e.non_gaussian_form,
+            harmonic_amplitude_1_n: e.harmonic_amplitudes_n[0] as f32,
+            harmonic_amplitude_2_n: e.harmonic_amplitudes_n[1] as f32,
+            harmonic_amplitude_3_n: e.harmonic_amplitudes_n[2] as f32,
+            harmonic_amplitude_4_n: e.harmonic_amplitudes_n[3] as f32,
+            harmonic_phase_1_rad: e.harmonic_phases_rad[0] as f32,
+            harmonic_phase_2_rad: e.harmonic_phases_rad[1] as f32,
+            harmonic_phase_3_rad: e.harmonic_phases_rad[2] as f32,
+            harmonic_phase_4_rad: e.harmonic_phases_rad[3] as f32,
+            hysteresis_form: e.hysteresis_form,
+            hysteresis_length_m: e.hysteresis_length_m as f32,
+            colour_form: e.colour_form,
+            colour_rho: e.colour_rho as f32,
+            colour_hold_intervals: e.colour_hold_intervals,
+            stiction_form: e.stiction_form,
+            stiction_excess: e.stiction_excess as f32,
+            drift_form: e.drift_form,
+            drift_rate_per_s: e.drift_rate_per_s as f32,
+            noise_interval_s: o.noise_interval_s as f32,
+            _pad0: 0,
+            _pad1: 0,
+        }
+    }
+}
+
 /// One grid point as the kernel sees it (struct `GridPoint`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -117,7 +184,10 @@ pub struct GridPoint {
     pub histogram_lo_m: f32,
     /// Inner histogram bins per metre, 1/m.
     pub histogram_bins_per_m: f32,
-    pub _pad: u32,
+    /// Load-dependent friction offset Δa at this point, –.
+    pub friction_offset: f32,
+    /// Non-Gaussian strength at this point's N0, –.
+    pub non_gaussian_strength: f32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -135,8 +205,10 @@ pub struct PathState {
     pub normal_force_n: f32,
     /// Time stuck during measured cycles, s.
     pub stick_time_s: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    pub slip_start_x_m: f32,
+    pub colour_state: f32,
+    pub interval_phase: f32,
+    pub stiction_excess: f32,
 }
 
 /// Uniform of `philox_check.wgsl` (struct `CheckParams`).
@@ -221,6 +293,7 @@ impl Kernels {
                 storage_entry(3, false),
                 storage_entry(4, false),
                 storage_entry(5, false),
+                uniform_entry(6),
             ],
         });
         let check = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -486,7 +559,8 @@ impl GridPoint {
             inv_quantum_per_m: spec.range.inv_quantum_f32(),
             histogram_lo_m: spec.range.lo_m as f32,
             histogram_bins_per_m: spec.range.bins_per_m_f32(),
-            _pad: 0,
+            friction_offset: o.effects.friction_offset as f32,
+            non_gaussian_strength: o.effects.non_gaussian_strength as f32,
         }
     }
 }
@@ -504,8 +578,13 @@ fn validate_request(request: &EnsembleRequest<'_>) -> Result<()> {
     }
     for spec in request.points {
         let o = &spec.oscillator;
-        let same_model = Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, ..o.clone() }
-            == Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, ..first.oscillator.clone() };
+        let shared = |o: &Oscillator| {
+            let mut effects = o.effects.clone();
+            effects.friction_offset = 0.0;
+            effects.non_gaussian_strength = 0.0;
+            Oscillator { omega_rad_per_s: 0.0, period_s: 0.0, normal_force_mean_n: 0.0, noise_interval_fixed: 0, effects, ..o.clone() }
+        };
+        let same_model = shared(o) == shared(&first.oscillator);
         if !same_model {
             return Err(Error::Mismatch("all grid points of one GPU ensemble must share the model".into()));
         }
@@ -589,6 +668,11 @@ pub fn run_ensemble(
         let mut params = params_for(&chunk[0].oscillator, request);
         params.invocations = invocations;
         let grid: Vec<GridPoint> = chunk.iter().map(GridPoint::from_spec).collect();
+        let effects_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("effects"),
+            contents: bytemuck::bytes_of(&Effects::from_oscillator(&chunk[0].oscillator)),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
         let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("grid points"),
             contents: bytemuck::cast_slice(&grid),
@@ -617,6 +701,7 @@ pub fn run_ensemble(
                 wgpu::BindGroupEntry { binding: 3, resource: peaks.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: sums.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: histograms.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: effects_uniform.as_entire_binding() },
             ],
         });
         let dispatch = |pipeline: &wgpu::ComputePipeline, params: &Params| {

@@ -3,6 +3,7 @@
 pub mod analytic;
 pub mod cli;
 pub mod cpu;
+pub mod effects;
 pub mod error;
 pub mod gpu;
 pub mod io;

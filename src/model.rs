@@ -5,15 +5,16 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::effects::{EffectParams, Effects, EFFECT_NAMES};
 use crate::error::{Error, Result};
 
 /// The embedded default: the seed paper's rig (see the README for how the
 /// friction law was chosen).
 pub const PAPER_RIG_TOML: &str = include_str!("../models/paper-rig.toml");
 
-/// A complete model: rig, excitation, friction law, noise, solver.
+/// A complete model: rig, excitation, friction law, noise, solver, and the
+/// optional effects (each its own table; see [`crate::effects`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct Model {
     pub rig: Rig,
     pub excitation: Excitation,
@@ -22,7 +23,12 @@ pub struct Model {
     pub noise: Noise,
     #[serde(default)]
     pub solver: Solver,
+    #[serde(flatten)]
+    pub effects: Effects,
 }
+
+/// The top-level tables a model file may have.
+const MODEL_TABLES: [&str; 6] = ["rig", "excitation", "friction", "normal_force", "noise", "solver"];
 
 /// The block on its leaf springs, without friction contact.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -160,6 +166,14 @@ impl Model {
         for assignment in overrides {
             apply_override(&mut table, assignment)?;
         }
+        // `flatten` cannot deny unknown keys, so the top level is checked here.
+        if let Some(unknown) = table.keys().find(|k| !MODEL_TABLES.contains(&k.as_str()) && !EFFECT_NAMES.contains(&k.as_str())) {
+            return Err(syntax(format!(
+                "unknown table `{unknown}`; expected one of {} or an effect ({})",
+                MODEL_TABLES.join(", "),
+                EFFECT_NAMES.join(", ")
+            )));
+        }
         let model: Model = Model::deserialize(toml::Value::Table(table))
             .map_err(|e: toml::de::Error| syntax(e.to_string()))?;
         model.validate()?;
@@ -214,6 +228,7 @@ impl Model {
             self.noise.interval_s > 0.0,
             "the noise hold interval must be > 0 s",
         )?;
+        self.effects.validate()?;
         let s = self.solver.steps_per_period;
         if !(Solver::MIN_STEPS_PER_PERIOD..=Solver::MAX_STEPS_PER_PERIOD).contains(&s) {
             return Err(Error::InvalidParameter {
@@ -366,6 +381,10 @@ pub struct Oscillator {
     pub normal_force_sigma_n: f64,
     /// Integration steps per excitation period.
     pub steps_per_period: u32,
+    /// Noise hold interval τ, s.
+    pub noise_interval_s: f64,
+    /// The effects at this grid point (all zero: the baseline).
+    pub effects: EffectParams,
     /// Noise hold interval in excitation periods, as 32.32 fixed point:
     /// boundary `j` lies at `j * noise_interval_fixed / 2^32` periods.
     pub noise_interval_fixed: u64,
@@ -379,7 +398,7 @@ impl Oscillator {
         let period_s = 1.0 / condition.excitation_frequency_hz;
         let periods_per_interval = model.noise.interval_s / period_s;
         let noise_interval_fixed = (periods_per_interval * 4_294_967_296.0).round();
-        let noiseless = model.friction.sigma == 0.0 && model.normal_force.sigma == 0.0;
+        let noiseless = model.friction.sigma == 0.0 && model.normal_force.sigma == 0.0 && !model.effects.any();
         if !noiseless && !(noise_interval_fixed >= 1.0 && noise_interval_fixed < 2f64.powi(63)) {
             return Err(Error::InvalidParameter {
                 key: "noise.interval_s".into(),
@@ -406,6 +425,8 @@ impl Oscillator {
             normal_force_mean_n: condition.normal_force_n,
             normal_force_sigma_n: model.normal_force.sigma,
             steps_per_period: model.solver.steps_per_period,
+            noise_interval_s: model.noise.interval_s,
+            effects: EffectParams::new(&model.effects, condition.normal_force_n, model.friction.a, model.noise.interval_s),
             // Without noise there is nothing to hold: no boundaries split the steps.
             noise_interval_fixed: if noiseless { Self::NOISELESS_INTERVAL } else { noise_interval_fixed as u64 },
         })

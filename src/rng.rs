@@ -10,6 +10,10 @@
 pub const STREAM_FRICTION: u32 = 0;
 /// Noise stream of the normal force's random part `ξ_N`.
 pub const STREAM_NORMAL_FORCE: u32 = 1;
+/// Noise stream driving the slow part of `two_scale` coloured friction noise.
+pub const STREAM_COLOUR: u32 = 2;
+/// Noise stream of `noisy` stiction.
+pub const STREAM_STICTION: u32 = 3;
 
 const PHILOX_M0: u32 = 0xD251_1F53;
 const PHILOX_M1: u32 = 0xCD9E_8D57;
@@ -63,6 +67,13 @@ pub fn uniform_open(word: u32) -> f64 {
 #[inline]
 pub fn box_muller(u1: f64, u2: f64) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Both standard Gaussians of a key: words 0–1 and words 2–3 of its block.
+#[inline]
+pub fn gaussian_pair(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> (f64, f64) {
+    let w = philox4x32_10(noise_counter(realisation, stream, interval), key);
+    (box_muller(uniform_open(w[0]), uniform_open(w[1])), box_muller(uniform_open(w[2]), uniform_open(w[3])))
 }
 
 /// The standard Gaussian value of key `(seed, realisation, stream, interval)`.

@@ -8,7 +8,7 @@ use std::mem::{align_of, offset_of, size_of};
 
 use naga::proc::Layouter;
 use naga::{Module, Scalar, ScalarKind, TypeInner};
-use stickslip::gpu::{CheckParams, ENSEMBLE_WGSL, GridPoint, PHILOX_CHECK_WGSL, Params, PathState};
+use stickslip::gpu::{CheckParams, Effects, ENSEMBLE_WGSL, GridPoint, PHILOX_CHECK_WGSL, Params, PathState};
 
 /// One Rust field: name, byte offset, byte size.
 struct RustField {
@@ -91,7 +91,8 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 inv_quantum_per_m,
                 histogram_lo_m,
                 histogram_bins_per_m,
-                _pad,
+                friction_offset,
+                non_gaussian_strength,
             }),
             "ENSEMBLE_WGSL",
         ),
@@ -107,6 +108,37 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 friction_noise,
                 normal_force_n,
                 stick_time_s,
+                slip_start_x_m,
+                colour_state,
+                interval_phase,
+                stiction_excess,
+            }),
+            "ENSEMBLE_WGSL",
+        ),
+        (
+            rust_struct!(Effects {
+                harmonic_form,
+                harmonic_shape,
+                harmonic_shape_mean,
+                non_gaussian_form,
+                harmonic_amplitude_1_n,
+                harmonic_amplitude_2_n,
+                harmonic_amplitude_3_n,
+                harmonic_amplitude_4_n,
+                harmonic_phase_1_rad,
+                harmonic_phase_2_rad,
+                harmonic_phase_3_rad,
+                harmonic_phase_4_rad,
+                hysteresis_form,
+                hysteresis_length_m,
+                colour_form,
+                colour_rho,
+                colour_hold_intervals,
+                stiction_form,
+                stiction_excess,
+                drift_form,
+                drift_rate_per_s,
+                noise_interval_s,
                 _pad0,
                 _pad1,
             }),
