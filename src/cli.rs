@@ -11,6 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::cpu::{self, RunPlan, Sampler};
 use crate::io;
 use crate::model::{Condition, Model, Oscillator};
+use crate::diagnose::{self, DiagnoseSettings};
 use crate::plot;
 use crate::sweep::{self, Backend, BackendChoice, Grid, RunIdentity, Shard, SweepResult, SweepSettings};
 
@@ -29,6 +30,57 @@ enum Command {
     Sweep(SweepArgs),
     /// Combine the outputs of `sweep --shard K/N` runs into what the unsharded run writes.
     Merge(MergeArgs),
+    /// Diagnose the gap between a measurement set and the model: where, which effect, how far it shrinks.
+    Diagnose(DiagnoseArgs),
+    /// Benchmark the diagnosis blind on synthetic sets with a withheld effect.
+    BenchmarkDiagnosis(BenchmarkArgs),
+}
+
+#[derive(Args, Debug)]
+struct DiagnoseArgs {
+    /// The measurement set (a directory with manifest.json).
+    dir: PathBuf,
+    /// Output directory (report.json, report.html, baseline-model.toml, fitted-model.toml).
+    #[arg(long)]
+    out: PathBuf,
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+    #[arg(long, default_value_t = 20_251_122)]
+    seed: u64,
+    /// Simulated replicate records per condition.
+    #[arg(long, default_value_t = 8)]
+    replicates: u32,
+}
+
+#[derive(Args, Debug)]
+struct BenchmarkArgs {
+    /// Where the synthetic sets and their diagnoses go.
+    #[arg(long, default_value = "out/benchmark-diagnosis")]
+    out: PathBuf,
+    /// Null sets (no effect).
+    #[arg(long, default_value_t = 8)]
+    nulls: u32,
+    /// Effect forms used (1 and 2 are the non-candidate forms).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    forms: Vec<u32>,
+    /// Strength levels (0 moderate, 1 strong).
+    #[arg(long, value_delimiter = ',', default_value = "0,1")]
+    levels: Vec<u32>,
+    /// Only these effects (comma list of names); all seven by default.
+    #[arg(long, value_delimiter = ',')]
+    effects: Vec<String>,
+    /// Runs per condition and record length (s).
+    #[arg(long, default_value_t = 2)]
+    runs_per_condition: u32,
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+    /// Simulated replicate records per condition in each diagnosis.
+    #[arg(long, default_value_t = 8)]
+    replicates: u32,
 }
 
 #[derive(Args, Debug)]
@@ -163,6 +215,8 @@ pub fn main() -> ExitCode {
         Command::Simulate(args) => simulate(args),
         Command::Sweep(args) => run_sweep(args),
         Command::Merge(args) => merge(args),
+        Command::Diagnose(args) => run_diagnose(args),
+        Command::BenchmarkDiagnosis(args) => run_benchmark(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -341,4 +395,122 @@ fn write_outputs(
         writeln!(w)
     })
     .with_context(|| format!("writing {}", path.display()))
+}
+
+fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
+    // Read (and so validate) the set before anything else: bad input writes nothing.
+    let set = crate::measure::read_measurement_set(&args.dir)?;
+    let (backend, description) = Backend::open(args.backend.into())?;
+    eprintln!("backend: {description}");
+    let settings = DiagnoseSettings { seed: args.seed, replicates: args.replicates.max(2), ..DiagnoseSettings::default() };
+    let started = Instant::now();
+    let spinner = ProgressBar::new_spinner();
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    let diagnosis = diagnose::diagnose_set(&set, &settings, &backend, &mut |step| spinner.set_message(step.to_string()))?;
+    spinner.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    crate::report::write_diagnosis(&args.out, &diagnosis, &args.dir, elapsed)?;
+    let report = diagnosis.report_json();
+    println!(
+        "verdict: {} (confidence {:.2}); gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
+        diagnosis.verdict,
+        diagnosis.confidence,
+        report["gap"]["baseline"].as_f64().unwrap_or(f64::NAN),
+        report["gap"]["after"].as_f64().unwrap_or(f64::NAN),
+        report["gap"]["shrink"].as_f64().unwrap_or(f64::NAN),
+        report["gap"]["heldout_shrink"].as_f64().map_or("n/a".to_string(), |h| format!("{h:.2}")),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
+    use crate::effects::EFFECT_NAMES;
+    use crate::synthetic::{benchmark_plan, random_truth, write_set, SetShape};
+    for e in &args.effects {
+        if !EFFECT_NAMES.contains(&e.as_str()) {
+            anyhow::bail!("invalid --effects: `{e}` is not one of {}", EFFECT_NAMES.join(", "));
+        }
+    }
+    let (backend, description) = Backend::open(args.backend.into())?;
+    eprintln!("backend: {description}");
+    let shape = SetShape { runs_per_condition: args.runs_per_condition.max(1), duration_s: args.duration, ..SetShape::default() };
+    let plan: Vec<_> = benchmark_plan(args.nulls, &args.forms, &args.levels)
+        .into_iter()
+        .filter(|(e, _, _)| args.effects.is_empty() || e.is_none_or(|e| args.effects.iter().any(|n| n == EFFECT_NAMES[e])))
+        .collect();
+    let settings = DiagnoseSettings { seed: args.seed ^ 0xD1A6, replicates: args.replicates.max(2), ..DiagnoseSettings::default() };
+    let labels: Vec<&str> = EFFECT_NAMES.iter().copied().chain(["none"]).collect();
+    let mut confusion = vec![vec![0u32; labels.len()]; labels.len()];
+    let mut rows = Vec::new();
+    let bar = progress_bar(plan.len() as u64, "diagnosing");
+    let started = Instant::now();
+    for (i, &(effect, form, level)) in plan.iter().enumerate() {
+        let seed = args.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
+        let (truth, conditions) = random_truth(seed, effect, form, level)?;
+        let dir = args.out.join(format!("set-{i:03}"));
+        write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
+        let set = crate::measure::read_measurement_set(&dir.join("data"))?;
+        let t0 = Instant::now();
+        let d = diagnose::diagnose_set(&set, &settings, &backend, &mut |_| {})?;
+        let seconds = t0.elapsed().as_secs_f64();
+        crate::report::write_diagnosis(&dir.join("diagnosis"), &d, &dir.join("data"), seconds)?;
+        let truth_name = effect.map_or("none", |e| EFFECT_NAMES[e]);
+        // Does the effect move the peak statistics beyond their noise? Compare
+        // the truth with and without it on the same noise.
+        let moves = match effect {
+            None => false,
+            Some(_) => {
+                let mut without = truth.clone();
+                without.effects = Default::default();
+                diagnose::peak_shift_in_noise_units(&truth, &without, &conditions, shape, &backend)? > 2.0
+            }
+        };
+        let report = d.report_json();
+        let heldout = report["gap"]["heldout_shrink"].as_f64();
+        let row = labels.iter().position(|l| *l == truth_name).unwrap();
+        let col = labels.iter().position(|l| *l == d.verdict).unwrap_or(labels.len() - 1);
+        confusion[row][col] += 1;
+        rows.push((truth_name.to_string(), form, level, d.verdict.clone(), heldout, moves, seconds));
+        bar.inc(1);
+        bar.println(format!(
+            "set {i:3}: truth {truth_name:<24} form {form} level {level} -> {:<24} held-out shrink {} {}({seconds:.0} s)",
+            d.verdict,
+            heldout.map_or("n/a".into(), |h| format!("{h:+.2}")),
+            if moves { "" } else { "[effect within peak noise] " }
+        ));
+    }
+    bar.finish_and_clear();
+    let effect_rows: Vec<_> = rows.iter().filter(|r| r.0 != "none").collect();
+    let null_rows: Vec<_> = rows.iter().filter(|r| r.0 == "none").collect();
+    let correct = effect_rows.iter().filter(|r| r.0 == r.3).count();
+    let false_positives = null_rows.iter().filter(|r| r.3 != "none").count();
+    let mut shrinks: Vec<f64> = effect_rows.iter().filter(|r| r.5).filter_map(|r| r.4).collect();
+    shrinks.sort_by(f64::total_cmp);
+    let median = if shrinks.is_empty() { f64::NAN } else if shrinks.len() % 2 == 1 { shrinks[shrinks.len() / 2] } else { 0.5 * (shrinks[shrinks.len() / 2 - 1] + shrinks[shrinks.len() / 2]) };
+    let mut text = String::new();
+    text.push_str(&format!("blind benchmark of the diagnosis: {} sets ({} with an effect, {} null), {} runs x {} s per condition, 4 conditions; {description}\n", rows.len(), effect_rows.len(), null_rows.len(), shape.runs_per_condition, shape.duration_s));
+    text.push_str("confusion matrix (rows: withheld effect, columns: verdict)\n");
+    let short = |l: &str| l.split('_').map(|w| &w[..w.len().min(4)]).collect::<Vec<_>>().join("_");
+    text.push_str(&format!("{:<26}", ""));
+    for l in &labels {
+        text.push_str(&format!("{:>11}", short(l)));
+    }
+    text.push('\n');
+    for (r, l) in labels.iter().enumerate() {
+        text.push_str(&format!("{l:<26}"));
+        for c in 0..labels.len() {
+            text.push_str(&format!("{:>11}", confusion[r][c]));
+        }
+        text.push('\n');
+    }
+    let pct = |a: usize, b: usize| if b == 0 { f64::NAN } else { 100.0 * a as f64 / b as f64 };
+    text.push_str(&format!("top-1 accuracy: {correct}/{} = {:.1}% (target >= 90%)\n", effect_rows.len(), pct(correct, effect_rows.len())));
+    text.push_str(&format!("false-positive rate on null sets: {false_positives}/{} = {:.1}% (target <= 10%)\n", null_rows.len(), pct(false_positives, null_rows.len())));
+    text.push_str(&format!("median held-out shrink where the effect moves the peak statistics beyond their noise ({} sets): {:.2} (target >= 0.60)\n", shrinks.len(), median));
+    text.push_str(&format!("total time {:.0} s\n", started.elapsed().as_secs_f64()));
+    print!("{text}");
+    crate::io::create_dir(&args.out)?;
+    crate::io::write_atomically(&args.out.join("summary.txt"), |w| w.write_all(text.as_bytes()))?;
+    Ok(())
 }
