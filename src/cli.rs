@@ -50,6 +50,9 @@ struct DiagnoseArgs {
     /// Simulated replicate records per condition.
     #[arg(long, default_value_t = 8)]
     replicates: u32,
+    /// Realisations per condition in the ensembles that score summary data.
+    #[arg(long, default_value_t = 64)]
+    realisations: u32,
 }
 
 #[derive(Args, Debug)]
@@ -402,7 +405,12 @@ fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     let set = crate::measure::read_measurement_set(&args.dir)?;
     let (backend, description) = Backend::open(args.backend.into())?;
     eprintln!("backend: {description}");
-    let settings = DiagnoseSettings { seed: args.seed, replicates: args.replicates.max(2), ..DiagnoseSettings::default() };
+    let settings = DiagnoseSettings {
+        seed: args.seed,
+        replicates: args.replicates.max(2),
+        ensemble_realisations: args.realisations.max(4),
+        ..DiagnoseSettings::default()
+    };
     let started = Instant::now();
     let spinner = ProgressBar::new_spinner();
     spinner.enable_steady_tick(std::time::Duration::from_millis(200));
@@ -473,12 +481,18 @@ fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         confusion[row][col] += 1;
         rows.push((truth_name.to_string(), form, level, d.verdict.clone(), heldout, moves, seconds));
         bar.inc(1);
-        bar.println(format!(
+        let line = format!(
             "set {i:3}: truth {truth_name:<24} form {form} level {level} -> {:<24} held-out shrink {} {}({seconds:.0} s)",
             d.verdict,
             heldout.map_or("n/a".into(), |h| format!("{h:+.2}")),
             if moves { "" } else { "[effect within peak noise] " }
-        ));
+        );
+        // A hidden bar (output not a terminal) drops println: print directly.
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
     }
     bar.finish_and_clear();
     let effect_rows: Vec<_> = rows.iter().filter(|r| r.0 != "none").collect();
