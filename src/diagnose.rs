@@ -157,6 +157,10 @@ struct Data<'a> {
     /// Record length per unit in excitation periods (for simulated records).
     record_s: Vec<f64>,
     sample_interval_s: f64,
+    /// Mean measured normal force per condition key (where recorded), N.
+    measured_normal_force_n: BTreeMap<(i64, i64), f64>,
+    /// Longest record, s.
+    longest_record_s: f64,
 }
 
 fn mean(values: &[f64]) -> f64 {
@@ -233,32 +237,30 @@ impl<'a> Data<'a> {
             }
         }
         let sample_interval_s = set.runs.first().map(|r| r.sample_interval_s()).unwrap_or(1.0 / 600.0);
-        Ok(Data { set, units, measured, record_s, sample_interval_s })
+        // Mean measured normal force per condition, over the runs that record it.
+        let mut forces: BTreeMap<(i64, i64), Vec<f64>> = BTreeMap::new();
+        for r in &set.runs {
+            if let Some(n) = &r.normal_force {
+                let c = Condition { excitation_frequency_hz: r.excitation_frequency_hz, normal_force_n: r.normal_force_n };
+                forces.entry(condition_key(c)).or_default().push(mean(n));
+            }
+        }
+        let measured_normal_force_n = forces.into_iter().map(|(k, v)| (k, mean(&v))).collect();
+        let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
+        Ok(Data { set, units, measured, record_s, sample_interval_s, measured_normal_force_n, longest_record_s })
     }
 
     fn has_heldout(&self) -> bool {
         self.units.iter().any(|u| u.heldout)
     }
 
-    /// Mean measured normal force per condition key, when recorded.
-    fn measured_normal_force(&self, c: Condition) -> Option<f64> {
-        let values: Vec<f64> = self
-            .set
-            .runs
-            .iter()
-            .filter(|r| condition_key(Condition { excitation_frequency_hz: r.excitation_frequency_hz, normal_force_n: r.normal_force_n }) == condition_key(c))
-            .filter_map(|r| r.normal_force.as_ref().map(|n| mean(n)))
-            .collect();
-        (!values.is_empty()).then(|| mean(&values))
-    }
-
     /// The condition a unit is simulated at under `model`: N0 such that the
     /// simulated record's mean normal force equals the measured mean (where
     /// recorded), allowing for the model's drift over warm-up and record.
     fn simulated_condition(&self, u: &Unit, model: &Model, warmup_cycles: u32) -> Condition {
-        let Some(measured) = self.measured_normal_force(u.condition) else { return u.condition };
+        let Some(&measured) = self.measured_normal_force_n.get(&condition_key(u.condition)) else { return u.condition };
         let start = f64::from(warmup_cycles) / u.condition.excitation_frequency_hz;
-        let length = self.set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
+        let length = self.longest_record_s;
         let factor = match &model.effects.normal_force_drift {
             Some(d) => {
                 let form = d.form as u32;
