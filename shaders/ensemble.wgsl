@@ -58,7 +58,7 @@ struct Effects {
     drift_form: u32,
     drift_rate_per_s: f32,
     noise_interval_s: f32,
-    _pad0: u32,
+    stiction_release_m: f32,
     _pad1: u32,
 }
 
@@ -247,6 +247,8 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32) -> f32 {
     var mu = law * hysteresis_factor(slipped_m);
     if (effects.stiction_form == 2u) {
         mu += path.stiction_excess * exp(-slipped_m / 1e-4);
+    } else if (effects.stiction_form == 0u && effects.stiction_release_m > 0.0) {
+        mu += path.stiction_excess * max(1.0 - slipped_m / effects.stiction_release_m, 0.0);
     }
     return max(mu, 0.0);
 }

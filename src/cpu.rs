@@ -197,6 +197,8 @@ impl<'a> Path<'a> {
         let mut mu = law * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m);
         if e.stiction_form == 2 {
             mu += self.stiction_excess * (-slipped_m / effects::STICTION_DECAY_M).exp();
+        } else if e.stiction_form == 0 && e.stiction_release_m > 0.0 {
+            mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
         }
         mu.max(0.0)
     }

@@ -128,13 +128,19 @@ pub enum ColourForm {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Stiction {
-    /// `constant`: μ_s = μ(0) + Δ; `noisy`: Δ·max(0, 1 + z/2) per interval;
+    /// `constant`: μ_s = μ(0) + Δ, and after breakaway an extra
+    /// Δ·max(0, 1 − d/L) that fades linearly over the first `release_length_m`
+    /// L of slip (L = 0: friction drops to the kinetic law at once);
+    /// `noisy`: Δ·max(0, 1 + z/2) per interval, dropping at once;
     /// `decaying`: Δ at breakaway, and an extra Δ·e^(−d/0.1 mm) while the
     /// slip begins (a smooth static-to-kinetic transition).
     #[serde(default)]
     pub form: StictionForm,
     /// Excess Δ of the static coefficient, –.
     pub excess: f64,
+    /// Slip L over which the `constant` form's excess fades, m (0: at once).
+    #[serde(default)]
+    pub release_length_m: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -284,6 +290,7 @@ impl Effects {
         }
         if let Some(s) = &self.stiction {
             check("stiction.excess", s.excess, s.excess >= 0.0, "must be >= 0")?;
+            check("stiction.release_length_m", s.release_length_m, s.release_length_m >= 0.0, "must be >= 0 m")?;
         }
         if let Some(l) = &self.load_dependent_friction {
             check("load_dependent_friction.strength", l.strength, true, "must be finite")?;
@@ -322,6 +329,8 @@ pub struct EffectParams {
     pub colour_hold_intervals: u32,
     pub stiction_form: u32,
     pub stiction_excess: f64,
+    /// Slip over which the constant form's excess fades, m.
+    pub stiction_release_m: f64,
     /// Δa at this point's N0, –.
     pub friction_offset: f64,
     pub drift_form: u32,
@@ -367,6 +376,7 @@ impl EffectParams {
         if let Some(s) = &effects.stiction {
             p.stiction_form = s.form as u32;
             p.stiction_excess = s.excess;
+            p.stiction_release_m = s.release_length_m;
         }
         if let Some(l) = &effects.load_dependent_friction {
             let r = l.reference_force_n;

@@ -122,7 +122,8 @@ pub struct Effects {
     pub drift_rate_per_s: f32,
     /// s
     pub noise_interval_s: f32,
-    pub _pad0: u32,
+    /// m
+    pub stiction_release_m: f32,
     pub _pad1: u32,
 }
 
@@ -152,7 +153,7 @@ impl Effects {
             drift_form: e.drift_form,
             drift_rate_per_s: e.drift_rate_per_s as f32,
             noise_interval_s: o.noise_interval_s as f32,
-            _pad0: 0,
+            stiction_release_m: e.stiction_release_m as f32,
             _pad1: 0,
         }
     }

@@ -118,6 +118,7 @@ pub fn random_truth(seed: u64, effect: Option<usize>, form: u32, level: u32) -> 
             m.effects.stiction = Some(effects::Stiction {
                 form: if form == 1 { effects::StictionForm::Noisy } else { effects::StictionForm::Decaying },
                 excess: pick(0.12, 0.25),
+                release_length_m: 0.0,
             });
         }
         Some("load_dependent_friction") => {

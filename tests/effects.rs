@@ -12,7 +12,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 21] = [
+const ZERO: [&[&str]; 22] = [
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]", "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]"],
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]", "normal_force_harmonics.form=\"bumps\""],
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]", "normal_force_harmonics.form=\"square\""],
@@ -28,6 +28,7 @@ const ZERO: [&[&str]; 21] = [
     &["stiction.excess=0.0"],
     &["stiction.excess=0.0", "stiction.form=\"noisy\""],
     &["stiction.excess=0.0", "stiction.form=\"decaying\""],
+    &["stiction.excess=0.0", "stiction.release_length_m=3e-4"],
     &["load_dependent_friction.strength=0.0"],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"saturating\""],
@@ -38,7 +39,7 @@ const ZERO: [&[&str]; 21] = [
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time).
-const ON: [&[&str]; 21] = [
+const ON: [&[&str]; 22] = [
     &["normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]", "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]"],
     &["normal_force_harmonics.amplitudes_n=[0.6, 0.0, 0.0, 0.0]", "normal_force_harmonics.form=\"bumps\"", "normal_force_harmonics.shape=4.0"],
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.5, 0.0, 0.0]", "normal_force_harmonics.form=\"square\"", "normal_force_harmonics.shape=3.0"],
@@ -54,6 +55,7 @@ const ON: [&[&str]; 21] = [
     &["stiction.excess=0.15"],
     &["stiction.excess=0.15", "stiction.form=\"noisy\""],
     &["stiction.excess=0.15", "stiction.form=\"decaying\""],
+    &["stiction.excess=0.15", "stiction.release_length_m=3e-4"],
     &["load_dependent_friction.strength=0.01"],
     &["load_dependent_friction.strength=0.3", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"saturating\""],
@@ -133,6 +135,20 @@ fn each_effect_does_what_it_says() {
     // Stiction holds the block longer at each reversal.
     let (stuck, stuck_base) = (stick_time(&model(&["stiction.excess=0.2"])), stick_time(&Model::default()));
     assert!(stuck > 1.5 * stuck_base, "stiction: stick time {stuck} vs baseline {stuck_base}");
+    // Stiction released over 0.3 mm keeps friction above the kinetic law
+    // just after breakaway; released at once it does not.
+    let early_slip_mu = |m: &Model| {
+        let r = record(m, 5.0);
+        let early: Vec<f64> = r
+            .windows(2)
+            .filter(|w| (0.002..0.03).contains(&w[1].v_m_per_s.abs()) && w[1].v_m_per_s.abs() > w[0].v_m_per_s.abs() && w[1].normal_force_n > 0.0)
+            .map(|w| w[1].friction_force_n.abs() / w[1].normal_force_n)
+            .collect();
+        mean(early.into_iter())
+    };
+    let (released, abrupt) = (early_slip_mu(&model(&["stiction.excess=0.2", "stiction.release_length_m=3e-4"])), early_slip_mu(&model(&["stiction.excess=0.2"])));
+    println!("friction coefficient early in a slip: released over 0.3 mm {released:.4}, at once {abrupt:.4}");
+    assert!(released - abrupt > 0.05, "stiction release: {released} vs {abrupt}");
     // More friction at 16.39 N than at the 10 N reference lowers the peaks.
     let base = mean_peak(&Model::default());
     assert!(mean_peak(&model(&["load_dependent_friction.strength=0.01"])) < base, "more friction at 16.39 N than at 10 N");

@@ -139,7 +139,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 drift_form,
                 drift_rate_per_s,
                 noise_interval_s,
-                _pad0,
+                stiction_release_m,
                 _pad1,
             }),
             "ENSEMBLE_WGSL",
