@@ -1,20 +1,22 @@
 //! Diagnosis of the sim-to-real gap (`stickslip diagnose`).
 //!
 //! 1. **Calibrate** the baseline: the friction law and its noise from the
-//!    force channels where they exist (least squares of μ = |F|/N against
-//!    speed while slipping), σ_N and each condition's N0 from the measured
-//!    normal force, and the friction level `a` from the response: it is
-//!    solved so the simulated mean peaks (GPU ensembles) match the measured
-//!    ones. Summary-only data calibrate `a` and σ_μ from peak means and
-//!    variances.
+//!    force channels where they exist (a least-squares Stribeck fit of
+//!    μ = |F|/N against speed while slipping, matched between measured and
+//!    simulated records by indirect inference), σ_N and each condition's N0
+//!    from the measured normal force. Without force channels the friction
+//!    level `a` is solved so the simulated mean peaks (GPU ensembles) match
+//!    the measured ones.
 //! 2. **Locate**: every observable of `features.rs` is computed by the same
 //!    code from the measured records and from simulated replicate records of
 //!    the same length and sampling; each (condition, observable) gets a
 //!    z-score against the simulator's own replicate spread. `locations` are
 //!    those with |z| > 3.
 //! 3. **Attribute**: for each effect (its candidate form), the strength is
-//!    searched with `a` re-solved at every trial, so an effect cannot win by
-//!    shifting the baseline; the gap left is measured.
+//!    searched with the baseline recalibrated at every trial (the friction
+//!    law and σ_μ, or `a`), so an effect cannot win by shifting the baseline
+//!    and is not judged against a law its own signature distorted; the gap
+//!    left is measured.
 //! 4. **Quantify**: the gap metric is the mean z² over (condition,
 //!    observable); `shrink` is measured on the fitting units and
 //!    `heldout_shrink` on units left out of every fit (alternate runs of a
@@ -161,6 +163,8 @@ struct Data<'a> {
     measured_normal_force_n: BTreeMap<(i64, i64), f64>,
     /// Longest record, s.
     longest_record_s: f64,
+    /// The friction law fitted to the fitting units' force channels.
+    measured_law: Option<FrictionLaw>,
 }
 
 fn mean(values: &[f64]) -> f64 {
@@ -247,7 +251,9 @@ impl<'a> Data<'a> {
         }
         let measured_normal_force_n = forces.into_iter().map(|(k, v)| (k, mean(&v))).collect();
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
-        Ok(Data { set, units, measured, record_s, sample_interval_s, measured_normal_force_n, longest_record_s })
+        let fit_runs: Vec<&Run> = units.iter().filter(|u| !u.heldout).flat_map(|u| u.runs.iter().map(|&r| &set.runs[r])).collect();
+        let measured_law = fit_friction_law(&fit_runs);
+        Ok(Data { set, units, measured, record_s, sample_interval_s, measured_normal_force_n, longest_record_s, measured_law })
     }
 
     fn has_heldout(&self) -> bool {
@@ -377,16 +383,31 @@ fn solve_friction_level(model: &Model, data: &Data<'_>, settings: &DiagnoseSetti
     Ok((with_a(best), if slope.is_finite() && slope < 0.0 { slope } else { -1.0 }))
 }
 
-/// Sets the friction level `a` for `model` and scores it. With friction
-/// channels, `a` is corrected so the simulated mean μ while slipping matches
-/// the measured one (the force channels calibrate friction); otherwise it is
-/// solved from the response (mean peaks, GPU ensembles).
+/// Calibrates the friction law of `model` to the data and scores it.
+///
+/// With friction channels this is indirect inference: the same
+/// least-squares Stribeck fit (`fit_friction_law_at`, at the measured data's
+/// best `c`) is run on the measured records and on the model's simulated
+/// replicate records, and `a`, `b` and σ_μ are moved by the difference
+/// (σ_μ² by the difference of the residual variances). The fit's numbers are
+/// then those of the data whatever else the model carries (two steps, each
+/// from the fitting units' replicates alone), so an effect that
+/// changes friction (hysteresis lowering it early in a slip, stiction raising
+/// it, a noise that is coloured or skewed) is judged with the law and noise
+/// level that the data imply *given that effect*, not the ones it distorted.
+/// Without friction channels `a` is solved from the response (mean peaks,
+/// GPU ensembles).
 fn calibrate_and_score(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, backend: &Backend, slope: Option<f64>) -> Result<(Model, Vec<Score>, f64)> {
-    if measured_mean(data, "friction_mu_mean").is_some() {
-        let first = score(model, data, settings, backend)?;
-        let misses: Vec<f64> = first.iter().filter(|s| !s.heldout && s.observable == "friction_mu_mean").map(|s| s.measured - s.simulated).collect();
+    if let Some(measured) = data.measured_law {
         let mut m = model.clone();
-        m.friction.a = (m.friction.a + mean(&misses)).max((-m.friction.b).max(0.0));
+        m.friction.c = measured.c;
+        for _ in 0..LAW_STEPS {
+            let Some(simulated) = simulated_law(&m, data, settings, measured.c)? else { break };
+            m.friction.b += measured.b - simulated.b;
+            m.friction.a = (m.friction.a + measured.a - simulated.a).max((-m.friction.b).max(0.0));
+            let variance = m.friction.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
+            m.friction.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt();
+        }
         let scores = score(&m, data, settings, backend)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
     }
@@ -428,13 +449,7 @@ fn score(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, backend: &
     use rayon::prelude::*;
     let simulated: Vec<Result<Vec<RunFeatures>>> = run_units
         .par_iter()
-        .map(|&i| {
-            let u = &data.units[i];
-            let c = data.simulated_condition(u, model, settings.warmup_cycles);
-            (0..settings.replicates)
-                .map(|r| Ok(run_features(&simulate_record(model, c, data.record_s[i], data.sample_interval_s, settings.seed, r + 1000 * i as u32, settings.warmup_cycles)?)))
-                .collect()
-        })
+        .map(|&i| (0..settings.replicates).map(|r| Ok(run_features(&simulate_replicate(model, data, settings, i, r)?))).collect())
         .collect();
     for (&i, sims) in run_units.iter().zip(simulated) {
         let sims = sims?;
@@ -458,6 +473,26 @@ fn score(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, backend: &
         }
     }
     Ok(scores)
+}
+
+/// Replicate `replicate` of unit `unit` under `model`: a record as long as
+/// the unit's, sampled like the data, on its own noise path (the same path
+/// for every model, so differences between models are not noise).
+fn simulate_replicate(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, unit: usize, replicate: u32) -> Result<Run> {
+    let c = data.simulated_condition(&data.units[unit], model, settings.warmup_cycles);
+    simulate_record(model, c, data.record_s[unit], data.sample_interval_s, settings.seed, replicate + 1000 * unit as u32, settings.warmup_cycles)
+}
+
+/// The friction law fitted at `c` to the model's simulated replicates of the
+/// fitting units, pooled like the measured fitting runs are.
+fn simulated_law(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, c: f64) -> Result<Option<FrictionLaw>> {
+    use rayon::prelude::*;
+    let jobs: Vec<(usize, u32)> = (0..data.units.len())
+        .filter(|&i| !data.units[i].heldout && data.units[i].summary.is_none())
+        .flat_map(|i| (0..settings.replicates).map(move |r| (i, r)))
+        .collect();
+    let runs = jobs.par_iter().map(|&(i, r)| simulate_replicate(model, data, settings, i, r)).collect::<Result<Vec<Run>>>()?;
+    Ok(fit_friction_law_at(&runs.iter().collect::<Vec<_>>(), c))
 }
 
 /// The baseline from the data, before solving for `a`.
@@ -488,20 +523,54 @@ fn initial_baseline(data: &Data<'_>) -> Result<Model> {
         m.normal_force.sigma = mean(&summary_vars).sqrt();
     }
     // The friction law from the force channels, where recorded.
-    if let Some(law) = fit_friction_law(&fit_runs) {
-        m.friction.a = law.0;
-        m.friction.b = law.1;
-        m.friction.c = law.2;
+    if let Some(law) = data.measured_law {
+        m.friction.a = law.a;
+        m.friction.b = law.b;
+        m.friction.c = law.c;
         m.friction.d = 0.0;
-        m.friction.sigma = law.3;
+        m.friction.sigma = law.sigma;
     }
     m.validate()?;
     Ok(m)
 }
 
-/// Least squares of μ = |F|/N against speed on slipping samples:
-/// `a + b/(1 + c s)`, c from a grid. Returns (a, b, c, residual sd).
-fn fit_friction_law(runs: &[&Run]) -> Option<(f64, f64, f64, f64)> {
+/// A Stribeck law `μ(v) = a + b / (1 + c |v|)` fitted to slipping samples,
+/// with the residual standard deviation around it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FrictionLaw {
+    /// –
+    a: f64,
+    /// –
+    b: f64,
+    /// s/m
+    c: f64,
+    /// Residual standard deviation of μ, –.
+    sigma: f64,
+}
+
+/// Steps of the friction law's indirect inference (each simulates the
+/// fitting units' replicates once).
+const LAW_STEPS: usize = 2;
+
+/// Stribeck decay rates `c` (s/m) the law is fitted over.
+const LAW_C_GRID: [f64; 7] = [0.0, 2.0, 5.0, 10.0, 20.0, 40.0, 80.0];
+
+/// The law with the smallest residual over [`LAW_C_GRID`]; `None` without
+/// force channels or with fewer than 50 slipping samples.
+fn fit_friction_law(runs: &[&Run]) -> Option<FrictionLaw> {
+    LAW_C_GRID
+        .iter()
+        .filter_map(|&c| fit_friction_law_at(runs, c))
+        .filter(|law| law.a >= 0.0 && law.a + law.b >= 0.0)
+        .min_by(|x, y| x.sigma.total_cmp(&y.sigma))
+}
+
+/// Least squares of μ = |F|/N against speed on slipping samples (|v| above
+/// 5% of the record's largest, friction opposing motion) at a given `c`:
+/// linear in (a, b) with basis (1, 1/(1 + c|v|)). `None` with too few
+/// samples. The fit is not constrained (as a statistic of simulated records
+/// it must be the same function as on the measured ones).
+fn fit_friction_law_at(runs: &[&Run], c: f64) -> Option<FrictionLaw> {
     let mut speeds = Vec::new();
     let mut mus = Vec::new();
     for r in runs {
@@ -517,25 +586,14 @@ fn fit_friction_law(runs: &[&Run]) -> Option<(f64, f64, f64, f64)> {
     if mus.len() < 50 {
         return None;
     }
-    let mut best: Option<(f64, f64, f64, f64)> = None;
-    for c in [0.0, 2.0, 5.0, 10.0, 20.0, 40.0, 80.0] {
-        // Linear least squares in (a, b) with basis (1, 1/(1 + c s)).
-        let basis: Vec<f64> = speeds.iter().map(|s| 1.0 / (1.0 + c * s)).collect();
-        let (n, sx, sy) = (mus.len() as f64, basis.iter().sum::<f64>(), mus.iter().sum::<f64>());
-        let sxx: f64 = basis.iter().map(|x| x * x).sum();
-        let sxy: f64 = basis.iter().zip(&mus).map(|(x, y)| x * y).sum();
-        let det = n * sxx - sx * sx;
-        let (a, b) = if c == 0.0 || det.abs() < 1e-12 { (sy / n, 0.0) } else { ((sxx * sy - sx * sxy) / det, (n * sxy - sx * sy) / det) };
-        if a < 0.0 || a + b < 0.0 {
-            continue;
-        }
-        let rss: f64 = basis.iter().zip(&mus).map(|(x, y)| (y - a - b * x).powi(2)).sum();
-        let sigma = (rss / (n - 2.0)).sqrt();
-        if best.is_none_or(|bst| sigma < bst.3) {
-            best = Some((a, b, c, sigma));
-        }
-    }
-    best
+    let basis: Vec<f64> = speeds.iter().map(|s| 1.0 / (1.0 + c * s)).collect();
+    let (n, sx, sy) = (mus.len() as f64, basis.iter().sum::<f64>(), mus.iter().sum::<f64>());
+    let sxx: f64 = basis.iter().map(|x| x * x).sum();
+    let sxy: f64 = basis.iter().zip(&mus).map(|(x, y)| x * y).sum();
+    let det = n * sxx - sx * sx;
+    let (a, b) = if c == 0.0 || det.abs() < 1e-12 { (sy / n, 0.0) } else { ((sxx * sy - sx * sxy) / det, (n * sxy - sx * sy) / det) };
+    let rss: f64 = basis.iter().zip(&mus).map(|(x, y)| (y - a - b * x).powi(2)).sum();
+    Some(FrictionLaw { a, b, c, sigma: (rss / (n - 2.0)).sqrt() })
 }
 
 /// A candidate: how to set its effect from one strength value.
@@ -543,7 +601,10 @@ struct CandidateSpec {
     effect: &'static str,
     /// Strength values to try.
     grid: Vec<f64>,
-    apply: Box<dyn Fn(&Model, f64) -> Model + Sync>,
+    /// Values of a second parameter, each tried with every strength
+    /// (`[0.0]` where the candidate has one parameter).
+    second: Vec<f64>,
+    apply: Box<dyn Fn(&Model, f64, f64) -> Model + Sync>,
     /// Parameter names for the report.
     describe: Box<dyn Fn(&Model) -> BTreeMap<String, f64> + Sync>,
 }
@@ -582,7 +643,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "normal_force_harmonics",
         grid: if has_n { vec![0.5, 0.75, 1.0, 1.25] } else { vec![0.1, 0.3, 1.0, 2.0] },
-        apply: Box::new(move |m, s| {
+        second: vec![0.0],
+        apply: Box::new(move |m, s, _| {
             let mut m = m.clone();
             let amps = if has_n { [excess[0] * s, excess[1] * s, excess[2] * s, excess[3] * s] } else { [s, 0.0, 0.0, 0.0] };
             m.effects.normal_force_harmonics = Some(effects::NormalForceHarmonics { form: effects::HarmonicForm::Fourier, amplitudes_n: amps, phases_rad: [0.0; 4], shape: 2.0 });
@@ -597,7 +659,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "non_gaussian_friction",
         grid: [0.15, 0.3, 0.5, 0.8, 1.2].iter().map(|s| s * sign).collect(),
-        apply: Box::new(|m, s| {
+        second: vec![0.0],
+        apply: Box::new(|m, s, _| {
             let mut m = m.clone();
             m.effects.non_gaussian_friction = Some(effects::NonGaussianFriction { form: effects::NonGaussianForm::Skew, strength: s, load_exponent: 0.0, reference_force_n: 10.0 });
             m
@@ -607,7 +670,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "friction_hysteresis",
         grid: vec![2e-5, 5e-5, 1e-4, 2e-4, 4e-4, 8e-4],
-        apply: Box::new(|m, s| {
+        second: vec![0.0],
+        apply: Box::new(|m, s, _| {
             let mut m = m.clone();
             m.effects.friction_hysteresis = Some(effects::FrictionHysteresis { form: effects::HysteresisForm::Exponential, length_m: s });
             m
@@ -617,7 +681,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "coloured_friction_noise",
         grid: log_grid(dt, &[2.0, 4.0, 8.0, 16.0, 32.0]),
-        apply: Box::new(|m, s| {
+        second: vec![0.0],
+        apply: Box::new(|m, s, _| {
             let mut m = m.clone();
             m.effects.coloured_friction_noise = Some(effects::ColouredFrictionNoise { form: effects::ColourForm::Ar1, correlation_time_s: s });
             m
@@ -627,12 +692,18 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "stiction",
         grid: vec![0.02, 0.05, 0.1, 0.2, 0.35],
-        apply: Box::new(|m, s| {
+        // Static friction that is released at once, or over the first
+        // 0.1 or 0.3 mm of slip.
+        second: vec![0.0, 1e-4, 3e-4],
+        apply: Box::new(|m, s, release| {
             let mut m = m.clone();
-            m.effects.stiction = Some(effects::Stiction { form: effects::StictionForm::Constant, excess: s });
+            m.effects.stiction = Some(effects::Stiction { form: effects::StictionForm::Constant, excess: s, release_length_m: release });
             m
         }),
-        describe: Box::new(|m| BTreeMap::from([("excess".to_string(), m.effects.stiction.as_ref().unwrap().excess)])),
+        describe: Box::new(|m| {
+            let s = m.effects.stiction.as_ref().unwrap();
+            BTreeMap::from([("excess".to_string(), s.excess), ("release_length_m".to_string(), s.release_length_m)])
+        }),
     });
     // Where friction is measured, the slope of mean μ against N0 across the
     // fitting conditions centres the search.
@@ -657,7 +728,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
             Some(s) => log_grid(s, &[0.5, 0.75, 1.0, 1.25, 1.5]),
             None => vec![-0.04, -0.02, -0.01, -0.004, 0.004, 0.01, 0.02, 0.04],
         },
-        apply: Box::new(move |m, s| {
+        second: vec![0.0],
+        apply: Box::new(move |m, s, _| {
             let mut m = m.clone();
             m.effects.load_dependent_friction = Some(effects::LoadDependentFriction { form: effects::LoadForm::Linear, strength: s, reference_force_n: mean_n0.max(1e-3) });
             m
@@ -670,7 +742,8 @@ fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores: &[Score])
     specs.push(CandidateSpec {
         effect: "normal_force_drift",
         grid: log_grid(if drift == 0.0 { 0.002 } else { drift }, &[0.5, 0.75, 1.0, 1.5]),
-        apply: Box::new(|m, s| {
+        second: vec![0.0],
+        apply: Box::new(|m, s, _| {
             let mut m = m.clone();
             m.effects.normal_force_drift = Some(effects::NormalForceDrift { form: effects::DriftForm::Linear, rate_per_s: s });
             m
@@ -696,9 +769,10 @@ pub fn diagnose_set(set: &MeasurementSet, settings: &DiagnoseSettings, backend: 
     let mut candidates = Vec::new();
     for spec in &specs {
         progress(&format!("trying {}", spec.effect));
-        let mut best: Option<(f64, Model, Vec<Score>, f64)> = None;
-        let trial_at = |s: f64, best: &mut Option<(f64, Model, Vec<Score>, f64)>| -> Result<()> {
-            let trial = (spec.apply)(&baseline, s);
+        // (gap on the fitting units, calibrated model, scores, strength, second parameter)
+        let mut best: Option<(f64, Model, Vec<Score>, f64, f64)> = None;
+        let trial_at = |s: f64, t: f64, best: &mut Option<(f64, Model, Vec<Score>, f64, f64)>| -> Result<()> {
+            let trial = (spec.apply)(&baseline, s, t);
             if trial.validate().is_err() {
                 return Ok(());
             }
@@ -708,26 +782,28 @@ pub fn diagnose_set(set: &MeasurementSet, settings: &DiagnoseSettings, backend: 
                 let mut w: Vec<&Score> = scores.iter().filter(|s| !s.heldout).collect();
                 w.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
                 let top: Vec<String> = w.iter().take(6).map(|s| format!("{}@{:.1}N {:+.1} (m {:.3e} s {:.3e})", s.observable, s.normal_force_n, s.z, s.measured, s.simulated)).collect();
-                eprintln!("{} {s:e}: a {:.4} gap {g:.2} | {}", spec.effect, trial.friction.a, top.join("; "));
+                eprintln!("{} {s:e} {t:e}: a {:.4} b {:.4} sigma {:.4} gap {g:.2} | {}", spec.effect, trial.friction.a, trial.friction.b, trial.friction.sigma, top.join("; "));
             }
             if best.as_ref().is_none_or(|b| g < b.0) {
-                *best = Some((g, trial, scores, s));
+                *best = Some((g, trial, scores, s, t));
             }
             Ok(())
         };
-        for &s in &spec.grid {
-            trial_at(s, &mut best)?;
+        for &t in &spec.second {
+            for &s in &spec.grid {
+                trial_at(s, t, &mut best)?;
+            }
         }
-        // Refine: halfway to each neighbour of the best grid value.
-        if let Some(at) = best.as_ref().map(|b| b.3) {
+        // Refine: halfway to each neighbour of the best strength.
+        if let Some((at, t)) = best.as_ref().map(|b| (b.3, b.4)) {
             if let Some(i) = spec.grid.iter().position(|&g| g == at) {
                 let neighbours = [i.checked_sub(1).map(|j| spec.grid[j]), spec.grid.get(i + 1).copied()];
                 for n in neighbours.into_iter().flatten() {
-                    trial_at(0.5 * (at + n), &mut best)?;
+                    trial_at(0.5 * (at + n), t, &mut best)?;
                 }
             }
         }
-        let best = best.map(|(g, m, sc, _)| (g, m, sc));
+        let best = best.map(|(g, m, sc, _, _)| (g, m, sc));
         let Some((g1_fit, model, scores)) = best else { continue };
         let g1_ho = gap_of(&scores, true);
         let mut worst: Vec<&Score> = scores.iter().collect();
