@@ -927,3 +927,42 @@ pub fn peak_shift_in_noise_units(with: &Model, without: &Model, conditions: &[Co
     }
     Ok(worst)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::Sample;
+    use rand::rngs::StdRng;
+    use rand::{RngExt, SeedableRng};
+
+    /// A record sliding back and forth at 1 Hz with friction from a known
+    /// Stribeck law plus Gaussian noise of sd `sigma`.
+    fn record(a: f64, b: f64, c: f64, sigma: f64, seed: u64) -> Run {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let samples: Vec<Sample> = (0..12_000)
+            .map(|i| {
+                let t_s = f64::from(i) / 600.0;
+                let v = 0.2 * (std::f64::consts::TAU * t_s).sin();
+                let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+                let noise = sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                let mu = a + b / (1.0 + c * v.abs()) + noise;
+                Sample { t_s, x_m: 0.0, v_m_per_s: v, normal_force_n: 10.0, friction_force_n: -v.signum() * mu * 10.0 }
+            })
+            .collect();
+        Run::from_samples(&samples, 1.0, 1e-3, 10.0)
+    }
+
+    #[test]
+    fn friction_law_fit_recovers_a_known_law() {
+        let run = record(0.25, 0.1, 20.0, 0.04, 1);
+        let law = fit_friction_law(&[&run]).unwrap();
+        assert_eq!(law.c, 20.0, "{law:?}");
+        assert!((law.a - 0.25).abs() < 0.005 && (law.b - 0.1).abs() < 0.01, "{law:?}");
+        assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
+        // At a fixed c the fit is the unconstrained least squares, so a law
+        // with friction falling below zero at rest is still reported.
+        let rising = fit_friction_law_at(&[&record(0.4, -0.3, 80.0, 0.0, 2)], 80.0).unwrap();
+        assert!((rising.b + 0.3).abs() < 1e-6 && (rising.a - 0.4).abs() < 1e-6, "{rising:?}");
+        assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)]).is_none_or(|l| l.a + l.b >= 0.0));
+    }
+}
