@@ -2,7 +2,9 @@
 //! benchmark of the diagnosis on them (`stickslip benchmark-diagnosis`).
 //!
 //! Each set: a random rig and friction law, 2 frequencies × 2 normal-force
-//! levels, several runs per condition at 600 Hz with sensor noise on every
+//! levels (45% and 90% of Den Hartog's no-stop threshold: from continuous
+//! slip to the edge of stick-slip, where the noise stops the mass now and
+//! then, as on the paper's rig at its higher loads), several runs per condition at 600 Hz with sensor noise on every
 //! channel, and either no effect (a null set) or one effect in one of its
 //! non-candidate forms (forms 1 and 2: the diagnosis only ever fits form 0,
 //! so the real effect never matches a candidate's form exactly) at one of two
@@ -76,7 +78,7 @@ pub fn random_truth(seed: u64, effect: Option<usize>, form: u32, level: u32) -> 
     let mut conditions = Vec::new();
     for eta in [0.65, 0.8] {
         let threshold = DenHartog::stop_threshold(eta);
-        for share in [0.3, 0.6] {
+        for share in [0.45, 0.9] {
             let n0 = share * threshold * k * m.excitation.amplitude_m / mu;
             conditions.push(Condition { excitation_frequency_hz: eta * m.rig.natural_frequency_hz, normal_force_n: n0 });
         }
