@@ -77,6 +77,10 @@ struct BenchmarkArgs {
     runs_per_condition: u32,
     #[arg(long, default_value_t = 20.0)]
     duration: f64,
+    /// Normal-force levels as shares of Den Hartog's no-stop threshold
+    /// (comma list; below 1 the noiseless block never stops).
+    #[arg(long, value_delimiter = ',', default_values_t = crate::synthetic::LOAD_SHARES)]
+    load_shares: Vec<f64>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
     #[arg(long, value_enum, default_value = "auto")]
@@ -440,6 +444,9 @@ fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
             anyhow::bail!("invalid --effects: `{e}` is not one of {}", EFFECT_NAMES.join(", "));
         }
     }
+    if args.load_shares.is_empty() || args.load_shares.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        anyhow::bail!("invalid --load-shares {:?}: each must be a number > 0 (a share of the no-stop threshold)", args.load_shares);
+    }
     let (backend, description) = Backend::open(args.backend.into())?;
     eprintln!("backend: {description}");
     let shape = SetShape { runs_per_condition: args.runs_per_condition.max(1), duration_s: args.duration, ..SetShape::default() };
@@ -455,7 +462,7 @@ fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     let started = Instant::now();
     for (i, &(effect, form, level)) in plan.iter().enumerate() {
         let seed = args.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-        let (truth, conditions) = random_truth(seed, effect, form, level)?;
+        let (truth, conditions) = random_truth(seed, effect, form, level, &args.load_shares)?;
         let dir = args.out.join(format!("set-{i:03}"));
         write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
         let set = crate::measure::read_measurement_set(&dir.join("data"))?;
@@ -503,7 +510,7 @@ fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     shrinks.sort_by(f64::total_cmp);
     let median = if shrinks.is_empty() { f64::NAN } else if shrinks.len() % 2 == 1 { shrinks[shrinks.len() / 2] } else { 0.5 * (shrinks[shrinks.len() / 2 - 1] + shrinks[shrinks.len() / 2]) };
     let mut text = String::new();
-    text.push_str(&format!("blind benchmark of the diagnosis: {} sets ({} with an effect, {} null), {} runs x {} s per condition, 4 conditions; {description}\n", rows.len(), effect_rows.len(), null_rows.len(), shape.runs_per_condition, shape.duration_s));
+    text.push_str(&format!("blind benchmark of the diagnosis: {} sets ({} with an effect, {} null), {} runs x {} s per condition, 2 frequencies x loads at {:?} of the no-stop threshold; {description}\n", rows.len(), effect_rows.len(), null_rows.len(), shape.runs_per_condition, shape.duration_s, args.load_shares));
     text.push_str("confusion matrix (rows: withheld effect, columns: verdict)\n");
     let short = |l: &str| l.split('_').map(|w| &w[..w.len().min(4)]).collect::<Vec<_>>().join("_");
     text.push_str(&format!("{:<26}", ""));

@@ -2,9 +2,10 @@
 //! benchmark of the diagnosis on them (`stickslip benchmark-diagnosis`).
 //!
 //! Each set: a random rig and friction law, 2 frequencies × 2 normal-force
-//! levels (45% and 90% of Den Hartog's no-stop threshold: from continuous
-//! slip to the edge of stick-slip, where the noise stops the mass now and
-//! then, as on the paper's rig at its higher loads), several runs per condition at 600 Hz with sensor noise on every
+//! levels (by default 45% and 90% of Den Hartog's no-stop threshold: from
+//! continuous slip to the edge of stick-slip, where the noise stops the mass
+//! now and then, as on the paper's rig at its higher loads; `--load-shares`
+//! sets others), several runs per condition at 600 Hz with sensor noise on every
 //! channel, and either no effect (a null set) or one effect in one of its
 //! non-candidate forms (forms 1 and 2: the diagnosis only ever fits form 0,
 //! so the real effect never matches a candidate's form exactly) at one of two
@@ -57,9 +58,15 @@ fn uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
 
+/// Normal-force levels of the benchmark's sets, as shares of Den Hartog's
+/// no-stop threshold (see the module's documentation).
+pub const LOAD_SHARES: [f64; 2] = [0.45, 0.9];
+
 /// A random rig and friction law with the effect `effect` (index into
-/// [`EFFECT_NAMES`], `None` for a null set) in `form` at `level`.
-pub fn random_truth(seed: u64, effect: Option<usize>, form: u32, level: u32) -> Result<(Model, Vec<Condition>)> {
+/// [`EFFECT_NAMES`], `None` for a null set) in `form` at `level`, at two
+/// frequencies × the normal forces that are `load_shares` of the no-stop
+/// threshold.
+pub fn random_truth(seed: u64, effect: Option<usize>, form: u32, level: u32, load_shares: &[f64]) -> Result<(Model, Vec<Condition>)> {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut m = Model::default();
     m.rig.mass_kg = uniform(&mut rng, 0.6, 1.6);
@@ -78,7 +85,7 @@ pub fn random_truth(seed: u64, effect: Option<usize>, form: u32, level: u32) -> 
     let mut conditions = Vec::new();
     for eta in [0.65, 0.8] {
         let threshold = DenHartog::stop_threshold(eta);
-        for share in [0.45, 0.9] {
+        for &share in load_shares {
             let n0 = share * threshold * k * m.excitation.amplitude_m / mu;
             conditions.push(Condition { excitation_frequency_hz: eta * m.rig.natural_frequency_hz, normal_force_n: n0 });
         }

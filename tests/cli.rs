@@ -73,6 +73,8 @@ fn bad_input_is_named_and_nothing_is_written() {
     refused(&["simulate", "--out", out_s, "--set", "rig.mass_kg=-1"], &out, "rig.mass_kg");
     refused(&["simulate", "--out", out_s, "--frequency", "0"], &out, "excitation_frequency_hz");
     refused(&["simulate", "--out", out_s, "--sample-rate", "0"], &out, "--sample-rate");
+    refused(&["benchmark-diagnosis", "--out", out_s, "--load-shares", "0.5,-1"], &out, "--load-shares");
+    refused(&["benchmark-diagnosis", "--out", out_s, "--effects", "stickiness"], &out, "stickiness");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
