@@ -466,6 +466,22 @@ impl Sampler {
     }
 }
 
+/// One realisation sampled like a measured record: `seconds` of samples
+/// every `sample_interval_s`, starting after `warmup_cycles` periods, with
+/// times measured from the record's start.
+pub fn sample_record(osc: &Oscillator, seed: u64, realisation: u32, warmup_cycles: u32, seconds: f64, sample_interval_s: f64, initial: InitialState) -> Vec<Sample> {
+    let start_s = f64::from(warmup_cycles) * osc.period_s;
+    let cycles = (seconds / osc.period_s).ceil() as u32 + 1;
+    let mut sampler = Sampler::new(sample_interval_s, start_s);
+    simulate_path(osc, seed, realisation, RunPlan { warmup_cycles, measured_cycles: cycles }, initial, Some(&mut sampler));
+    let mut samples = sampler.samples;
+    samples.truncate((seconds / sample_interval_s).round() as usize);
+    for s in &mut samples {
+        s.t_s -= start_s;
+    }
+    samples
+}
+
 /// Runs one realisation and returns its per-period peaks.
 pub fn simulate_path(
     osc: &Oscillator,

@@ -28,7 +28,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::cpu::{self, RunPlan, Sampler};
+use crate::cpu::{self, RunPlan};
 use crate::effects;
 use crate::error::{Error, Result};
 use crate::features::{run_features, RunFeatures};
@@ -281,15 +281,7 @@ impl<'a> Data<'a> {
 /// Simulates one record of `seconds` at `condition`, sampled like the data.
 fn simulate_record(model: &Model, condition: Condition, seconds: f64, sample_interval_s: f64, seed: u64, realisation: u32, warmup: u32) -> Result<Run> {
     let osc = Oscillator::new(model, condition)?;
-    let start = f64::from(warmup) * osc.period_s;
-    let cycles = (seconds * condition.excitation_frequency_hz).ceil() as u32 + 1;
-    let mut sampler = Sampler::new(sample_interval_s, start);
-    cpu::simulate_path(&osc, seed, realisation, RunPlan { warmup_cycles: warmup, measured_cycles: cycles }, initial_state(model, condition), Some(&mut sampler));
-    let mut samples = sampler.samples;
-    samples.truncate((seconds / sample_interval_s).round() as usize);
-    for s in &mut samples {
-        s.t_s -= start;
-    }
+    let samples = cpu::sample_record(&osc, seed, realisation, warmup, seconds, sample_interval_s, initial_state(model, condition));
     Ok(Run::from_samples(&samples, condition.excitation_frequency_hz, model.excitation.amplitude_m, condition.normal_force_n))
 }
 

@@ -18,7 +18,7 @@ use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 
 use crate::analytic::DenHartog;
-use crate::cpu::{self, RunPlan, Sampler};
+use crate::cpu;
 use crate::effects::{self, EFFECT_NAMES};
 use crate::error::{Error, Result};
 use crate::io;
@@ -159,20 +159,13 @@ pub fn write_set(dir: &Path, truth: &Model, conditions: &[Condition], shape: Set
     for (ci, &c) in conditions.iter().enumerate() {
         let osc = Oscillator::new(truth, c)?;
         for r in 0..shape.runs_per_condition {
-            let warmup = 60;
-            let start = f64::from(warmup) * osc.period_s;
-            let cycles = (shape.duration_s * c.excitation_frequency_hz).ceil() as u32 + 1;
-            let mut sampler = Sampler::new(dt, start);
             let realisation = ci as u32 * 100 + r;
-            cpu::simulate_path(&osc, seed, realisation, RunPlan { warmup_cycles: warmup, measured_cycles: cycles }, initial_state(truth, c), Some(&mut sampler));
-            let mut samples = sampler.samples;
-            samples.truncate((shape.duration_s / dt).round() as usize);
+            let mut samples = cpu::sample_record(&osc, seed, realisation, 60, shape.duration_s, dt, initial_state(truth, c));
             let gauss = |rng: &mut StdRng| {
                 let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
                 (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
             };
             for s in &mut samples {
-                s.t_s -= start;
                 s.x_m += 2e-6 * gauss(&mut rng);
                 s.v_m_per_s += 2e-3 * gauss(&mut rng);
                 s.normal_force_n += 0.02 * gauss(&mut rng);
