@@ -8,63 +8,48 @@
 //!
 //!     cargo bench --bench throughput
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use stickslip::cpu::{simulate_ensemble, RunPlan};
-use stickslip::gpu::{self, GpuContext, PointSpec};
-use stickslip::model::{Condition, Model, Oscillator};
-use stickslip::reduce::PeakRange;
-use stickslip::sweep::initial_state;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use stickslip::engine::gpu::GpuContext;
+use stickslip::engine::{Condition, Engine, GpuOptions, Job, Model, Point, Record, RunPlan};
 
 const PLAN: RunPlan = RunPlan { warmup_cycles: 0, measured_cycles: 20 };
+const CONDITION: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
-fn workload() -> (Model, Condition, Oscillator) {
-    let model = Model::default();
-    let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
-    let osc = Oscillator::new(&model, condition).unwrap();
-    (model, condition, osc)
+fn steps(realisations: u32, model: &Model) -> u64 {
+    u64::from(realisations) * u64::from(PLAN.measured_cycles) * u64::from(model.solver.steps_per_period)
 }
 
-fn steps(realisations: u32, osc: &Oscillator) -> u64 {
-    u64::from(realisations) * u64::from(PLAN.measured_cycles) * u64::from(osc.steps_per_period)
+fn throughput(c: &mut Criterion, group: &str, engine: &Engine, sizes: [u32; 3]) {
+    eprintln!("{group}: {}", engine.description());
+    let model = Model::default();
+    let points = [Point::steady(&model, CONDITION)];
+    let mut group = c.benchmark_group(group);
+    group.sample_size(10);
+    for realisations in sizes {
+        group.throughput(Throughput::Elements(steps(realisations, &model)));
+        group.bench_with_input(BenchmarkId::from_parameter(realisations), &realisations, |b, &r| {
+            let job = Job {
+                model: &model,
+                points: &points,
+                realisations: r,
+                first_realisation: 0,
+                seed: 1,
+                plan: PLAN,
+                record: Record::Sums,
+            };
+            b.iter(|| engine.run(&job, &mut |_, _| {}).unwrap())
+        });
+    }
+    group.finish();
 }
 
 fn gpu_throughput(c: &mut Criterion) {
     let ctx = GpuContext::new(true).expect("a GPU adapter (lavapipe will do)");
-    eprintln!("adapter: {}", ctx.describe());
-    let (model, condition, osc) = workload();
-    let points = [PointSpec { oscillator: osc.clone(), initial: initial_state(&model, condition), range: PeakRange::for_point(&model, condition) }];
-    let mut group = c.benchmark_group("gpu");
-    group.sample_size(10);
-    for realisations in [1024u32, 4096, 16384] {
-        group.throughput(Throughput::Elements(steps(realisations, &osc)));
-        group.bench_with_input(BenchmarkId::from_parameter(realisations), &realisations, |b, &r| {
-            let request = gpu::EnsembleRequest {
-                points: &points,
-                realisations_per_point: r,
-                realisation_offset: 0,
-                seed: 1,
-                plan: PLAN,
-                steps_per_dispatch: gpu::DEFAULT_STEPS_PER_DISPATCH,
-                record_peaks: false,
-            };
-            b.iter(|| gpu::run_ensemble(&ctx.device, &ctx.queue, &ctx.kernels, &request, &mut |_, _| {}).unwrap())
-        });
-    }
-    group.finish();
+    throughput(c, "gpu", &Engine::gpu(ctx, GpuOptions::default()), [1024, 4096, 16384]);
 }
 
 fn cpu_throughput(c: &mut Criterion) {
-    let (model, condition, osc) = workload();
-    let initial = initial_state(&model, condition);
-    let mut group = c.benchmark_group("cpu");
-    group.sample_size(10);
-    for realisations in [256u32, 1024, 4096] {
-        group.throughput(Throughput::Elements(steps(realisations, &osc)));
-        group.bench_with_input(BenchmarkId::from_parameter(realisations), &realisations, |b, &r| {
-            b.iter(|| simulate_ensemble(&osc, 1, 0..r, PLAN, initial))
-        });
-    }
-    group.finish();
+    throughput(c, "cpu", &Engine::cpu("bench"), [256, 1024, 4096]);
 }
 
 criterion_group!(benches, gpu_throughput, cpu_throughput);

@@ -1,21 +1,22 @@
-//! stickslip: ensembles of a stochastic stick-slip friction oscillator.
+//! stickslip: ensembles of a stochastic stick-slip friction oscillator on the
+//! GPU (WGSL through wgpu) with an exact f64 CPU reference, reduced into
+//! frequency-response statistics, and a diagnosis of where and why a
+//! simulation departs from measurements.
+//!
+//! - [`engine`]: the model, the two integrators and the exact reductions,
+//!   behind one entry point ([`engine::Engine::run`]);
+//! - [`sweep`]: frequency × normal-force grids, shards, merge and figures;
+//! - [`diagnose`]: measurement sets, features, calibration, candidates,
+//!   verdict, report and the blind benchmark;
+//! - [`io`] and [`figure`]: atomic files and shared drawing helpers;
+//! - [`cli`]: the command line, the only module that uses `anyhow`.
 
-pub mod analytic;
 pub mod cli;
-pub mod cpu;
 pub mod diagnose;
-pub mod effects;
-pub mod features;
+pub mod engine;
 pub mod error;
-pub mod gpu;
+pub mod figure;
 pub mod io;
-pub mod measure;
-pub mod model;
-pub mod plot;
-pub mod reduce;
-pub mod report;
-pub mod rng;
 pub mod sweep;
-pub mod synthetic;
 
 pub use error::{Error, Result};

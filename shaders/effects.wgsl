@@ -1,0 +1,60 @@
+// The effects' arithmetic in f32: src/engine/cpu/effects.rs, function for
+// function (the forms are the generated constants of src/engine/gpu/source.rs).
+// Every function reduces to the baseline's arithmetic at zero strength.
+
+fn harmonic_wave(c: f32) -> f32 {
+    if (effects.harmonic_form == HARMONIC_FORM_BUMPS) {
+        return pow(max(c, 0.0), effects.harmonic_shape) - effects.harmonic_shape_mean;
+    }
+    if (effects.harmonic_form == HARMONIC_FORM_SQUARE) {
+        return tanh(effects.harmonic_shape * c) / tanh(effects.harmonic_shape);
+    }
+    return c;
+}
+
+fn harmonic_term(amplitude_n: f32, phase_rad: f32, multiple: f32, theta: f32) -> f32 {
+    if (amplitude_n == 0.0) {
+        return 0.0;
+    }
+    return amplitude_n * harmonic_wave(cos(multiple * theta + phase_rad));
+}
+
+fn non_gaussian(s: f32, g: f32, g2: f32) -> f32 {
+    if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_LOGNORMAL) {
+        if (s == 0.0) {
+            return g;
+        }
+        let v = s * s;
+        return (exp(s * g) - exp(0.5 * v)) / sqrt((exp(v) - 1.0) * exp(v));
+    }
+    if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_TUKEY_H) {
+        return g * exp(0.5 * s * g * g) * pow(1.0 - 2.0 * s, 0.75);
+    }
+    return (g + s * (g2 * g2 - 1.0) * 0.7071067811865476) / sqrt(1.0 + s * s);
+}
+
+fn hysteresis_factor(slipped_m: f32) -> f32 {
+    let length = effects.hysteresis_length_m;
+    if (length == 0.0) {
+        return 1.0;
+    }
+    let r = slipped_m / length;
+    if (effects.hysteresis_form == HYSTERESIS_FORM_TANH) {
+        return tanh(r);
+    }
+    if (effects.hysteresis_form == HYSTERESIS_FORM_RATIONAL) {
+        return r / (r + 1.0);
+    }
+    return 1.0 - exp(-r);
+}
+
+fn drift_factor(t_s: f32) -> f32 {
+    let rate = effects.drift_rate_per_s;
+    if (effects.drift_form == DRIFT_FORM_SATURATING) {
+        return 1.0 + rate * DRIFT_SATURATION_S * (1.0 - exp(-t_s / DRIFT_SATURATION_S));
+    }
+    if (effects.drift_form == DRIFT_FORM_WANDER) {
+        return 1.0 + rate * DRIFT_WANDER_S * sin(t_s / DRIFT_WANDER_S);
+    }
+    return 1.0 + rate * t_s;
+}

@@ -1,0 +1,92 @@
+// Exact reduction of peaks in the kernel: src/engine/reduce.rs's quantisation
+// and binning in f32 (the same arithmetic as the CPU's), with integer tallies
+// that each invocation adds to its point's sums once per dispatch, by
+// multi-word atomic additions that carry.
+
+// Accumulator words (ACCUMULATOR_WORDS per point): 0-1 peaks (u64),
+// 2-3 Σ(q + 2^31) (u64), 4-6 Σq² (u96), 7-8 stuck time in T/2^20 (u64),
+// 9 clamped peaks, 10-11 unused.
+
+// This invocation's sums over the dispatch, flushed once at its end.
+struct Tally {
+    peaks: u32,
+    sum_biased: vec2<u32>,
+    sum_squares: vec3<u32>,
+    stick_units: vec2<u32>,
+    clamped: u32,
+}
+
+var<private> tally: Tally;
+var<private> point_index: u32;
+
+fn add_u64(a: vec2<u32>, b: u32) -> vec2<u32> {
+    let lo = a.x + b;
+    return vec2<u32>(lo, a.y + select(0u, 1u, lo < b));
+}
+
+// a (96 bits) + b (64 bits: lo, hi)
+fn add_u96(a: vec3<u32>, b: vec2<u32>) -> vec3<u32> {
+    let lo = a.x + b.x;
+    let carry0 = select(0u, 1u, lo < b.x);
+    let mid0 = a.y + b.y;
+    let carry1 = select(0u, 1u, mid0 < b.y);
+    let mid = mid0 + carry0;
+    let carry2 = select(0u, 1u, mid < carry0);
+    return vec3<u32>(lo, mid, a.z + carry1 + carry2);
+}
+
+// The histogram bin of a peak; mirrors PeakRange::bin.
+fn histogram_bin(peak_m: f32) -> u32 {
+    let inner = HISTOGRAM_BINS - 2u;
+    let position = (peak_m - point.histogram_lo_m) * point.histogram_bins_per_m;
+    if (position < 0.0) {
+        return 0u;
+    }
+    if (position >= f32(inner)) {
+        return inner + 1u;
+    }
+    return u32(position) + 1u;
+}
+
+// Quantises and tallies one measured period; mirrors PointAccumulator::add_period.
+fn tally_period(peak_m: f32, stuck_share: f32) {
+    let q_real = round((peak_m - point.peak_centre_m) * point.inv_quantum_per_m);
+    let q = i32(clamp(q_real, -QUANTISE_LIMIT, QUANTISE_LIMIT));
+    tally.peaks += 1u;
+    tally.sum_biased = add_u64(tally.sum_biased, bitcast<u32>(q) ^ 0x80000000u);
+    let magnitude = u32(abs(q));
+    let square = mulhilo(magnitude, magnitude);
+    tally.sum_squares = add_u96(tally.sum_squares, vec2<u32>(square.y, square.x));
+    tally.stick_units = add_u64(tally.stick_units, u32(round(stuck_share * STICK_UNITS_PER_PERIOD)));
+    tally.clamped += select(0u, 1u, abs(q_real) > QUANTISE_LIMIT);
+    atomicAdd(&histograms[point_index * HISTOGRAM_BINS + histogram_bin(peak_m)], 1u);
+}
+
+// Exact multi-word atomic addition: each word's carry is added to the next.
+fn atomic_add_u64(word: u32, value: vec2<u32>) {
+    let old = atomicAdd(&accumulators[word], value.x);
+    let carry = select(0u, 1u, old + value.x < old);
+    atomicAdd(&accumulators[word + 1u], value.y + carry);
+}
+
+fn atomic_add_u96(word: u32, value: vec3<u32>) {
+    let old0 = atomicAdd(&accumulators[word], value.x);
+    let carry0 = select(0u, 1u, old0 + value.x < old0);
+    let mid = value.y + carry0;
+    let carry_mid = select(0u, 1u, mid < carry0);
+    let old1 = atomicAdd(&accumulators[word + 1u], mid);
+    let carry1 = select(0u, 1u, old1 + mid < old1) + carry_mid;
+    atomicAdd(&accumulators[word + 2u], value.z + carry1);
+}
+
+fn flush_tally() {
+    if (tally.peaks == 0u) {
+        return;
+    }
+    let base = point_index * ACCUMULATOR_WORDS;
+    atomic_add_u64(base, vec2<u32>(tally.peaks, 0u));
+    atomic_add_u64(base + 2u, tally.sum_biased);
+    atomic_add_u96(base + 4u, tally.sum_squares);
+    atomic_add_u64(base + 7u, tally.stick_units);
+    atomicAdd(&accumulators[base + 9u], tally.clamped);
+}

@@ -1,0 +1,150 @@
+//! `stickslip diagnose` and `stickslip benchmark-diagnosis`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::{BackendArg, progress_bar};
+use crate::diagnose::benchmark::{BenchmarkSettings, run_benchmark as run_benchmark_sets};
+use crate::diagnose::measure::read_measurement_set;
+use crate::diagnose::report::write_diagnosis;
+use crate::diagnose::synthetic::{SetShape, benchmark_plan};
+use crate::diagnose::{DiagnoseSettings, diagnose_set};
+use crate::engine::{Effect, Engine, GpuOptions};
+
+#[derive(Args, Debug)]
+pub(crate) struct DiagnoseArgs {
+    /// The measurement set (a directory with manifest.json).
+    pub(crate) dir: PathBuf,
+    /// Output directory (report.json, report.html, baseline-model.toml, fitted-model.toml).
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    #[arg(long, value_enum, default_value = "auto")]
+    pub(crate) backend: BackendArg,
+    #[arg(long, default_value_t = 20_251_122)]
+    pub(crate) seed: u64,
+    /// Simulated replicate records per condition.
+    #[arg(long, default_value_t = 8)]
+    pub(crate) replicates: u32,
+    /// Realisations per condition in the ensembles that score summary data.
+    #[arg(long, default_value_t = 64)]
+    pub(crate) realisations: u32,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct BenchmarkArgs {
+    /// Where the synthetic sets and their diagnoses go.
+    #[arg(long, default_value = "out/benchmark-diagnosis")]
+    pub(crate) out: PathBuf,
+    /// Null sets (no effect).
+    #[arg(long, default_value_t = 8)]
+    pub(crate) nulls: u32,
+    /// Effect forms used (1 and 2 are the non-candidate forms).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub(crate) forms: Vec<u32>,
+    /// Strength levels (0 moderate, 1 strong).
+    #[arg(long, value_delimiter = ',', default_value = "0,1")]
+    pub(crate) levels: Vec<u32>,
+    /// Only these effects (comma list of names); all seven by default.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) effects: Vec<String>,
+    /// Runs per condition and record length (s).
+    #[arg(long, default_value_t = 2)]
+    pub(crate) runs_per_condition: u32,
+    #[arg(long, default_value_t = 20.0)]
+    pub(crate) duration: f64,
+    /// Normal-force levels as shares of Den Hartog's no-stop threshold
+    /// (comma list; below 1 the noiseless block never stops).
+    #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::synthetic::LOAD_SHARES)]
+    pub(crate) load_shares: Vec<f64>,
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    #[arg(long, value_enum, default_value = "auto")]
+    pub(crate) backend: BackendArg,
+    /// Simulated replicate records per condition in each diagnosis.
+    #[arg(long, default_value_t = 8)]
+    pub(crate) replicates: u32,
+}
+
+pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
+    // Read (and so validate) the set before anything else: bad input writes nothing.
+    let set = read_measurement_set(&args.dir)?;
+    let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
+    eprintln!("backend: {}", engine.description());
+    let settings = DiagnoseSettings {
+        seed: args.seed,
+        replicates: args.replicates.max(2),
+        ensemble_realisations: args.realisations.max(4),
+        ..DiagnoseSettings::default()
+    };
+    let started = Instant::now();
+    let spinner = ProgressBar::new_spinner();
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| spinner.set_message(step.to_string()))?;
+    spinner.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    let report = write_diagnosis(&args.out, &diagnosis, &args.dir, elapsed)?;
+    println!(
+        "verdict: {} (confidence {:.2}); gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
+        report.verdict.effect,
+        report.verdict.confidence,
+        report.gap.baseline,
+        report.gap.after,
+        report.gap.shrink,
+        report.gap.heldout_shrink.map_or("n/a".to_string(), |h| format!("{h:.2}")),
+        args.out.display()
+    );
+    Ok(())
+}
+
+pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
+    let effects = args
+        .effects
+        .iter()
+        .map(|e| e.parse::<Effect>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| anyhow::anyhow!("invalid --effects: {e}"))?;
+    if args.load_shares.is_empty() || args.load_shares.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        anyhow::bail!(
+            "invalid --load-shares {:?}: each must be a number > 0 (a share of the no-stop threshold)",
+            args.load_shares
+        );
+    }
+    let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
+    eprintln!("backend: {}", engine.description());
+    let settings = BenchmarkSettings {
+        out: args.out,
+        nulls: args.nulls,
+        forms: args.forms,
+        levels: args.levels,
+        effects,
+        shape: SetShape {
+            runs_per_condition: args.runs_per_condition.max(1),
+            duration_s: args.duration,
+            ..SetShape::default()
+        },
+        load_shares: args.load_shares,
+        seed: args.seed,
+        replicates: args.replicates,
+    };
+    let sets = benchmark_plan(settings.nulls, &settings.forms, &settings.levels)
+        .iter()
+        .filter(|(e, _, _)| settings.effects.is_empty() || e.is_none_or(|e| settings.effects.contains(&e)))
+        .count();
+    let bar = progress_bar(sets as u64, "diagnosing");
+    let (_, text) = run_benchmark_sets(&settings, &engine, &mut |line| {
+        // A hidden bar (output not a terminal) drops println: print directly.
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    print!("{text}");
+    Ok(())
+}

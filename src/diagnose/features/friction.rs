@@ -1,0 +1,163 @@
+//! Features of the friction coefficient while slipping: its random part's
+//! spread, shape and memory, the accelerating against decelerating branch,
+//! and breakaway against low-speed friction.
+
+use super::stats::{least_squares, moments, negligible, shape};
+use super::{
+    BREAKAWAY_SAMPLES, FrictionFeatures, HYSTERESIS_BINS, HYSTERESIS_MIN_PER_SIDE, LOW_SPEED_FRACTION, MIN_PAIRS,
+    MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
+};
+
+/// Grid of Stribeck rates `c` (in units of 1 / max|v|) tried by the friction baseline.
+fn stribeck_grid() -> impl Iterator<Item = f64> {
+    (0..21).map(|i| 0.3 * 10f64.powf(i as f64 * 0.2))
+}
+
+/// Friction-coefficient features (see [`FrictionFeatures`]).
+pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Option<FrictionFeatures> {
+    let n = v.len().min(force.len()).min(normal.len());
+    let (v, force, normal) = (&v[..n], &force[..n], &normal[..n]);
+    let v_max = v.iter().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()));
+    if v_max <= 0.0 {
+        return None;
+    }
+    let usable = |i: usize| v[i].is_finite() && force[i].is_finite() && normal[i].is_finite() && normal[i] > 0.0;
+    let slipping: Vec<bool> =
+        (0..n).map(|i| usable(i) && v[i].abs() > SLIP_SPEED_FRACTION * v_max && force[i] * v[i] < 0.0).collect();
+    let idx: Vec<usize> = (0..n).filter(|&i| slipping[i]).collect();
+    if idx.len() < MIN_SLIP_SAMPLES {
+        return None;
+    }
+    let mu: Vec<f64> = idx.iter().map(|&i| force[i].abs() / normal[i]).collect();
+    let speed: Vec<f64> = idx.iter().map(|&i| v[i].abs() / v_max).collect();
+    let (mu_mean, _, _, _) = moments(&mu);
+
+    // Baseline law μ(s): quadratic, plus a Stribeck term when it fits better.
+    let m = mu.len();
+    let y = |i: usize| mu[i] - mu_mean;
+    let quadratic = |i: usize, row: &mut [f64]| {
+        row[0] = 1.0;
+        row[1] = speed[i];
+        row[2] = speed[i] * speed[i];
+    };
+    let mut best: Option<(Vec<f64>, f64, Option<f64>)> =
+        least_squares(m, 3, quadratic, y).map(|(coef, ssr)| (coef, ssr, None));
+    for c in stribeck_grid() {
+        let design = |i: usize, row: &mut [f64]| {
+            quadratic(i, row);
+            row[3] = 1.0 / (1.0 + c * speed[i]);
+        };
+        if let Some((coef, ssr)) = least_squares(m, 4, design, y) {
+            if best.as_ref().is_none_or(|b| ssr < b.1) {
+                best = Some((coef, ssr, Some(c)));
+            }
+        }
+    }
+    let residual: Vec<f64> = match &best {
+        Some((coef, _, c)) => (0..m)
+            .map(|i| {
+                let s = speed[i];
+                let mut fit = coef[0] + coef[1] * s + coef[2] * s * s;
+                if let Some(c) = c {
+                    fit += coef[3] / (1.0 + c * s);
+                }
+                y(i) - fit
+            })
+            .collect(),
+        None => (0..m).map(y).collect(),
+    };
+    let (r_mean, r2, r3, r4) = moments(&residual);
+    let (residual_skewness, residual_excess_kurtosis) = shape(mu_mean, r2, r3, r4);
+    let residual_std = (r2 * m as f64 / (m - 1) as f64).sqrt();
+
+    // Slip phases: runs of consecutive slipping samples moving the same way.
+    let mut phase = vec![0usize; m];
+    for j in 1..m {
+        let same = idx[j] == idx[j - 1] + 1 && v[idx[j]].signum() == v[idx[j - 1]].signum();
+        phase[j] = if same { phase[j - 1] } else { phase[j - 1] + 1 };
+    }
+    let autocorr = |lag: usize| -> Option<f64> {
+        if negligible(r2, mu_mean) {
+            return None;
+        }
+        let (mut sum, mut pairs) = (0.0, 0usize);
+        for j in 0..m.saturating_sub(lag) {
+            if phase[j + lag] == phase[j] {
+                sum += (residual[j] - r_mean) * (residual[j + lag] - r_mean);
+                pairs += 1;
+            }
+        }
+        (pairs >= MIN_PAIRS).then(|| sum / pairs as f64 / r2)
+    };
+
+    // Hysteresis: accelerating minus decelerating residual within |v| bins.
+    let mut bins = [(0.0, 0usize, 0.0, 0usize); HYSTERESIS_BINS];
+    for (j, &i) in idx.iter().enumerate() {
+        if i == 0 || i + 1 >= n || !v[i - 1].is_finite() || !v[i + 1].is_finite() {
+            continue;
+        }
+        let dv = v[i + 1] - v[i - 1];
+        let b = ((speed[j] - SLIP_SPEED_FRACTION) / (1.0 - SLIP_SPEED_FRACTION) * HYSTERESIS_BINS as f64) as usize;
+        let bin = &mut bins[b.min(HYSTERESIS_BINS - 1)];
+        if v[i] * dv > 0.0 {
+            bin.0 += residual[j];
+            bin.1 += 1;
+        } else if v[i] * dv < 0.0 {
+            bin.2 += residual[j];
+            bin.3 += 1;
+        }
+    }
+    let (mut weighted, mut weights) = (0.0, 0.0);
+    for &(acc_sum, n_acc, dec_sum, n_dec) in &bins {
+        if n_acc >= HYSTERESIS_MIN_PER_SIDE && n_dec >= HYSTERESIS_MIN_PER_SIDE {
+            let (a, d) = (n_acc as f64, n_dec as f64);
+            let w = a * d / (a + d);
+            weighted += w * (acc_sum / a - dec_sum / d);
+            weights += w;
+        }
+    }
+    let hysteresis = (weights > 0.0).then(|| weighted / weights);
+
+    // Breakaway: the largest |F|/N over the end of each stick phase followed by motion.
+    let stuck = |i: usize| v[i].is_finite() && v[i].abs() <= STICK_SPEED_FRACTION * v_max;
+    let mut ratios = Vec::new();
+    let mut start = 0;
+    while start < n {
+        if !stuck(start) {
+            start += 1;
+            continue;
+        }
+        let mut end = start;
+        while end < n && stuck(end) {
+            end += 1;
+        }
+        if end - start >= MIN_STICK_SAMPLES && end < n {
+            let ratio = (end.saturating_sub(BREAKAWAY_SAMPLES).max(start)..end)
+                .filter(|&i| usable(i))
+                .map(|i| force[i].abs() / normal[i])
+                .fold(f64::NEG_INFINITY, f64::max);
+            if ratio.is_finite() {
+                ratios.push(ratio);
+            }
+        }
+        start = end;
+    }
+    let breakaway_mean = (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64);
+    let low: Vec<f64> = speed.iter().zip(&mu).filter(|(s, _)| **s < LOW_SPEED_FRACTION).map(|(_, m)| *m).collect();
+    let low_speed_mu_mean = (!low.is_empty()).then(|| low.iter().sum::<f64>() / low.len() as f64);
+    let stiction_excess = breakaway_mean.zip(low_speed_mu_mean).map(|(b, l)| b - l);
+
+    Some(FrictionFeatures {
+        slip_samples: m,
+        mu_mean,
+        residual_std,
+        residual_skewness,
+        residual_excess_kurtosis,
+        residual_autocorr_lag1: autocorr(1),
+        residual_autocorr_lag10: autocorr(10),
+        hysteresis,
+        breakaway_mean,
+        low_speed_mu_mean,
+        stiction_excess,
+    })
+}

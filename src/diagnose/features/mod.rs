@@ -1,0 +1,210 @@
+//! Features of one time-series record, computed by the same code from
+//! measured runs ([`read_measurement_set`](crate::diagnose::measure::read_measurement_set))
+//! and from simulated records (the engine's samples → [`Run::from_samples`]).
+//!
+//! Each feature targets one of the effects named in `shared/spec/model.md`:
+//!
+//! | group | features | effect it looks at |
+//! | --- | --- | --- |
+//! | peaks | mean, variance, skewness, count, trend | the paper's Figures 8 and 9 |
+//! | normal force | mean, variance, harmonics 1×–4×, residual variance, drift | `normal_force_harmonics`, `normal_force_drift` |
+//! | friction | mean μ, residual std / skewness / excess kurtosis | `non_gaussian_friction`, `load_dependent_friction` |
+//! | friction | residual autocorrelation at lags 1 and 10 | `coloured_friction_noise` |
+//! | friction | accelerating − decelerating μ | `friction_hysteresis` |
+//! | friction | breakaway ratio − low-speed μ | `stiction` |
+//! | stick fraction | share of samples at rest | all of them, indirectly |
+//!
+//! Every feature is finite or absent (`None`); degenerate inputs (no slip,
+//! zero variance, too few samples) give `None` or a documented neutral value,
+//! never NaN.
+
+mod friction;
+mod record;
+mod stats;
+
+use crate::diagnose::measure::Run;
+use crate::diagnose::observable::Observable;
+
+/// Slipping samples have `|v|` above this fraction of the record's largest `|v|`.
+pub const SLIP_SPEED_FRACTION: f64 = 0.05;
+/// Stuck samples have `|v|` at most this fraction of the record's largest `|v|`.
+pub const STICK_SPEED_FRACTION: f64 = 0.01;
+/// "Low-speed" slip, for the stiction feature: `|v|` below this fraction of the largest `|v|`.
+pub const LOW_SPEED_FRACTION: f64 = 0.2;
+/// Number of `|v|` bins in which accelerating and decelerating friction are compared.
+pub const HYSTERESIS_BINS: usize = 8;
+/// Fewest accelerating and fewest decelerating samples a bin needs to count.
+pub const HYSTERESIS_MIN_PER_SIDE: usize = 3;
+/// Stick samples before a breakaway whose largest `|F|/N` is the breakaway ratio.
+pub const BREAKAWAY_SAMPLES: usize = 3;
+/// Shortest run of stuck samples that counts as a stick phase.
+pub const MIN_STICK_SAMPLES: usize = 2;
+/// Normal-force harmonics fitted: 1× … `HARMONICS`× the excitation frequency.
+pub const HARMONICS: usize = 4;
+/// A harmonic is fitted only below this fraction of the sample rate (Nyquist is 0.5).
+pub const HARMONIC_RATE_LIMIT: f64 = 0.45;
+/// Fewest sample pairs behind an autocorrelation.
+pub const MIN_PAIRS: usize = 10;
+/// Fewest slipping samples behind the friction features.
+pub const MIN_SLIP_SAMPLES: usize = 20;
+
+/// All features of one record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunFeatures {
+    /// Per-period peak statistics; `None` with fewer than two complete periods.
+    pub peaks: Option<PeakFeatures>,
+    /// Normal-force features; `None` without a `normal_force` channel.
+    pub normal_force: Option<NormalForceFeatures>,
+    /// Friction-coefficient features; `None` without `v`, `friction_force`
+    /// and `normal_force`, or with too few slipping samples.
+    pub friction: Option<FrictionFeatures>,
+    /// Share of samples at rest, dimensionless in [0, 1]: `|v|` at most
+    /// [`STICK_SPEED_FRACTION`] of the largest `|v|`; without `v`, the share
+    /// of successive `x` differences at most that fraction of the largest
+    /// difference. `None` with fewer than two samples.
+    pub stick_fraction: Option<f64>,
+}
+
+/// Statistics of the largest `x` in each excitation period.
+///
+/// Periods are the windows `[t0 + kT, t0 + (k+1)T)`, `T = 1/f`, from the
+/// record's first sample `t0`; only complete windows count. The peak is the
+/// largest sample, not interpolated (for a sinusoid sampled `r` times per
+/// period this is low by at most `1 − cos(π/r)`, relative: 6.7e-4 at 7 Hz
+/// and 600 Hz).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PeakFeatures {
+    /// Number of peaks (complete periods).
+    pub count: usize,
+    /// Mean peak, m.
+    pub mean_m: f64,
+    /// Unbiased variance of the peaks, m² (0 with one peak).
+    pub var_m2: f64,
+    /// Skewness `m3 / m2^1.5` of the peaks, dimensionless (0 when they do not vary).
+    pub skewness: f64,
+    /// Least-squares slope of the peaks against time divided by their mean,
+    /// 1/s; `None` when the mean peak is 0.
+    pub trend_per_s: Option<f64>,
+}
+
+/// Features of the measured normal force `N(t)`.
+///
+/// `N` is fitted by least squares with a constant, a straight line in time
+/// and `cos`/`sin` at `k·f`, `k = 1…4`, jointly over the whole record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalForceFeatures {
+    /// Mean, N.
+    pub mean_n: f64,
+    /// Unbiased variance, N².
+    pub var_n2: f64,
+    /// Amplitude `sqrt(a² + b²)` of the fitted harmonic at `(k+1)·f`, N;
+    /// `None` for harmonics at or above [`HARMONIC_RATE_LIMIT`] × the sample
+    /// rate, or when the fit is singular.
+    pub harmonic_amplitude_n: [Option<f64>; HARMONICS],
+    /// Variance of what the fit leaves (mean, drift and harmonics removed),
+    /// N², with the fitted parameters' degrees of freedom taken off.
+    pub residual_var_n2: Option<f64>,
+    /// Slope of the fitted line, N/s.
+    pub drift_n_per_s: Option<f64>,
+    /// Slope of the fitted line divided by the mean, 1/s (`None` for a zero mean).
+    pub drift_per_s: Option<f64>,
+}
+
+/// Features of the friction coefficient `μ = |F| / N` while slipping.
+///
+/// Slipping samples: `|v|` above [`SLIP_SPEED_FRACTION`] of the largest
+/// `|v|`, friction opposing the motion (`F·v < 0`) and `N > 0`. A baseline
+/// law `μ(s) = p0 + p1 s + p2 s² + p3 / (1 + c s)`, `s = |v| / max|v|`, is
+/// fitted by least squares (`c` from a fixed grid, or without the last term,
+/// whichever fits best); its residuals `r` are the "random part".
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrictionFeatures {
+    /// Number of slipping samples.
+    pub slip_samples: usize,
+    /// Mean μ over slipping samples, dimensionless.
+    pub mu_mean: f64,
+    /// Standard deviation of the residuals, dimensionless.
+    pub residual_std: f64,
+    /// Skewness `m3 / m2^1.5` of the residuals (0 when they do not vary).
+    pub residual_skewness: f64,
+    /// Excess kurtosis `m4 / m2² − 3` of the residuals (0 when they do not vary).
+    pub residual_excess_kurtosis: f64,
+    /// Autocorrelation of the residuals between successive samples of the
+    /// same slip phase; `None` with fewer than [`MIN_PAIRS`] pairs.
+    pub residual_autocorr_lag1: Option<f64>,
+    /// The same at a lag of 10 samples (both within one slip phase).
+    pub residual_autocorr_lag10: Option<f64>,
+    /// Mean residual on accelerating samples (`v · dv/dt > 0`, central
+    /// differences) minus that on decelerating samples, compared within
+    /// [`HYSTERESIS_BINS`] equal `|v|` bins and averaged with weights
+    /// `n_acc·n_dec / (n_acc + n_dec)`, dimensionless. Positive: more
+    /// friction while speeding up. `None` when no bin has both kinds.
+    pub hysteresis: Option<f64>,
+    /// Mean breakaway ratio: over each stick phase (at least
+    /// [`MIN_STICK_SAMPLES`] samples with `|v|` at most
+    /// [`STICK_SPEED_FRACTION`] of the largest `|v|`) followed by motion, the
+    /// largest `|F|/N` in its last [`BREAKAWAY_SAMPLES`] samples;
+    /// dimensionless, `None` without such phases.
+    pub breakaway_mean: Option<f64>,
+    /// Mean μ over slipping samples with `|v|` below [`LOW_SPEED_FRACTION`]
+    /// of the largest `|v|`; `None` without such samples.
+    pub low_speed_mu_mean: Option<f64>,
+    /// Excess static friction: `breakaway_mean − low_speed_mu_mean`.
+    pub stiction_excess: Option<f64>,
+}
+
+/// Computes every feature of `run`.
+pub fn run_features(run: &Run) -> RunFeatures {
+    RunFeatures {
+        peaks: record::peak_features(run),
+        normal_force: run.normal_force.as_deref().and_then(|n| record::normal_force_features(run, n)),
+        friction: match (&run.v_m_per_s, &run.friction_force, &run.normal_force) {
+            (Some(v), Some(f), Some(n)) => friction::friction_features(v, f, n),
+            _ => None,
+        },
+        stick_fraction: record::stick_fraction(run),
+    }
+}
+
+impl RunFeatures {
+    /// Every feature by observable, in a fixed order, `None` where it is missing.
+    pub fn all(&self) -> Vec<(Observable, Option<f64>)> {
+        let p = self.peaks.as_ref();
+        let n = self.normal_force.as_ref();
+        let f = self.friction.as_ref();
+        let harmonic = |k: usize| n.and_then(|n| n.harmonic_amplitude_n[k]);
+        vec![
+            (Observable::PeakCount, p.map(|p| p.count as f64)),
+            (Observable::PeakMeanM, p.map(|p| p.mean_m)),
+            (Observable::PeakVarM2, p.map(|p| p.var_m2)),
+            (Observable::PeakSkewness, p.map(|p| p.skewness)),
+            (Observable::PeakTrendPerS, p.and_then(|p| p.trend_per_s)),
+            (Observable::NormalForceMeanN, n.map(|n| n.mean_n)),
+            (Observable::NormalForceVarN2, n.map(|n| n.var_n2)),
+            (Observable::NormalForceHarmonic1N, harmonic(0)),
+            (Observable::NormalForceHarmonic2N, harmonic(1)),
+            (Observable::NormalForceHarmonic3N, harmonic(2)),
+            (Observable::NormalForceHarmonic4N, harmonic(3)),
+            (Observable::NormalForceResidualVarN2, n.and_then(|n| n.residual_var_n2)),
+            (Observable::NormalForceDriftNPerS, n.and_then(|n| n.drift_n_per_s)),
+            (Observable::NormalForceDriftPerS, n.and_then(|n| n.drift_per_s)),
+            (Observable::FrictionSlipSamples, f.map(|f| f.slip_samples as f64)),
+            (Observable::FrictionMuMean, f.map(|f| f.mu_mean)),
+            (Observable::FrictionResidualStd, f.map(|f| f.residual_std)),
+            (Observable::FrictionResidualSkewness, f.map(|f| f.residual_skewness)),
+            (Observable::FrictionResidualExcessKurtosis, f.map(|f| f.residual_excess_kurtosis)),
+            (Observable::FrictionResidualAutocorrLag1, f.and_then(|f| f.residual_autocorr_lag1)),
+            (Observable::FrictionResidualAutocorrLag10, f.and_then(|f| f.residual_autocorr_lag10)),
+            (Observable::FrictionHysteresis, f.and_then(|f| f.hysteresis)),
+            (Observable::FrictionBreakawayMean, f.and_then(|f| f.breakaway_mean)),
+            (Observable::FrictionLowSpeedMuMean, f.and_then(|f| f.low_speed_mu_mean)),
+            (Observable::FrictionStictionExcess, f.and_then(|f| f.stiction_excess)),
+            (Observable::StickFraction, self.stick_fraction),
+        ]
+    }
+
+    /// The features that are present (and finite), for scoring.
+    pub fn named_values(&self) -> Vec<(Observable, f64)> {
+        self.all().into_iter().filter_map(|(name, value)| value.filter(|v| v.is_finite()).map(|v| (name, v))).collect()
+    }
+}

@@ -1,0 +1,122 @@
+//! Features of the whole record: per-period peaks, the normal force, and
+//! the share of time at rest.
+
+use super::stats::{least_squares, moments, shape, slope};
+use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, STICK_SPEED_FRACTION};
+use crate::diagnose::measure::{self, Run};
+
+/// Per-period peaks (see [`PeakFeatures`]).
+pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
+    let f = run.excitation_frequency_hz;
+    let n = run.t_s.len().min(run.x_m.len());
+    let dt = run.sample_interval_s();
+    if !(f.is_finite() && f > 0.0) || n < 2 || dt <= 0.0 {
+        return None;
+    }
+    let period_s = 1.0 / f;
+    let t0 = run.t_s[0];
+    let windows = (n as f64 * dt / period_s + 1e-9).floor();
+    if windows.is_nan() || windows < 2.0 {
+        return None;
+    }
+    let windows = windows as usize;
+    let mut peak = vec![f64::NEG_INFINITY; windows];
+    for i in 0..n {
+        let k = ((run.t_s[i] - t0) / period_s).floor();
+        if k >= 0.0 && (k as usize) < windows && run.x_m[i].is_finite() {
+            let k = k as usize;
+            peak[k] = peak[k].max(run.x_m[i]);
+        }
+    }
+    let (times, peaks): (Vec<f64>, Vec<f64>) =
+        peak.iter().enumerate().filter(|(_, p)| p.is_finite()).map(|(k, &p)| ((k as f64 + 0.5) * period_s, p)).unzip();
+    let count = peaks.len();
+    if count < 2 {
+        return None;
+    }
+    let (mean, m2, m3, m4) = moments(&peaks);
+    let (skewness, _) = shape(mean, m2, m3, m4);
+    let trend_per_s = match slope(&times, &peaks) {
+        Some(s) if mean != 0.0 => Some(s / mean),
+        _ => None,
+    };
+    Some(PeakFeatures { count, mean_m: mean, var_m2: m2 * count as f64 / (count - 1) as f64, skewness, trend_per_s })
+}
+
+/// Normal-force features (see [`NormalForceFeatures`]).
+pub(super) fn normal_force_features(run: &Run, force: &[f64]) -> Option<NormalForceFeatures> {
+    let n = force.len().min(run.t_s.len());
+    if n < 2 || force[..n].iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let force = &force[..n];
+    let t = &run.t_s[..n];
+    let (mean, m2, _, _) = moments(force);
+    let var_n2 = m2 * n as f64 / (n - 1) as f64;
+
+    let f = run.excitation_frequency_hz;
+    let rate = measure::sample_rate_hz(run);
+    let fitted: Vec<usize> =
+        (1..=HARMONICS).filter(|&k| f.is_finite() && f > 0.0 && k as f64 * f < HARMONIC_RATE_LIMIT * rate).collect();
+    let t0 = t[0];
+    let span = t[n - 1] - t0;
+    let centre = 0.5 * (t[n - 1] + t0);
+    let p = 2 + 2 * fitted.len();
+    let fit = (span > 0.0)
+        .then(|| {
+            least_squares(
+                n,
+                p,
+                |i, row| {
+                    row[0] = 1.0;
+                    row[1] = (t[i] - centre) / span;
+                    for (j, &k) in fitted.iter().enumerate() {
+                        let phase = std::f64::consts::TAU * k as f64 * f * (t[i] - t0);
+                        row[2 + 2 * j] = phase.cos();
+                        row[3 + 2 * j] = phase.sin();
+                    }
+                },
+                |i| force[i] - mean,
+            )
+        })
+        .flatten();
+    let mut harmonic_amplitude_n = [None; HARMONICS];
+    let (mut residual_var_n2, mut drift_n_per_s) = (None, None);
+    if let Some((coef, ssr)) = fit {
+        for (j, &k) in fitted.iter().enumerate() {
+            harmonic_amplitude_n[k - 1] = Some(coef[2 + 2 * j].hypot(coef[3 + 2 * j]));
+        }
+        residual_var_n2 = (n > p).then(|| ssr / (n - p) as f64);
+        drift_n_per_s = Some(coef[1] / span);
+    }
+    let drift_per_s = drift_n_per_s.filter(|_| mean != 0.0).map(|d| d / mean);
+    Some(NormalForceFeatures {
+        mean_n: mean,
+        var_n2,
+        harmonic_amplitude_n,
+        residual_var_n2,
+        drift_n_per_s,
+        drift_per_s,
+    })
+}
+
+/// Share of samples at rest (see [`RunFeatures::stick_fraction`]).
+pub(super) fn stick_fraction(run: &Run) -> Option<f64> {
+    let share = |values: &[f64]| -> Option<f64> {
+        let finite: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).map(f64::abs).collect();
+        if finite.is_empty() {
+            return None;
+        }
+        let max = finite.iter().copied().fold(0.0, f64::max);
+        let at_rest = finite.iter().filter(|&&x| x <= STICK_SPEED_FRACTION * max).count();
+        Some(at_rest as f64 / finite.len() as f64)
+    };
+    match &run.v_m_per_s {
+        Some(v) if v.len() >= 2 => share(v),
+        Some(_) => None,
+        None => {
+            let dx: Vec<f64> = run.x_m.windows(2).map(|w| w[1] - w[0]).collect();
+            share(&dx)
+        }
+    }
+}

@@ -1,0 +1,115 @@
+//! Small numerics behind the features: moments, a slope, and linear least
+//! squares by Cholesky on the normal equations.
+
+/// Mean and central moments `(mean, m2, m3, m4)` (population, divided by n).
+pub(super) fn moments(values: &[f64]) -> (f64, f64, f64, f64) {
+    let n = values.len() as f64;
+    if values.is_empty() {
+        return (0.0, 0.0, 0.0, 0.0);
+    }
+    // Shifted by the first value: exact for constant data, and no
+    // cancellation for data with a large offset.
+    let shift = values[0];
+    let offset = values.iter().map(|x| x - shift).sum::<f64>() / n;
+    let mean = shift + offset;
+    let (mut m2, mut m3, mut m4) = (0.0, 0.0, 0.0);
+    for &x in values {
+        let d = (x - shift) - offset;
+        let d2 = d * d;
+        m2 += d2;
+        m3 += d2 * d;
+        m4 += d2 * d2;
+    }
+    (mean, m2 / n, m3 / n, m4 / n)
+}
+
+/// Whether a second moment is too small, relative to the values' scale, to
+/// divide by (zero variance up to rounding).
+pub(super) fn negligible(m2: f64, mean: f64) -> bool {
+    m2.is_nan() || m2 <= (1e-24 * mean * mean).max(f64::MIN_POSITIVE)
+}
+
+/// Skewness and excess kurtosis from central moments (0, 0 when `m2` is negligible).
+pub(super) fn shape(mean: f64, m2: f64, m3: f64, m4: f64) -> (f64, f64) {
+    if negligible(m2, mean) { (0.0, 0.0) } else { (m3 / m2.powf(1.5), m4 / (m2 * m2) - 3.0) }
+}
+
+/// Least-squares slope of `y` against `x`; `None` when `x` does not vary.
+pub(super) fn slope(x: &[f64], y: &[f64]) -> Option<f64> {
+    let (mx, sxx, _, _) = moments(x);
+    if x.len() < 2 || negligible(sxx, mx) {
+        return None;
+    }
+    let my = y.iter().sum::<f64>() / y.len() as f64;
+    let sxy = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum::<f64>() / x.len() as f64;
+    Some(sxy / sxx)
+}
+
+/// Linear least squares: accumulates the normal equations of `rows`
+/// (`fill(i, row)` writes row `i` of the design matrix) against `y`, and
+/// solves them by Cholesky. Returns the coefficients and the residual sum of
+/// squares, or `None` when the design is (numerically) singular.
+pub(super) fn least_squares(
+    n: usize,
+    p: usize,
+    mut fill: impl FnMut(usize, &mut [f64]),
+    y: impl Fn(usize) -> f64,
+) -> Option<(Vec<f64>, f64)> {
+    if n < p || p == 0 {
+        return None;
+    }
+    let mut ata = vec![0.0; p * p];
+    let mut aty = vec![0.0; p];
+    let mut row = vec![0.0; p];
+    for i in 0..n {
+        fill(i, &mut row);
+        let yi = y(i);
+        for a in 0..p {
+            aty[a] += row[a] * yi;
+            for b in 0..=a {
+                ata[a * p + b] += row[a] * row[b];
+            }
+        }
+    }
+    // Cholesky: ata = L Lᵀ, L stored in the lower triangle.
+    let mut l = vec![0.0; p * p];
+    for a in 0..p {
+        for b in 0..=a {
+            let mut sum = ata[a * p + b];
+            for k in 0..b {
+                sum -= l[a * p + k] * l[b * p + k];
+            }
+            if a == b {
+                if sum.is_nan() || sum <= (1e-10 * ata[a * p + a]).max(0.0) {
+                    return None;
+                }
+                l[a * p + a] = sum.sqrt();
+            } else {
+                l[a * p + b] = sum / l[b * p + b];
+            }
+        }
+    }
+    let mut z = vec![0.0; p];
+    for a in 0..p {
+        let mut sum = aty[a];
+        for k in 0..a {
+            sum -= l[a * p + k] * z[k];
+        }
+        z[a] = sum / l[a * p + a];
+    }
+    let mut coef = vec![0.0; p];
+    for a in (0..p).rev() {
+        let mut sum = z[a];
+        for k in a + 1..p {
+            sum -= l[k * p + a] * coef[k];
+        }
+        coef[a] = sum / l[a * p + a];
+    }
+    let mut ssr = 0.0;
+    for i in 0..n {
+        fill(i, &mut row);
+        let fit: f64 = row.iter().zip(&coef).map(|(r, c)| r * c).sum();
+        ssr += (y(i) - fit).powi(2);
+    }
+    coef.iter().all(|c| c.is_finite()).then_some((coef, ssr))
+}

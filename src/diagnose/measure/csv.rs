@@ -1,0 +1,296 @@
+//! Run files and summary tables: CSV read with the header checked, every
+//! field a finite number, and errors that name the file and line.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use super::json::{Bound, bad};
+use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow};
+use crate::error::{Error, Result};
+
+/// A CSV column the reader wants.
+struct Column {
+    name: &'static str,
+    required: bool,
+}
+
+/// A CSV file read with its header checked: where each wanted column is.
+struct Table {
+    file: PathBuf,
+    reader: csv::Reader<std::io::Cursor<Vec<u8>>>,
+    /// Byte offsets of the line ends (`\n`, or a `\r` not followed by `\n`).
+    line_ends: Vec<usize>,
+    /// Field index of each wanted column, `None` where an optional one is absent.
+    index: Vec<Option<usize>>,
+}
+
+impl Table {
+    /// Reads `path`, parses the header and finds `columns`.
+    /// `named_by` says which manifest key names the file (for messages).
+    fn open(path: &Path, named_by: &str, columns: &[Column]) -> Result<Table> {
+        let bytes = std::fs::read(path)
+            .map_err(|e| bad(path, None, format!("cannot read the file named by {named_by}: {e}")))?;
+        let line_ends = (0..bytes.len())
+            .filter(|&i| bytes[i] == b'\n' || (bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
+            .collect();
+        let reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .flexible(false)
+            .from_reader(std::io::Cursor::new(bytes));
+        let mut table = Table { file: path.to_path_buf(), reader, line_ends, index: Vec::new() };
+        let header = match table.reader.headers() {
+            Ok(header) => header.clone(),
+            Err(e) => return Err(table.csv_error(e)),
+        };
+        if header.iter().all(|h| h.is_empty()) {
+            return Err(bad(path, Some(1), "the file is empty: a header row is required"));
+        }
+        let header_line = header.position().map_or(1, |p| table.line(p.byte()));
+        let mut positions: HashMap<&str, usize> = HashMap::new();
+        for (i, name) in header.iter().enumerate() {
+            if columns.iter().any(|c| c.name == name) && positions.insert(name, i).is_some() {
+                return Err(bad(
+                    path,
+                    Some(header_line),
+                    format!("column `{name}` appears more than once in the header"),
+                ));
+            }
+        }
+        let mut index = Vec::with_capacity(columns.len());
+        for c in columns {
+            let at = positions.get(c.name).copied();
+            if at.is_none() && c.required {
+                let have: Vec<&str> = header.iter().collect();
+                return Err(bad(
+                    path,
+                    Some(header_line),
+                    format!("missing required column `{}` (the header has: {})", c.name, have.join(", ")),
+                ));
+            }
+            index.push(at);
+        }
+        table.index = index;
+        Ok(table)
+    }
+
+    /// The line (counted from 1) of the record the csv reader places at
+    /// byte `pos`. The reader's own line numbers are wrong for `\r\n` and
+    /// `\r` line ends, and its byte offsets may point at the line end before
+    /// a record, so line ends at `pos` are skipped first.
+    fn line(&self, pos: u64) -> u64 {
+        let bytes = self.reader.get_ref().get_ref();
+        let mut start = usize::try_from(pos).unwrap_or(usize::MAX).min(bytes.len());
+        while start < bytes.len() && matches!(bytes[start], b'\r' | b'\n') {
+            start += 1;
+        }
+        1 + self.line_ends.partition_point(|&end| end < start) as u64
+    }
+
+    /// A csv-crate error as a measurement error with the line it happened on.
+    fn csv_error(&self, e: csv::Error) -> Error {
+        let file = &self.file;
+        let line = e.position().map(|p| self.line(p.byte()));
+        match e.kind() {
+            csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+                bad(file, line, format!("the row has {len} fields but the header has {expected_len}"))
+            }
+            csv::ErrorKind::Utf8 { .. } => bad(file, line, "the row is not valid UTF-8 text"),
+            csv::ErrorKind::Io(io) => bad(file, line, format!("cannot read the file: {io}")),
+            _ => bad(file, line, format!("cannot read the file as CSV: {e}")),
+        }
+    }
+
+    /// Calls `row(line, values)` for every data row; `values[j]` is the
+    /// finite number in wanted column `j` (`None` for absent optional columns).
+    fn for_each_row(
+        mut self,
+        columns: &[Column],
+        mut row: impl FnMut(u64, &[Option<f64>]) -> Result<()>,
+    ) -> Result<()> {
+        let mut record = csv::StringRecord::new();
+        let mut values = vec![None; columns.len()];
+        loop {
+            match self.reader.read_record(&mut record) {
+                Ok(true) => {}
+                Ok(false) => return Ok(()),
+                Err(e) => return Err(self.csv_error(e)),
+            }
+            let line = record.position().map_or(0, |p| self.line(p.byte()));
+            for (j, c) in columns.iter().enumerate() {
+                values[j] = match self.index[j] {
+                    None => None,
+                    Some(i) => Some(parse_number(&self.file, line, c.name, record.get(i).unwrap_or(""))?),
+                };
+            }
+            row(line, &values)?;
+        }
+    }
+}
+
+/// The finite number in one CSV field.
+fn parse_number(file: &Path, line: u64, column: &str, text: &str) -> Result<f64> {
+    let value: f64 = text.parse().map_err(|_| {
+        let shown = if text.is_empty() { "an empty field".to_string() } else { format!("`{text}`") };
+        bad(file, Some(line), format!("column `{column}`: {shown} is not a number"))
+    })?;
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(bad(file, Some(line), format!("column `{column}`: `{text}` is not a finite number")))
+    }
+}
+
+const RUN_COLUMNS: [Column; 5] = [
+    Column { name: "t", required: true },
+    Column { name: "x", required: true },
+    Column { name: "v", required: false },
+    Column { name: "normal_force", required: false },
+    Column { name: "friction_force", required: false },
+];
+
+/// Reads and checks one run file; the manifest entry `ctx` named it.
+pub(super) fn read_run_file(path: &Path, ctx: &str, frequency_hz: f64, amplitude_m: f64, force_n: f64) -> Result<Run> {
+    let table = Table::open(path, &format!("manifest.json {ctx}.file"), &RUN_COLUMNS)?;
+    let has = |j: usize| table.index[j].is_some();
+    let (has_v, has_n, has_f) = (has(2), has(3), has(4));
+    let mut t_s = Vec::new();
+    let mut x_m = Vec::new();
+    let mut v = Vec::new();
+    let mut normal = Vec::new();
+    let mut friction = Vec::new();
+    let mut lines = Vec::new();
+    table.for_each_row(&RUN_COLUMNS, |line, values| {
+        let t = values[0].unwrap_or(f64::NAN);
+        match t_s.last() {
+            Some(&previous) if t <= previous => {
+                return Err(bad(
+                    path,
+                    Some(line),
+                    format!("time does not increase: t = {t} s follows t = {previous} s"),
+                ));
+            }
+            _ => {}
+        }
+        t_s.push(t);
+        x_m.push(values[1].unwrap_or(f64::NAN));
+        lines.push(line);
+        if let Some(value) = values[2] {
+            v.push(value);
+        }
+        if let Some(value) = values[3] {
+            normal.push(value);
+        }
+        if let Some(value) = values[4] {
+            friction.push(value);
+        }
+        Ok(())
+    })?;
+
+    let n = t_s.len();
+    let period_s = 1.0 / frequency_hz;
+    let needed = format!(
+        "at least {MIN_PERIODS} excitation periods ({:.6} s at {frequency_hz} Hz) are required",
+        MIN_PERIODS * period_s
+    );
+    if n < 2 {
+        return Err(bad(path, None, format!("the record has {n} sample(s); {needed}")));
+    }
+    let mut intervals: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    intervals.sort_by(f64::total_cmp);
+    let median = intervals[intervals.len() / 2];
+    for (i, w) in t_s.windows(2).enumerate() {
+        let dt = w[1] - w[0];
+        if (dt - median).abs() > SAMPLING_TOLERANCE * median {
+            return Err(bad(
+                path,
+                Some(lines[i + 1]),
+                format!(
+                    "the sample interval {dt} s (from t = {} s) differs from the record's median interval \
+                     {median} s by more than {}%: records must be uniformly sampled",
+                    w[0],
+                    SAMPLING_TOLERANCE * 100.0
+                ),
+            ));
+        }
+    }
+    let duration_s = t_s[n - 1] - t_s[0] + median;
+    if duration_s < MIN_PERIODS * period_s * (1.0 - 1e-9) {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "the record is too short: {n} samples cover {duration_s:.6} s = {:.3} excitation periods; {needed}",
+                duration_s / period_s
+            ),
+        ));
+    }
+    Ok(Run {
+        file: path.to_path_buf(),
+        excitation_frequency_hz: frequency_hz,
+        excitation_amplitude_m: amplitude_m,
+        normal_force_n: force_n,
+        t_s,
+        x_m,
+        v_m_per_s: has_v.then_some(v),
+        normal_force: has_n.then_some(normal),
+        friction_force: has_f.then_some(friction),
+    })
+}
+
+const SUMMARY_COLUMNS: [Column; 7] = [
+    Column { name: "excitation_frequency_hz", required: true },
+    Column { name: "excitation_amplitude_m", required: true },
+    Column { name: "normal_force_mean_n", required: true },
+    Column { name: "normal_force_var_n2", required: false },
+    Column { name: "peak_mean_m", required: true },
+    Column { name: "peak_var_m2", required: false },
+    Column { name: "n_peaks", required: false },
+];
+
+/// Reads and checks the summary table.
+pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
+    let table = Table::open(path, "manifest.json summary", &SUMMARY_COLUMNS)?;
+    let mut rows = Vec::new();
+    table.for_each_row(&SUMMARY_COLUMNS, |line, values| {
+        let check = |j: usize, bound: Bound, unit: &str| -> Result<Option<f64>> {
+            match values[j] {
+                None => Ok(None),
+                Some(value) => match bound.violation(value, unit) {
+                    None => Ok(Some(value)),
+                    Some(problem) => {
+                        Err(bad(path, Some(line), format!("column `{}`: {problem}", SUMMARY_COLUMNS[j].name)))
+                    }
+                },
+            }
+        };
+        // Required columns are always present here (`Table::open` checked).
+        let required = |j: usize, bound: Bound, unit: &str| -> Result<f64> {
+            check(j, bound, unit).map(|v| v.unwrap_or(f64::NAN))
+        };
+        let n_peaks = match values[6] {
+            None => None,
+            Some(value) if value >= 0.0 && value.fract() == 0.0 && value <= 9_007_199_254_740_992.0 => {
+                Some(value as u64)
+            }
+            Some(value) => {
+                return Err(bad(path, Some(line), format!("column `n_peaks`: {value} is not a whole number ≥ 0")));
+            }
+        };
+        rows.push(SummaryRow {
+            excitation_frequency_hz: required(0, Bound::Positive, "Hz")?,
+            excitation_amplitude_m: required(1, Bound::NonNegative, "m")?,
+            normal_force_mean_n: required(2, Bound::NonNegative, "N")?,
+            normal_force_var_n2: check(3, Bound::NonNegative, "N²")?,
+            peak_mean_m: required(4, Bound::Finite, "m")?,
+            peak_var_m2: check(5, Bound::NonNegative, "m²")?,
+            n_peaks,
+            line,
+        });
+        Ok(())
+    })?;
+    if rows.is_empty() {
+        return Err(bad(path, None, "the summary table has a header but no rows"));
+    }
+    Ok(rows)
+}

@@ -1,0 +1,275 @@
+//! Reading measurement sets (`shared/spec/measurement-format.md`).
+//!
+//! A measurement set is a directory with `manifest.json`, the run files it
+//! names (time series, CSV) and an optional summary table (CSV). All values
+//! are SI: s, m, m/s, N, Hz.
+//!
+//! [`read_measurement_set`] refuses every kind of bad input that the spec
+//! lists, with an [`Error::Measurement`](crate::Error::Measurement) that names the file, the line (for
+//! CSV files; the header is line 1) and what is wrong:
+//!
+//! - a missing or unreadable file (manifest, run file or summary);
+//! - a `format` other than exactly `stickslip-measurements/1`;
+//! - a missing required key or column;
+//! - a value that is not a finite number;
+//! - a mass or frequency that is not positive (zero is refused as well as
+//!   negative values; also a negative damping ratio, excitation amplitude,
+//!   normal force or variance);
+//! - time that does not strictly increase;
+//! - a record shorter than ten excitation periods;
+//! - a set with neither runs nor summary rows.
+//!
+//! In addition, because the spec says records are uniformly sampled, a run
+//! whose sample interval anywhere differs from the record's median interval
+//! by more than 1 % ([`SAMPLING_TOLERANCE`]) is refused. Unknown manifest keys
+//! and extra CSV columns are ignored; columns may come in any order.
+
+mod csv;
+mod json;
+mod write;
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::engine::Sample;
+use crate::error::Result;
+use json::{Bound, Json, bad, kind};
+
+pub use write::{RunEntry, write_manifest, write_run_file};
+
+/// The only accepted value of the manifest's `format` key.
+pub const FORMAT: &str = "stickslip-measurements/1";
+
+/// Relative deviation of any sample interval from the record's median
+/// interval above which a run file is refused as not uniformly sampled.
+pub const SAMPLING_TOLERANCE: f64 = 0.01;
+
+/// Shortest accepted record, in excitation periods.
+pub const MIN_PERIODS: f64 = 10.0;
+
+/// A measurement set as read from its directory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasurementSet {
+    /// The directory the set was read from.
+    pub dir: PathBuf,
+    /// Free text from the manifest (empty when absent).
+    pub description: String,
+    /// The rig without friction contact.
+    pub rig: RigInfo,
+    /// Time-series records, in manifest order.
+    pub runs: Vec<Run>,
+    /// Per-condition statistics from the summary table, in file order.
+    pub summary: Vec<SummaryRow>,
+    /// The summary table's path, when the manifest names one.
+    pub summary_file: Option<PathBuf>,
+}
+
+/// The manifest's `rig`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigInfo {
+    /// Block mass, kg (> 0).
+    pub mass_kg: f64,
+    /// Natural frequency without friction contact, Hz (> 0).
+    pub natural_frequency_hz: f64,
+    /// Viscous damping ratio, dimensionless (≥ 0).
+    pub damping_ratio: f64,
+}
+
+/// One time-series record: a run file plus its manifest entry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// The run file (empty for records that did not come from a file).
+    pub file: PathBuf,
+    /// Excitation frequency, Hz (> 0).
+    pub excitation_frequency_hz: f64,
+    /// Base excitation amplitude, m (≥ 0).
+    pub excitation_amplitude_m: f64,
+    /// Nominal normal-force setting, N (≥ 0).
+    pub normal_force_n: f64,
+    /// Sample times, s, strictly increasing and uniformly spaced.
+    pub t_s: Vec<f64>,
+    /// Block displacement relative to the friction element, m.
+    pub x_m: Vec<f64>,
+    /// Block velocity, m/s, if recorded.
+    pub v_m_per_s: Option<Vec<f64>>,
+    /// Measured normal force, N, if recorded.
+    pub normal_force: Option<Vec<f64>>,
+    /// Friction force on the block, N, if recorded.
+    pub friction_force: Option<Vec<f64>>,
+}
+
+/// One row of a summary table: statistics of one condition.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SummaryRow {
+    /// Excitation frequency, Hz (> 0).
+    pub excitation_frequency_hz: f64,
+    /// Base excitation amplitude, m (≥ 0).
+    pub excitation_amplitude_m: f64,
+    /// Mean normal force, N (≥ 0).
+    pub normal_force_mean_n: f64,
+    /// Variance of the normal force, N² (≥ 0), if given.
+    pub normal_force_var_n2: Option<f64>,
+    /// Mean peak amplitude, m.
+    pub peak_mean_m: f64,
+    /// Variance of the peak amplitude, m² (≥ 0), if given.
+    pub peak_var_m2: Option<f64>,
+    /// Number of peaks behind the statistics, if given.
+    pub n_peaks: Option<u64>,
+    /// The row's line in the summary file (header = line 1).
+    pub line: u64,
+}
+
+impl Run {
+    /// A record made from simulated samples (the engine's records), with
+    /// every channel present. `file` is left empty.
+    pub fn from_samples(
+        samples: &[Sample],
+        excitation_frequency_hz: f64,
+        excitation_amplitude_m: f64,
+        normal_force_n: f64,
+    ) -> Run {
+        Run {
+            file: PathBuf::new(),
+            excitation_frequency_hz,
+            excitation_amplitude_m,
+            normal_force_n,
+            t_s: samples.iter().map(|s| s.t_s).collect(),
+            x_m: samples.iter().map(|s| s.x_m).collect(),
+            v_m_per_s: Some(samples.iter().map(|s| s.v_m_per_s).collect()),
+            normal_force: Some(samples.iter().map(|s| s.normal_force_n).collect()),
+            friction_force: Some(samples.iter().map(|s| s.friction_force_n).collect()),
+        }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// Whether the record has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Mean sample interval, s (0 with fewer than two samples).
+    pub fn sample_interval_s(&self) -> f64 {
+        let n = self.t_s.len();
+        if n < 2 {
+            return 0.0;
+        }
+        let span = self.t_s[n - 1] - self.t_s[0];
+        if span > 0.0 { span / (n - 1) as f64 } else { 0.0 }
+    }
+
+    /// Time the record covers, s: from its first sample to one interval past
+    /// its last (`n` samples × interval); 0 when empty.
+    pub fn duration_s(&self) -> f64 {
+        let n = self.t_s.len();
+        if n == 0 { 0.0 } else { n as f64 * self.sample_interval_s() }
+    }
+}
+
+/// Sample rate of a record, Hz, from its mean sample interval; 0 for a
+/// record with fewer than two samples.
+pub fn sample_rate_hz(run: &Run) -> f64 {
+    let dt = run.sample_interval_s();
+    if dt > 0.0 { 1.0 / dt } else { 0.0 }
+}
+
+/// Reads and checks the measurement set in `dir` (its `manifest.json` and
+/// the files that names). See the module documentation for what is refused.
+pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
+    let manifest_path = dir.join("manifest.json");
+    let bytes = std::fs::read(&manifest_path)
+        .map_err(|e| bad(&manifest_path, None, format!("cannot read the manifest: {e}")))?;
+    let root: Value = serde_json::from_slice(&bytes).map_err(|e| {
+        let line = (e.line() > 0).then_some(e.line() as u64);
+        bad(&manifest_path, line, format!("not valid JSON: {e}"))
+    })?;
+    let manifest = Json { file: &manifest_path };
+    let top = root.as_object().ok_or_else(|| bad(&manifest_path, None, "the manifest must be a JSON object"))?;
+
+    match top.get("format") {
+        None => return Err(manifest.missing("format")),
+        Some(Value::String(s)) if s == FORMAT => {}
+        Some(other) => {
+            return Err(bad(&manifest_path, None, format!("`format` is {other}, expected \"{FORMAT}\"")));
+        }
+    }
+    let description = match top.get("description") {
+        None | Some(Value::Null) => String::new(),
+        Some(Value::String(s)) => s.clone(),
+        Some(other) => {
+            return Err(bad(&manifest_path, None, format!("`description` must be a string, found {}", kind(other))));
+        }
+    };
+
+    let rig_value = top.get("rig").ok_or_else(|| manifest.missing("rig"))?;
+    let rig_obj = manifest.object(rig_value, "rig")?;
+    let rig = RigInfo {
+        mass_kg: manifest.number(rig_obj, "rig", "mass_kg", Bound::Positive, "kg")?,
+        natural_frequency_hz: manifest.number(rig_obj, "rig", "natural_frequency_hz", Bound::Positive, "Hz")?,
+        damping_ratio: manifest.number(rig_obj, "rig", "damping_ratio", Bound::NonNegative, "")?,
+    };
+
+    let run_values: &[Value] = match top.get("runs") {
+        None | Some(Value::Null) => &[],
+        Some(Value::Array(items)) => items,
+        Some(other) => {
+            return Err(bad(&manifest_path, None, format!("`runs` must be an array, found {}", kind(other))));
+        }
+    };
+    let summary_name = match top.get("summary") {
+        None | Some(Value::Null) => None,
+        Some(Value::String(s)) => Some(s.clone()),
+        Some(other) => {
+            return Err(bad(
+                &manifest_path,
+                None,
+                format!("`summary` must be a file name (string), found {}", kind(other)),
+            ));
+        }
+    };
+    if run_values.is_empty() && summary_name.is_none() {
+        return Err(bad(&manifest_path, None, "the set has no runs and no summary; it needs at least one of them"));
+    }
+
+    // Check every manifest entry before touching the files it names.
+    let mut entries = Vec::with_capacity(run_values.len());
+    for (i, value) in run_values.iter().enumerate() {
+        let ctx = format!("runs[{i}]");
+        let obj = manifest.object(value, &ctx)?;
+        let file = match obj.get("file") {
+            None => return Err(manifest.missing(&format!("{ctx}.file"))),
+            Some(Value::String(s)) if !s.is_empty() => s.clone(),
+            Some(other) => {
+                return Err(bad(
+                    &manifest_path,
+                    None,
+                    format!("`{ctx}.file` must be a non-empty file name, found {other}"),
+                ));
+            }
+        };
+        let frequency = manifest.number(obj, &ctx, "excitation_frequency_hz", Bound::Positive, "Hz")?;
+        let amplitude = manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::NonNegative, "m")?;
+        let force = manifest.number(obj, &ctx, "normal_force_n", Bound::NonNegative, "N")?;
+        entries.push((file, frequency, amplitude, force));
+    }
+
+    let mut runs = Vec::with_capacity(entries.len());
+    for (i, (file, frequency, amplitude, force)) in entries.into_iter().enumerate() {
+        let path = dir.join(&file);
+        runs.push(csv::read_run_file(&path, &format!("runs[{i}]"), frequency, amplitude, force)?);
+    }
+
+    let (summary, summary_file) = match summary_name {
+        None => (Vec::new(), None),
+        Some(name) => {
+            let path = dir.join(&name);
+            (csv::read_summary_file(&path)?, Some(path))
+        }
+    };
+
+    Ok(MeasurementSet { dir: dir.to_path_buf(), description, rig, runs, summary, summary_file })
+}

@@ -1,0 +1,267 @@
+//! The diagnosis's outputs: `report.json` (the contract of `interfaces.md`,
+//! written from the serde structs below, plus extra keys), the two model
+//! files, and an HTML report with its chart. Every file is written
+//! atomically; nothing is written when the diagnosis fails.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::diagnose::observable::Observable;
+use crate::diagnose::score::Score;
+use crate::diagnose::{Diagnosis, Unexplained, chart};
+use crate::error::Result;
+use crate::io::{create_dir, write_atomically};
+
+/// The format tag of `report.json`.
+pub const REPORT_FORMAT: &str = "stickslip-diagnosis/1";
+
+/// What the gap metric measures, as `report.json` states it.
+pub const GAP_METRIC: &str = "mean over (condition, observable) of the Huber loss of z (z² for |z| <= 3, 6|z| − 9 beyond), z = (measured − simulated)/(simulator's replicate spread); fitting units (held-out units for heldout_*)";
+
+/// `report.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Always [`REPORT_FORMAT`].
+    pub format: String,
+    pub verdict: VerdictReport,
+    pub gap: GapReport,
+    /// Where the calibrated baseline departs from the data (|z| > 3), largest first.
+    pub locations: Vec<Location>,
+    /// Every effect tried, best first.
+    pub candidates: Vec<CandidateReport>,
+    pub models: ModelFiles,
+    /// The measurement set diagnosed.
+    pub source: String,
+    /// Run time of the diagnosis, s.
+    pub elapsed_s: f64,
+}
+
+/// `verdict`: the effect named (`none` when the baseline explains the data).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VerdictReport {
+    pub effect: String,
+    /// –, in [0, 1].
+    pub confidence: f64,
+}
+
+/// `gap`: the gap metric before and after the verdict's effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GapReport {
+    pub metric: String,
+    /// The calibrated baseline's gap on the fitting units.
+    pub baseline: f64,
+    /// The fitted model's gap on the fitting units.
+    pub after: f64,
+    /// `(baseline − after) / baseline`, –.
+    pub shrink: f64,
+    /// The same on the held-out units; `null` without them.
+    pub heldout_shrink: Option<f64>,
+    pub heldout_baseline: Option<f64>,
+    pub heldout_after: Option<f64>,
+    /// What the held-out gap had to fall by for an effect to be named.
+    pub noise_threshold: f64,
+}
+
+/// One place the baseline departs from the data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Location {
+    /// Hz
+    pub excitation_frequency_hz: f64,
+    /// N
+    pub normal_force_n: f64,
+    pub observable: Observable,
+    pub detail: String,
+    /// |z|, –.
+    pub score: f64,
+}
+
+/// One candidate effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateReport {
+    pub effect: String,
+    pub shrink: f64,
+    pub heldout_shrink: Option<f64>,
+    pub gap_fit: f64,
+    pub gap_heldout: f64,
+    /// The fitted parameters by name (names carry units).
+    pub parameters: BTreeMap<String, f64>,
+    /// The five largest |z| the candidate leaves.
+    pub unexplained: Vec<UnexplainedReport>,
+}
+
+/// One (condition, observable) a candidate leaves unexplained.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UnexplainedReport {
+    pub observable: Observable,
+    pub excitation_frequency_hz: f64,
+    pub normal_force_n: f64,
+    pub z: f64,
+}
+
+/// `models`: the two model files beside the report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelFiles {
+    pub baseline: String,
+    pub fitted: String,
+}
+
+impl From<&Unexplained> for UnexplainedReport {
+    fn from(u: &Unexplained) -> Self {
+        UnexplainedReport {
+            observable: u.observable,
+            excitation_frequency_hz: u.excitation_frequency_hz,
+            normal_force_n: u.normal_force_n,
+            z: u.z,
+        }
+    }
+}
+
+impl Diagnosis {
+    /// `report.json` as `interfaces.md` describes it (plus extra keys).
+    pub fn report(&self, source: &Path, elapsed_s: f64) -> Report {
+        let chosen = self.chosen();
+        let after_fit = chosen.map_or(self.gap_fit, |c| c.gap_fit);
+        let after_ho = chosen.map_or(self.gap_heldout, |c| c.gap_heldout);
+        let shrink = if self.gap_fit > 0.0 { (self.gap_fit - after_fit) / self.gap_fit } else { 0.0 };
+        let heldout_shrink =
+            (self.has_heldout && self.gap_heldout > 0.0).then(|| (self.gap_heldout - after_ho) / self.gap_heldout);
+        let mut locations: Vec<&Score> = self.baseline_scores.iter().filter(|s| s.z.abs() > 3.0).collect();
+        locations.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+        Report {
+            format: REPORT_FORMAT.to_string(),
+            verdict: VerdictReport { effect: self.verdict_name().to_string(), confidence: self.confidence },
+            gap: GapReport {
+                metric: GAP_METRIC.to_string(),
+                baseline: self.gap_fit,
+                after: after_fit,
+                shrink,
+                heldout_shrink,
+                heldout_baseline: self.has_heldout.then_some(self.gap_heldout),
+                heldout_after: self.has_heldout.then_some(after_ho),
+                noise_threshold: self.noise_threshold,
+            },
+            locations: locations
+                .iter()
+                .map(|s| Location {
+                    excitation_frequency_hz: s.excitation_frequency_hz,
+                    normal_force_n: s.normal_force_n,
+                    observable: s.observable,
+                    detail: format!(
+                        "{}: measured {:.6e}, baseline simulates {:.6e}{}",
+                        s.observable.phase().describe(),
+                        s.measured,
+                        s.simulated,
+                        if s.heldout { " (held-out unit)" } else { "" }
+                    ),
+                    score: s.z.abs(),
+                })
+                .collect(),
+            candidates: self
+                .candidates
+                .iter()
+                .map(|c| CandidateReport {
+                    effect: c.effect.name().to_string(),
+                    shrink: c.shrink,
+                    heldout_shrink: c.heldout_shrink,
+                    gap_fit: c.gap_fit,
+                    gap_heldout: c.gap_heldout,
+                    parameters: c.parameters.clone(),
+                    unexplained: c.unexplained.iter().map(UnexplainedReport::from).collect(),
+                })
+                .collect(),
+            models: ModelFiles { baseline: "baseline-model.toml".into(), fitted: "fitted-model.toml".into() },
+            source: source.display().to_string(),
+            elapsed_s,
+        }
+    }
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// Writes `report.json`, `baseline-model.toml`, `fitted-model.toml`,
+/// `report.html` and `gap.png`/`gap.svg` into `out`; returns the report.
+pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed_s: f64) -> Result<Report> {
+    create_dir(out)?;
+    let report = diagnosis.report(source, elapsed_s);
+    write_atomically(&out.join("report.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &report)?;
+        writeln!(w)
+    })?;
+    let header = |what: &str| {
+        format!(
+            "# {what} written by stickslip diagnose from {}\n# Run it with: stickslip sweep --config THIS_FILE\n\n",
+            source.display()
+        )
+    };
+    write_atomically(&out.join("baseline-model.toml"), |w| {
+        w.write_all(header("The calibrated baseline").as_bytes())?;
+        w.write_all(diagnosis.baseline.to_toml_string().as_bytes())
+    })?;
+    write_atomically(&out.join("fitted-model.toml"), |w| {
+        w.write_all(
+            header(&format!("The baseline plus the verdict's effect ({})", diagnosis.verdict_name())).as_bytes(),
+        )?;
+        w.write_all(diagnosis.fitted.to_toml_string().as_bytes())
+    })?;
+    chart::write_gap_chart(out, diagnosis)?;
+    let html = html(diagnosis, &report);
+    write_atomically(&out.join("report.html"), |w| w.write_all(html.as_bytes()))?;
+    Ok(report)
+}
+
+fn html(d: &Diagnosis, report: &Report) -> String {
+    let gap = &report.gap;
+    let num = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
+    let mut s = String::new();
+    s.push_str("<!doctype html><html><head><meta charset=\"utf-8\"><title>stickslip diagnosis</title><style>");
+    s.push_str("body{font-family:sans-serif;max-width:960px;margin:2em auto;color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.4em}");
+    s.push_str("</style></head><body><h1>Diagnosis of the sim-to-real gap</h1>");
+    s.push_str(&format!(
+        "<p class=\"verdict\">Verdict: <b>{}</b> (confidence {:.2})</p>",
+        escape(d.verdict_name()),
+        d.confidence
+    ));
+    s.push_str(&format!(
+        "<p>Gap metric: {}.</p><table><tr><th></th><th>baseline</th><th>after</th><th>shrink</th></tr><tr><td>fitting units</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>held-out units</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+        escape(&gap.metric),
+        num(Some(gap.baseline)),
+        num(Some(gap.after)),
+        num(Some(gap.shrink)),
+        num(gap.heldout_baseline),
+        num(gap.heldout_after),
+        num(gap.heldout_shrink),
+    ));
+    s.push_str("<h2>Where the baseline departs from the data</h2><img src=\"gap.png\" alt=\"|z| per observable, baseline and fitted\" style=\"max-width:100%\">");
+    s.push_str("<table><tr><th>condition</th><th>observable</th><th>|z|</th><th>detail</th></tr>");
+    for loc in report.locations.iter().take(30) {
+        s.push_str(&format!(
+            "<tr><td>{} Hz, {:.3} N</td><td>{}</td><td>{:.1}</td><td style=\"text-align:left\">{}</td></tr>",
+            loc.excitation_frequency_hz,
+            loc.normal_force_n,
+            escape(loc.observable.name()),
+            loc.score,
+            escape(&loc.detail)
+        ));
+    }
+    s.push_str("</table><h2>Candidates (each refitted with the baseline's friction level)</h2><table><tr><th>effect</th><th>gap (fit)</th><th>gap (held-out)</th><th>shrink</th><th>held-out shrink</th><th>parameters</th></tr>");
+    for c in &d.candidates {
+        s.push_str(&format!(
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            escape(c.effect.name()),
+            c.gap_fit,
+            c.gap_heldout,
+            c.shrink,
+            c.heldout_shrink.map_or("–".into(), |h| format!("{h:.3}")),
+            escape(&c.parameters.iter().map(|(k, v)| format!("{k} = {v:.4e}")).collect::<Vec<_>>().join(", "))
+        ));
+    }
+    s.push_str(&format!(
+        "</table><p>A candidate counts only if it lowers the held-out gap by more than {:.3} (noise threshold). Models: <a href=\"baseline-model.toml\">baseline-model.toml</a>, <a href=\"fitted-model.toml\">fitted-model.toml</a>; both run with <code>stickslip sweep --config</code>.</p></body></html>\n",
+        d.noise_threshold
+    ));
+    s
+}

@@ -1,0 +1,87 @@
+//! What the diagnosis simulates, always through the engine: replicate
+//! records of a measured unit (sampled like the data, on noise paths that
+//! are the same for every model, so differences between models are not
+//! noise), and per-path peak statistics of small ensembles.
+
+use rayon::prelude::*;
+
+use crate::diagnose::data::Data;
+use crate::diagnose::measure::Run;
+use crate::diagnose::{DiagnoseSettings, mean, sd};
+use crate::engine::{Condition, Engine, Job, Model, Point, Record, RunPlan};
+use crate::error::Result;
+
+/// Realisation numbers of unit `u`'s replicates start at `u × REPLICATE_STRIDE`.
+const REPLICATE_STRIDE: u32 = 1000;
+
+/// Replicates `0..settings.replicates` of unit `unit` under `model`: records
+/// as long as the unit's, sampled like the data.
+pub(crate) fn replicates(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    unit: usize,
+) -> Result<Vec<Run>> {
+    let condition = data.simulated_condition(&data.units[unit], model, settings.warmup_cycles);
+    let points = [Point::steady(model, condition)];
+    let job = Job {
+        model,
+        points: &points,
+        realisations: settings.replicates,
+        first_realisation: REPLICATE_STRIDE * unit as u32,
+        seed: settings.seed,
+        plan: RunPlan { warmup_cycles: settings.warmup_cycles, measured_cycles: 0 },
+        record: Record::Sums,
+    };
+    let records = engine.records(&job, data.sample_interval_s, data.record_s[unit])?;
+    Ok(records
+        .iter()
+        .map(|samples| {
+            Run::from_samples(
+                samples,
+                condition.excitation_frequency_hz,
+                model.excitation.amplitude_m,
+                condition.normal_force_n,
+            )
+        })
+        .collect())
+}
+
+/// The replicates of several units, unit by unit (in `units`' order), with
+/// the units simulated in parallel.
+pub(crate) fn replicates_of(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    units: &[usize],
+) -> Result<Vec<Vec<Run>>> {
+    units.par_iter().map(|&u| replicates(engine, model, data, settings, u)).collect()
+}
+
+/// Per-path peak statistics of an ensemble: for each condition, every
+/// realisation's (mean, variance) of `cycles` peaks (m, m²).
+pub(crate) fn ensemble_path_stats(
+    engine: &Engine,
+    model: &Model,
+    conditions: &[Condition],
+    cycles: u32,
+    realisations: u32,
+    seed: u64,
+    warmup: u32,
+) -> Result<Vec<Vec<(f64, f64)>>> {
+    let points: Vec<Point> = conditions.iter().map(|&c| Point::steady(model, c)).collect();
+    let job = Job {
+        model,
+        points: &points,
+        realisations,
+        first_realisation: 0,
+        seed,
+        plan: RunPlan { warmup_cycles: warmup, measured_cycles: cycles.max(2) },
+        record: Record::Peaks,
+    };
+    let paths = engine.paths(&job)?;
+    let stats = |peaks: &[f64]| (mean(peaks), sd(peaks).powi(2));
+    Ok(paths.chunks(realisations as usize).map(|chunk| chunk.iter().map(|p| stats(&p.peaks_m)).collect()).collect())
+}

@@ -1,0 +1,213 @@
+//! The unmodelled effects of `shared/spec/model.md`, as optional extensions
+//! of the baseline. Each has its own table in the model file, a `form` (how
+//! it is shaped) and a strength; at zero strength the arithmetic reduces
+//! exactly to the baseline's, so paths are bit-identical (a test checks it).
+//!
+//! The first form of each effect is the one `diagnose` fits (the candidate);
+//! the others exist so synthetic data can carry an effect whose shape no
+//! candidate matches exactly. Grounding in the literature:
+//! - harmonics of the normal force: the paper's Figure 4 (misalignment 1×,
+//!   uneven wear 2×, bumps higher);
+//! - non-Gaussian friction noise: the paper's Figure 6 (skew growing with load);
+//! - hysteresis: frictional memory (Hess & Soom 1990), Dahl's pre-sliding
+//!   build-up of friction over a characteristic displacement after reversal;
+//! - coloured friction noise: correlated asperity contact (Ornstein–Uhlenbeck);
+//! - stiction: static friction above kinetic at breakaway (Rabinowicz; LuGre);
+//! - load-dependent friction: μ changing with contact pressure;
+//! - normal-force drift: wear and heating during a run (paper §2.2.1).
+//!
+//! Everything time-varying is evaluated once per noise interval (at the
+//! interval's start) and held, like the noise itself: results do not depend
+//! on the step size, and breakaway from stick stays a closed-form event.
+
+mod params;
+mod tables;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+pub use params::EffectParams;
+pub use tables::*;
+
+/// The unmodelled effects of `model.md`, by their fixed names. Every match
+/// on an effect is exhaustive, so adding one is a change the compiler walks
+/// through (model tables, both integrators, the candidates, the synthetic
+/// generator, the report).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    NormalForceHarmonics,
+    NonGaussianFriction,
+    FrictionHysteresis,
+    ColouredFrictionNoise,
+    Stiction,
+    LoadDependentFriction,
+    NormalForceDrift,
+}
+
+impl Effect {
+    /// Every effect, in the order of `model.md`'s table.
+    pub const ALL: [Effect; 7] = [
+        Effect::NormalForceHarmonics,
+        Effect::NonGaussianFriction,
+        Effect::FrictionHysteresis,
+        Effect::ColouredFrictionNoise,
+        Effect::Stiction,
+        Effect::LoadDependentFriction,
+        Effect::NormalForceDrift,
+    ];
+
+    /// The name used in model files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::NormalForceHarmonics => "normal_force_harmonics",
+            Effect::NonGaussianFriction => "non_gaussian_friction",
+            Effect::FrictionHysteresis => "friction_hysteresis",
+            Effect::ColouredFrictionNoise => "coloured_friction_noise",
+            Effect::Stiction => "stiction",
+            Effect::LoadDependentFriction => "load_dependent_friction",
+            Effect::NormalForceDrift => "normal_force_drift",
+        }
+    }
+}
+
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Effect {
+    type Err = String;
+
+    fn from_str(name: &str) -> std::result::Result<Effect, String> {
+        Effect::ALL.into_iter().find(|e| e.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+            format!("`{name}` is not an effect; expected one of {}", names.join(", "))
+        })
+    }
+}
+
+/// The shape of an effect (its `form` key). Forms are enums everywhere on
+/// the host; they become `u32` codes only at the GPU boundary, where the
+/// kernel sees one generated constant per variant.
+pub trait Form: Copy + Serialize + 'static {
+    /// Every form, in code order (the first is the candidate form).
+    const ALL: &'static [Self];
+    /// The code the kernel sees.
+    fn code(self) -> u32;
+}
+
+/// Time scale of the `saturating` drift, s.
+pub const DRIFT_SATURATION_S: f64 = 20.0;
+/// Time scale of the `wander` drift, s.
+pub const DRIFT_WANDER_S: f64 = 15.0;
+/// Displacement over which `decaying` stiction fades, m.
+pub const STICTION_DECAY_M: f64 = 1e-4;
+
+/// All effects of a model; `None` is off.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Effects {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_force_harmonics: Option<NormalForceHarmonics>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub non_gaussian_friction: Option<NonGaussianFriction>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction_hysteresis: Option<FrictionHysteresis>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coloured_friction_noise: Option<ColouredFrictionNoise>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiction: Option<Stiction>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_dependent_friction: Option<LoadDependentFriction>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_force_drift: Option<NormalForceDrift>,
+}
+
+fn check(key: &str, value: f64, ok: bool, message: &str) -> Result<()> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter { key: key.into(), value: value.to_string(), message: message.into() })
+    }
+}
+
+impl Effects {
+    /// Whether any effect table is present (then noise intervals matter even
+    /// without noise).
+    pub fn any(&self) -> bool {
+        Effect::ALL.into_iter().any(|e| self.has(e))
+    }
+
+    /// Whether `effect`'s table is present.
+    pub fn has(&self, effect: Effect) -> bool {
+        match effect {
+            Effect::NormalForceHarmonics => self.normal_force_harmonics.is_some(),
+            Effect::NonGaussianFriction => self.non_gaussian_friction.is_some(),
+            Effect::FrictionHysteresis => self.friction_hysteresis.is_some(),
+            Effect::ColouredFrictionNoise => self.coloured_friction_noise.is_some(),
+            Effect::Stiction => self.stiction.is_some(),
+            Effect::LoadDependentFriction => self.load_dependent_friction.is_some(),
+            Effect::NormalForceDrift => self.normal_force_drift.is_some(),
+        }
+    }
+
+    /// Range checks; errors name the dotted key.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(h) = &self.normal_force_harmonics {
+            for (k, (a, p)) in h.amplitudes_n.iter().zip(&h.phases_rad).enumerate() {
+                check(&format!("normal_force_harmonics.amplitudes_n[{k}]"), *a, true, "must be a finite number of N")?;
+                check(&format!("normal_force_harmonics.phases_rad[{k}]"), *p, true, "must be a finite angle")?;
+            }
+            check("normal_force_harmonics.shape", h.shape, h.shape > 0.0, "must be > 0")?;
+        }
+        if let Some(g) = &self.non_gaussian_friction {
+            let ok = match g.form {
+                NonGaussianForm::Skew => true,
+                NonGaussianForm::Lognormal => g.strength >= 0.0 && g.strength <= 3.0,
+                NonGaussianForm::TukeyH => (0.0..0.25).contains(&g.strength),
+            };
+            check(
+                "non_gaussian_friction.strength",
+                g.strength,
+                ok,
+                "lognormal needs 0..=3, tukey_h needs 0 <= h < 0.25",
+            )?;
+            check("non_gaussian_friction.load_exponent", g.load_exponent, true, "must be finite")?;
+            check(
+                "non_gaussian_friction.reference_force_n",
+                g.reference_force_n,
+                g.reference_force_n > 0.0,
+                "must be > 0 N",
+            )?;
+        }
+        if let Some(h) = &self.friction_hysteresis {
+            check("friction_hysteresis.length_m", h.length_m, h.length_m >= 0.0, "must be >= 0 m")?;
+        }
+        if let Some(c) = &self.coloured_friction_noise {
+            check(
+                "coloured_friction_noise.correlation_time_s",
+                c.correlation_time_s,
+                c.correlation_time_s >= 0.0,
+                "must be >= 0 s",
+            )?;
+        }
+        if let Some(s) = &self.stiction {
+            check("stiction.excess", s.excess, s.excess >= 0.0, "must be >= 0")?;
+            check("stiction.release_length_m", s.release_length_m, s.release_length_m >= 0.0, "must be >= 0 m")?;
+        }
+        if let Some(l) = &self.load_dependent_friction {
+            check("load_dependent_friction.strength", l.strength, true, "must be finite")?;
+            check(
+                "load_dependent_friction.reference_force_n",
+                l.reference_force_n,
+                l.reference_force_n > 0.0,
+                "must be > 0 N",
+            )?;
+        }
+        if let Some(d) = &self.normal_force_drift {
+            check("normal_force_drift.rate_per_s", d.rate_per_s, true, "must be finite")?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,95 @@
+//! The effects flattened for one grid point, as both integrators read them.
+
+use super::{ColourForm, DriftForm, Effects, HarmonicForm, HysteresisForm, LoadForm, NonGaussianForm, StictionForm};
+
+/// Effect parameters for one grid point, flattened for the integrators.
+/// An absent effect has its first (candidate) form at zero strength: the
+/// baseline.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EffectParams {
+    pub harmonic_form: HarmonicForm,
+    /// N
+    pub harmonic_amplitudes_n: [f64; 4],
+    /// rad
+    pub harmonic_phases_rad: [f64; 4],
+    pub harmonic_shape: f64,
+    /// Mean of max(0, cos)^shape over a period (bumps form).
+    pub harmonic_shape_mean: f64,
+    pub non_gaussian_form: NonGaussianForm,
+    /// Strength at this point's N0 (load scaling applied), –.
+    pub non_gaussian_strength: f64,
+    pub hysteresis_form: HysteresisForm,
+    /// m
+    pub hysteresis_length_m: f64,
+    pub colour_form: ColourForm,
+    /// AR(1) coefficient per interval, –.
+    pub colour_rho: f64,
+    /// Intervals a value is held (hold form).
+    pub colour_hold_intervals: u32,
+    pub stiction_form: StictionForm,
+    pub stiction_excess: f64,
+    /// Slip over which the constant form's excess fades, m.
+    pub stiction_release_m: f64,
+    /// Δa at this point's N0, –.
+    pub friction_offset: f64,
+    pub drift_form: DriftForm,
+    /// 1/s
+    pub drift_rate_per_s: f64,
+}
+
+/// E[max(0, cos θ)^p] over θ uniform: Γ((p+1)/2) / (2 √π Γ(p/2 + 1)).
+fn bump_mean(p: f64) -> f64 {
+    use statrs::function::gamma::gamma;
+    gamma((p + 1.0) / 2.0) / (2.0 * std::f64::consts::PI.sqrt() * gamma(p / 2.0 + 1.0))
+}
+
+impl EffectParams {
+    /// Flattens `effects` for a point with mean normal force `n0` (N), base
+    /// friction level `a` and noise hold interval `interval_s` (s).
+    pub fn new(effects: &Effects, n0: f64, a: f64, interval_s: f64) -> EffectParams {
+        let mut p = EffectParams { harmonic_shape: 2.0, colour_hold_intervals: 1, ..Default::default() };
+        if let Some(h) = &effects.normal_force_harmonics {
+            p.harmonic_form = h.form;
+            p.harmonic_amplitudes_n = h.amplitudes_n;
+            p.harmonic_phases_rad = h.phases_rad;
+            p.harmonic_shape = h.shape;
+            p.harmonic_shape_mean = bump_mean(h.shape);
+        }
+        if let Some(g) = &effects.non_gaussian_friction {
+            p.non_gaussian_form = g.form;
+            let scale =
+                if g.load_exponent == 0.0 { 1.0 } else { (n0.max(1e-9) / g.reference_force_n).powf(g.load_exponent) };
+            p.non_gaussian_strength = g.strength * scale;
+            if g.form == NonGaussianForm::TukeyH {
+                p.non_gaussian_strength = p.non_gaussian_strength.min(0.24);
+            }
+        }
+        if let Some(h) = &effects.friction_hysteresis {
+            p.hysteresis_form = h.form;
+            p.hysteresis_length_m = h.length_m;
+        }
+        if let Some(c) = &effects.coloured_friction_noise {
+            p.colour_form = c.form;
+            p.colour_rho = if c.correlation_time_s > 0.0 { (-interval_s / c.correlation_time_s).exp() } else { 0.0 };
+            p.colour_hold_intervals = ((c.correlation_time_s / interval_s).round() as u32).max(1);
+        }
+        if let Some(s) = &effects.stiction {
+            p.stiction_form = s.form;
+            p.stiction_excess = s.excess;
+            p.stiction_release_m = s.release_length_m;
+        }
+        if let Some(l) = &effects.load_dependent_friction {
+            let r = l.reference_force_n;
+            p.friction_offset = match l.form {
+                LoadForm::Linear => l.strength * (n0 - r),
+                LoadForm::Power => a * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
+                LoadForm::Saturating => l.strength * r * (1.0 - (-(n0 - r) / r).exp()),
+            };
+        }
+        if let Some(d) = &effects.normal_force_drift {
+            p.drift_form = d.form;
+            p.drift_rate_per_s = d.rate_per_s;
+        }
+        p
+    }
+}

@@ -1,0 +1,243 @@
+//! The effect tables of a model file: one struct per effect, with its
+//! `form` enum (the first form is the candidate's) and its strength.
+
+use serde::{Deserialize, Serialize};
+
+use super::Form;
+
+/// Periodic parts of N(t) at 1×..4× the excitation frequency.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NormalForceHarmonics {
+    /// `fourier`: Σ A_k cos(kΩt + φ_k); `bumps`: Σ A_k (max(0, cos(kΩt + φ_k))^shape − its mean);
+    /// `square`: Σ A_k tanh(shape·cos(kΩt + φ_k)) / tanh(shape).
+    #[serde(default)]
+    pub form: HarmonicForm,
+    /// Amplitudes A_1..A_4, N.
+    pub amplitudes_n: [f64; 4],
+    /// Phases φ_1..φ_4, rad.
+    #[serde(default)]
+    pub phases_rad: [f64; 4],
+    /// Shape of `bumps` (power) and `square` (sharpness), –.
+    #[serde(default = "two")]
+    pub shape: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HarmonicForm {
+    #[default]
+    Fourier = 0,
+    Bumps = 1,
+    Square = 2,
+}
+
+impl Form for HarmonicForm {
+    const ALL: &'static [Self] = &[HarmonicForm::Fourier, HarmonicForm::Bumps, HarmonicForm::Square];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// A skewed or heavy-tailed random part of the friction coefficient.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NonGaussianFriction {
+    /// `skew`: (z + s (z'² − 1)/√2)/√(1+s²); `lognormal`: standardised exp(s z);
+    /// `tukey_h`: standardised z·exp(h z²/2) (heavy tails). All have mean 0, variance 1.
+    #[serde(default)]
+    pub form: NonGaussianForm,
+    /// s (skew, lognormal) or h (tukey_h, < 0.5), –.
+    pub strength: f64,
+    /// Strength scales as (N0 / reference)^load_exponent, –.
+    #[serde(default)]
+    pub load_exponent: f64,
+    /// Reference normal force of the load scaling, N.
+    #[serde(default = "ten")]
+    pub reference_force_n: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NonGaussianForm {
+    #[default]
+    Skew = 0,
+    Lognormal = 1,
+    TukeyH = 2,
+}
+
+impl Form for NonGaussianForm {
+    const ALL: &'static [Self] = &[NonGaussianForm::Skew, NonGaussianForm::Lognormal, NonGaussianForm::TukeyH];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Friction that depends on the motion's history: after each slip start the
+/// sliding friction builds up over a displacement (Dahl-like pre-sliding), so
+/// accelerating and decelerating branches differ.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionHysteresis {
+    /// Build-up φ(d) of the sliding friction with displacement d since slip
+    /// start: `exponential` 1 − e^(−d/δ); `tanh` tanh(d/δ); `rational` d/(d+δ).
+    #[serde(default)]
+    pub form: HysteresisForm,
+    /// Characteristic displacement δ, m.
+    pub length_m: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HysteresisForm {
+    #[default]
+    Exponential = 0,
+    Tanh = 1,
+    Rational = 2,
+}
+
+impl Form for HysteresisForm {
+    const ALL: &'static [Self] = &[HysteresisForm::Exponential, HysteresisForm::Tanh, HysteresisForm::Rational];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// A friction noise correlated for longer than one hold interval.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColouredFrictionNoise {
+    /// `ar1`: Ornstein–Uhlenbeck sampled per interval, ρ = e^(−τ/τc);
+    /// `hold`: each value held for round(τc/τ) intervals;
+    /// `two_scale`: half white, half AR(1) with τc (variance split equally;
+    /// white only when τc = 0).
+    #[serde(default)]
+    pub form: ColourForm,
+    /// Correlation time τc, s.
+    pub correlation_time_s: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColourForm {
+    #[default]
+    Ar1 = 0,
+    Hold = 1,
+    TwoScale = 2,
+}
+
+impl Form for ColourForm {
+    const ALL: &'static [Self] = &[ColourForm::Ar1, ColourForm::Hold, ColourForm::TwoScale];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Breakaway friction above the friction just above zero velocity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stiction {
+    /// `constant`: μ_s = μ(0) + Δ, and after breakaway an extra
+    /// Δ·max(0, 1 − d/L) that fades linearly over the first `release_length_m`
+    /// L of slip (L = 0: friction drops to the kinetic law at once);
+    /// `noisy`: Δ·max(0, 1 + z/2) per interval, dropping at once;
+    /// `decaying`: Δ at breakaway, and an extra Δ·e^(−d/0.1 mm) while the
+    /// slip begins (a smooth static-to-kinetic transition).
+    #[serde(default)]
+    pub form: StictionForm,
+    /// Excess Δ of the static coefficient, –.
+    pub excess: f64,
+    /// Slip L over which the `constant` form's excess fades, m (0: at once).
+    #[serde(default)]
+    pub release_length_m: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StictionForm {
+    #[default]
+    Constant = 0,
+    Noisy = 1,
+    Decaying = 2,
+}
+
+impl Form for StictionForm {
+    const ALL: &'static [Self] = &[StictionForm::Constant, StictionForm::Noisy, StictionForm::Decaying];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// The mean friction coefficient changes with the normal-force level N0.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadDependentFriction {
+    /// Offset Δa added to `a`: `linear` k (N0 − Nref) with k in 1/N;
+    /// `power` a ((N0/Nref)^k − 1); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref)).
+    #[serde(default)]
+    pub form: LoadForm,
+    /// k (see `form`).
+    pub strength: f64,
+    /// Reference normal force Nref, N.
+    #[serde(default = "ten")]
+    pub reference_force_n: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadForm {
+    #[default]
+    Linear = 0,
+    Power = 1,
+    Saturating = 2,
+}
+
+impl Form for LoadForm {
+    const ALL: &'static [Self] = &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// The mean normal force drifts during a run (time t from the run's start).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NormalForceDrift {
+    /// N0 × `linear` (1 + r t); `saturating` (1 + r·20 s·(1 − e^(−t/20 s)));
+    /// `wander` (1 + r·15 s·sin(t/15 s)).
+    #[serde(default)]
+    pub form: DriftForm,
+    /// Initial relative rate r, 1/s.
+    pub rate_per_s: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DriftForm {
+    #[default]
+    Linear = 0,
+    Saturating = 1,
+    Wander = 2,
+}
+
+impl Form for DriftForm {
+    const ALL: &'static [Self] = &[DriftForm::Linear, DriftForm::Saturating, DriftForm::Wander];
+
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+fn two() -> f64 {
+    2.0
+}
+
+fn ten() -> f64 {
+    10.0
+}

@@ -1,0 +1,177 @@
+//! One GPU: adapter selection, device and queue, and the compiled
+//! pipelines. Functions elsewhere take the device, queue and [`Kernels`]
+//! (as wgpu's compute examples take `&Device, &Queue`), so tests can pass a
+//! device of their own.
+
+use crate::engine::gpu::source;
+use crate::error::{Error, Result};
+
+/// Compiled pipelines and their bind-group layouts.
+pub struct Kernels {
+    pub(crate) ensemble_layout: wgpu::BindGroupLayout,
+    pub(crate) init_paths: wgpu::ComputePipeline,
+    pub(crate) run_cycles: wgpu::ComputePipeline,
+    pub(crate) check_layout: wgpu::BindGroupLayout,
+    pub(crate) philox_check: wgpu::ComputePipeline,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn compute_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+    entry_point: &str,
+) -> wgpu::ComputePipeline {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry_point),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry_point),
+        layout: Some(&pipeline_layout),
+        module,
+        entry_point: Some(entry_point),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+impl Kernels {
+    /// Compiles the WGSL and builds the pipelines.
+    pub fn new(device: &wgpu::Device) -> Kernels {
+        let ensemble = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ensemble.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source::ensemble_wgsl().into()),
+        });
+        let ensemble_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ensemble"),
+            entries: &[
+                uniform_entry(0),
+                storage_entry(1, true),
+                storage_entry(2, false),
+                storage_entry(3, false),
+                storage_entry(4, false),
+                storage_entry(5, false),
+                uniform_entry(6),
+            ],
+        });
+        let check = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("check.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source::check_wgsl().into()),
+        });
+        let check_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("philox_check"),
+            entries: &[uniform_entry(0), storage_entry(1, false), storage_entry(2, false)],
+        });
+        Kernels {
+            init_paths: compute_pipeline(device, &ensemble_layout, &ensemble, "init_paths"),
+            run_cycles: compute_pipeline(device, &ensemble_layout, &ensemble, "run_cycles"),
+            philox_check: compute_pipeline(device, &check_layout, &check, "philox_check"),
+            ensemble_layout,
+            check_layout,
+        }
+    }
+}
+
+/// What kind of adapter a context runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdapterClass {
+    /// A hardware GPU (discrete, integrated or virtual).
+    Hardware,
+    /// A software rasteriser such as Mesa's lavapipe.
+    Software,
+}
+
+/// One GPU: device, queue, adapter description and compiled pipelines.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    pub kernels: Kernels,
+}
+
+impl GpuContext {
+    /// Opens the best adapter: a hardware GPU if there is one, otherwise a
+    /// software one (lavapipe) when `allow_software` is set.
+    pub fn new(allow_software: bool) -> Result<GpuContext> {
+        pollster::block_on(Self::new_async(allow_software, None))
+    }
+
+    /// Like [`GpuContext::new`], but the device gets `limits` instead of
+    /// everything the adapter offers (tests use this to force chunking).
+    pub fn with_limits(allow_software: bool, limits: wgpu::Limits) -> Result<GpuContext> {
+        pollster::block_on(Self::new_async(allow_software, Some(limits)))
+    }
+
+    async fn new_async(allow_software: bool, limits: Option<wgpu::Limits>) -> Result<GpuContext> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+        let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+        let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        adapters.retain(|a| a.get_info().backend != wgpu::Backend::Noop && (allow_software || rank(a) < 3));
+        adapters.sort_by_key(|a| rank(a));
+        let adapter = adapters.into_iter().next().ok_or_else(|| {
+            Error::NoGpu(if allow_software {
+                "no Vulkan, Metal or DX12 adapter found (install Mesa's lavapipe, package mesa-vulkan-drivers, for a software one)".into()
+            } else {
+                "no hardware GPU adapter found".into()
+            })
+        })?;
+        let adapter_info = adapter.get_info();
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("stickslip"),
+                required_limits: limits.unwrap_or_else(|| adapter.limits()),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| Error::NoGpu(format!("{}: {e}", adapter_info.name)))?;
+        let kernels = Kernels::new(&device);
+        Ok(GpuContext { device, queue, adapter_info, kernels })
+    }
+
+    /// Hardware or software adapter.
+    pub fn adapter_class(&self) -> AdapterClass {
+        match self.adapter_info.device_type {
+            wgpu::DeviceType::Cpu | wgpu::DeviceType::Other => AdapterClass::Software,
+            _ => AdapterClass::Hardware,
+        }
+    }
+
+    /// A one-line description: name, type, backend, driver.
+    pub fn describe(&self) -> String {
+        let i = &self.adapter_info;
+        format!("{} ({:?}, {:?}, {} {})", i.name, i.device_type, i.backend, i.driver, i.driver_info)
+    }
+}

@@ -1,0 +1,187 @@
+//! What the integrators work on: the constants of one grid point derived
+//! from a model ([`Oscillator`]), the initial state, how long a realisation
+//! runs ([`RunPlan`]), and what one realisation produces ([`PathResult`],
+//! [`Sample`]). Both backends share these types.
+
+use crate::engine::effects::EffectParams;
+use crate::engine::model::{Condition, Model};
+use crate::engine::reduce::PeakRange;
+use crate::error::{Error, Result};
+
+/// How long a realisation runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunPlan {
+    /// Excitation periods discarded before measuring.
+    pub warmup_cycles: u32,
+    /// Excitation periods whose peaks are measured.
+    pub measured_cycles: u32,
+}
+
+impl RunPlan {
+    /// All periods integrated: warm-up plus measured.
+    pub fn total_cycles(&self) -> u64 {
+        u64::from(self.warmup_cycles) + u64::from(self.measured_cycles)
+    }
+}
+
+/// State at t = 0: displacement (m) and velocity (m/s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InitialState {
+    /// Displacement x, m.
+    pub x_m: f64,
+    /// Velocity v, m/s.
+    pub v_m_per_s: f64,
+}
+
+impl InitialState {
+    /// The default initial state at a grid point: the frictionless steady
+    /// state of `model` at t = 0.
+    pub fn steady(model: &Model, condition: Condition) -> InitialState {
+        let (x_m, v_m_per_s) = model.linear_steady_state_at_zero(condition.excitation_frequency_hz);
+        InitialState { x_m, v_m_per_s }
+    }
+}
+
+/// One grid point of an ensemble: where it is, where its realisations
+/// start, and the range its peaks are binned and quantised in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    /// Excitation frequency and mean normal force.
+    pub condition: Condition,
+    /// State of every realisation at t = 0.
+    pub initial: InitialState,
+    /// Where the point's peaks are binned and quantised.
+    pub range: PeakRange,
+}
+
+impl Point {
+    /// A point started from the frictionless steady state, with the default
+    /// peak range (`PeakRange::for_point`).
+    pub fn steady(model: &Model, condition: Condition) -> Point {
+        Point {
+            condition,
+            initial: InitialState::steady(model, condition),
+            range: PeakRange::for_point(model, condition),
+        }
+    }
+}
+
+/// What one realisation produced.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathResult {
+    /// Peak displacement of each measured period, m.
+    pub peaks_m: Vec<f64>,
+    /// Time spent stuck during the measured periods, s.
+    pub stick_time_s: f64,
+}
+
+/// One output sample of a time-series record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the start of the record, s.
+    pub t_s: f64,
+    /// Displacement, m.
+    pub x_m: f64,
+    /// Velocity, m/s.
+    pub v_m_per_s: f64,
+    /// Normal force, N.
+    pub normal_force_n: f64,
+    /// Friction force on the block, N.
+    pub friction_force_n: f64,
+}
+
+/// Everything the integrators need for one grid point, derived once from a
+/// [`Model`] and a [`Condition`]. The GPU's `Params` is built from this too.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Oscillator {
+    /// Block mass `m`, kg.
+    pub mass_kg: f64,
+    /// Spring stiffness `k`, N/m.
+    pub stiffness_n_per_m: f64,
+    /// Viscous damping coefficient `c`, N·s/m.
+    pub damping_n_s_per_m: f64,
+    /// Base displacement amplitude `U0`, m.
+    pub base_amplitude_m: f64,
+    /// Excitation angular frequency `Ω`, rad/s.
+    pub omega_rad_per_s: f64,
+    /// Excitation period `T = 2π/Ω`, s.
+    pub period_s: f64,
+    /// Friction law parameters `a` (–), `b` (–), `c` (s/m), `d` (s²/m²).
+    pub friction_a: f64,
+    pub friction_b: f64,
+    pub friction_c_s_per_m: f64,
+    pub friction_d_s2_per_m2: f64,
+    /// Standard deviation of the friction coefficient's random part, –.
+    pub friction_sigma: f64,
+    /// Mean normal force `N0`, N.
+    pub normal_force_mean_n: f64,
+    /// Standard deviation of the normal force's random part, N.
+    pub normal_force_sigma_n: f64,
+    /// Integration steps per excitation period.
+    pub steps_per_period: u32,
+    /// Noise hold interval τ, s.
+    pub noise_interval_s: f64,
+    /// The effects at this grid point (all zero: the baseline).
+    pub effects: EffectParams,
+    /// Noise hold interval in excitation periods, as 32.32 fixed point:
+    /// boundary `j` lies at `j * noise_interval_fixed / 2^32` periods.
+    pub noise_interval_fixed: u64,
+}
+
+impl Oscillator {
+    /// Derives the constants for one grid point.
+    pub fn new(model: &Model, condition: Condition) -> Result<Oscillator> {
+        condition.validate()?;
+        let omega = std::f64::consts::TAU * condition.excitation_frequency_hz;
+        let period_s = 1.0 / condition.excitation_frequency_hz;
+        let periods_per_interval = model.noise.interval_s / period_s;
+        let noise_interval_fixed = (periods_per_interval * 4_294_967_296.0).round();
+        let noiseless = model.friction.sigma == 0.0 && model.normal_force.sigma == 0.0 && !model.effects.any();
+        let representable = noise_interval_fixed >= 1.0 && noise_interval_fixed < 2f64.powi(63);
+        if !noiseless && !representable {
+            return Err(Error::InvalidParameter {
+                key: "noise.interval_s".into(),
+                value: model.noise.interval_s.to_string(),
+                message: format!(
+                    "the hold interval is {periods_per_interval:e} excitation periods at {} Hz; \
+                     it must lie between 2^-32 and 2^31 periods",
+                    condition.excitation_frequency_hz
+                ),
+            });
+        }
+        Ok(Oscillator {
+            mass_kg: model.rig.mass_kg,
+            stiffness_n_per_m: model.stiffness_n_per_m(),
+            damping_n_s_per_m: model.damping_n_s_per_m(),
+            base_amplitude_m: model.excitation.amplitude_m,
+            omega_rad_per_s: omega,
+            period_s,
+            friction_a: model.friction.a,
+            friction_b: model.friction.b,
+            friction_c_s_per_m: model.friction.c,
+            friction_d_s2_per_m2: model.friction.d,
+            friction_sigma: model.friction.sigma,
+            normal_force_mean_n: condition.normal_force_n,
+            normal_force_sigma_n: model.normal_force.sigma,
+            steps_per_period: model.solver.steps_per_period,
+            noise_interval_s: model.noise.interval_s,
+            effects: EffectParams::new(
+                &model.effects,
+                condition.normal_force_n,
+                model.friction.a,
+                model.noise.interval_s,
+            ),
+            // Without noise there is nothing to hold: no boundaries split the steps.
+            noise_interval_fixed: if noiseless { Self::NOISELESS_INTERVAL } else { noise_interval_fixed as u64 },
+        })
+    }
+
+    /// The noise interval of a noiseless model: 2^31 − 1 periods, longer
+    /// than any run, so no boundary ever splits a step.
+    pub const NOISELESS_INTERVAL: u64 = ((1 << 31) - 1) << 32;
+
+    /// How many noise intervals a run of `periods` excitation periods spans.
+    pub fn noise_intervals_in(&self, periods: u64) -> u128 {
+        ((periods as u128) << 32) / self.noise_interval_fixed as u128 + 1
+    }
+}

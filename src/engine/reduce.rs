@@ -1,0 +1,294 @@
+//! Exact reduction of peak amplitudes into per-point statistics
+//! (`shaders/reduce.wgsl` is the kernel's half).
+//!
+//! Each peak `x` (m) is quantised against its grid point's histogram range:
+//! `q = round((x − centre) / quantum)` in f32 (the same arithmetic on CPU and
+//! GPU), with `quantum = (hi − lo) / 2^28`, about 4e-11 m for a 5 mm range.
+//! Counts, `Σq` and `Σq²` are integers, so accumulating them in any order,
+//! across dispatches, chunks or shards, gives the same bits. Quantiles come
+//! from a fixed-range histogram of `HISTOGRAM_BINS` bins (the first and last
+//! catch peaks below and above the range).
+
+use serde::{Deserialize, Serialize};
+
+use crate::engine::model::{Condition, Model};
+
+/// Histogram bins per grid point, including the underflow and overflow bins.
+pub const HISTOGRAM_BINS: u32 = 2048;
+/// Quantisation steps across the histogram range.
+pub const QUANTA_PER_RANGE: f64 = (1u64 << 28) as f64;
+/// Stick-time units per excitation period (stick time is counted in T/2^20).
+pub const STICK_UNITS_PER_PERIOD: f64 = (1u64 << 20) as f64;
+/// Largest quantised peak magnitude: the largest f32 below 2^31.
+pub const QUANTISE_LIMIT: f32 = 2_147_483_520.0;
+
+/// Statistics of the peak amplitudes at one grid point (one `sweep.csv` row).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointStats {
+    /// Hz
+    pub excitation_frequency_hz: f64,
+    /// Nominal normal force, N.
+    pub normal_force_n: f64,
+    /// Realisations behind the statistics.
+    pub realisations: u32,
+    /// Number of peaks behind the statistics.
+    pub peaks: u64,
+    /// Mean peak amplitude, m.
+    pub peak_mean_m: f64,
+    /// Unbiased variance of the peak amplitude, m².
+    pub peak_var_m2: f64,
+    /// 5%, 50% and 95% quantiles of the peak amplitude, m.
+    pub peak_p05_m: f64,
+    pub peak_p50_m: f64,
+    pub peak_p95_m: f64,
+    /// Share of measured time spent stuck, –.
+    pub stick_fraction: f64,
+}
+
+/// Where a point's peaks are binned and how they are quantised.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PeakRange {
+    /// Lower edge of the first inner bin, m.
+    pub lo_m: f64,
+    /// Upper edge of the last inner bin, m.
+    pub hi_m: f64,
+}
+
+impl PeakRange {
+    /// The range for a grid point: `[−0.5 A, 1.5 A]` around zero, with `A`
+    /// the frictionless steady amplitude there (friction only lowers peaks;
+    /// sticking blocks can sit on the negative side).
+    pub fn for_point(model: &Model, condition: Condition) -> PeakRange {
+        let a = model.linear_amplitude_m(condition.excitation_frequency_hz);
+        let a = if a.is_finite() && a > 0.0 { a } else { model.excitation.amplitude_m.max(1e-6) };
+        PeakRange { lo_m: -0.5 * a, hi_m: 1.5 * a }
+    }
+
+    /// Centre of the range, m (as the kernel sees it, f32).
+    pub fn centre_f32(&self) -> f32 {
+        (0.5 * (self.lo_m + self.hi_m)) as f32
+    }
+
+    /// `1 / quantum`, 1/m (f32, as the kernel sees it).
+    pub fn inv_quantum_f32(&self) -> f32 {
+        (QUANTA_PER_RANGE / (self.hi_m - self.lo_m)) as f32
+    }
+
+    /// Quantum, m, exactly as used for the statistics.
+    pub fn quantum_m(&self) -> f64 {
+        1.0 / f64::from(self.inv_quantum_f32())
+    }
+
+    /// Inner bins per metre (f32, as the kernel sees it).
+    pub fn bins_per_m_f32(&self) -> f32 {
+        (f64::from(HISTOGRAM_BINS - 2) / (self.hi_m - self.lo_m)) as f32
+    }
+
+    /// The quantised peak and whether it was clamped (|q| ≥ 2^31 − 1).
+    /// Mirrors `tally_period` in `reduce.wgsl`.
+    pub fn quantise(&self, peak_m: f32) -> (i32, bool) {
+        let q = ((peak_m - self.centre_f32()) * self.inv_quantum_f32()).round_ties_even();
+        (q.clamp(-QUANTISE_LIMIT, QUANTISE_LIMIT) as i32, q.abs() > QUANTISE_LIMIT)
+    }
+
+    /// The histogram bin of a peak. Mirrors `histogram_bin` in `reduce.wgsl`.
+    pub fn bin(&self, peak_m: f32) -> u32 {
+        let position = (peak_m - self.lo_m as f32) * self.bins_per_m_f32();
+        if position < 0.0 {
+            0
+        } else if position >= (HISTOGRAM_BINS - 2) as f32 {
+            HISTOGRAM_BINS - 1
+        } else {
+            position as u32 + 1
+        }
+    }
+
+    /// Edges of inner bin `b` (1..=BINS−2), m.
+    pub fn bin_edges(&self, b: u32) -> (f64, f64) {
+        let w = (self.hi_m - self.lo_m) / f64::from(HISTOGRAM_BINS - 2);
+        (self.lo_m + f64::from(b - 1) * w, self.lo_m + f64::from(b) * w)
+    }
+}
+
+/// Exact integer sums for one grid point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointAccumulator {
+    pub range: PeakRange,
+    /// Realisations behind the sums.
+    pub realisations: u64,
+    /// Measured excitation periods behind the sums (one peak each).
+    pub peaks: u64,
+    /// Σ q (quantised peaks).
+    pub sum_q: i128,
+    /// Σ q².
+    pub sum_q2: u128,
+    /// Σ stuck time, in units of T/2^20.
+    pub stick_units: u64,
+    /// Peaks whose quantised value had to be clamped (far outside the range).
+    pub clamped: u64,
+    /// Counts per bin; bin 0 is below the range, the last bin above it.
+    pub histogram: Vec<u64>,
+}
+
+impl PointAccumulator {
+    pub fn new(range: PeakRange) -> Self {
+        PointAccumulator {
+            range,
+            realisations: 0,
+            peaks: 0,
+            sum_q: 0,
+            sum_q2: 0,
+            stick_units: 0,
+            clamped: 0,
+            histogram: vec![0; HISTOGRAM_BINS as usize],
+        }
+    }
+
+    /// Adds one measured period: its peak (m) and stuck share of the period.
+    pub fn add_period(&mut self, peak_m: f64, stuck_share: f64) {
+        let peak = peak_m as f32;
+        let (q, clamped) = self.range.quantise(peak);
+        self.peaks += 1;
+        self.sum_q += i128::from(q);
+        self.sum_q2 += (i128::from(q) * i128::from(q)) as u128;
+        self.stick_units += stick_units(stuck_share);
+        self.clamped += u64::from(clamped);
+        self.histogram[self.range.bin(peak) as usize] += 1;
+    }
+
+    /// Adds another accumulator of the same point (exact).
+    pub fn merge(&mut self, other: &PointAccumulator) {
+        assert_eq!(self.range, other.range, "merging accumulators of different points");
+        self.realisations += other.realisations;
+        self.peaks += other.peaks;
+        self.sum_q += other.sum_q;
+        self.sum_q2 += other.sum_q2;
+        self.stick_units += other.stick_units;
+        self.clamped += other.clamped;
+        for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
+            *a += b;
+        }
+    }
+
+    /// Quantile from the histogram, interpolating linearly inside the bin.
+    /// Returns the range edge when the quantile falls outside the range.
+    pub fn quantile(&self, p: f64) -> f64 {
+        let target = p * self.peaks as f64;
+        let mut below = 0.0;
+        for (b, &count) in self.histogram.iter().enumerate() {
+            let count = count as f64;
+            if count > 0.0 && below + count >= target {
+                let b = b as u32;
+                if b == 0 {
+                    return self.range.lo_m;
+                }
+                if b == HISTOGRAM_BINS - 1 {
+                    return self.range.hi_m;
+                }
+                let (lo, hi) = self.range.bin_edges(b);
+                return lo + (hi - lo) * ((target - below) / count).clamp(0.0, 1.0);
+            }
+            below += count;
+        }
+        f64::NAN
+    }
+
+    /// Mean (m) and unbiased variance (m²) from the exact sums:
+    /// `n Σq² − (Σq)²` is formed exactly in 128-bit integers.
+    pub fn moments(&self) -> (f64, f64) {
+        let n = self.peaks as i128;
+        let quantum = self.range.quantum_m();
+        let mean_q = self.sum_q as f64 / self.peaks as f64;
+        let var_q = if n > 1 {
+            let spread = (n as u128)
+                .checked_mul(self.sum_q2)
+                .and_then(|a| i128::try_from(a).ok())
+                .zip(self.sum_q.checked_mul(self.sum_q))
+                .map(|(a, b)| (a - b) as f64)
+                .unwrap_or_else(|| n as f64 * self.sum_q2 as f64 - (self.sum_q as f64).powi(2));
+            spread / (n * (n - 1)) as f64
+        } else {
+            0.0
+        };
+        (f64::from(self.range.centre_f32()) + mean_q * quantum, var_q * quantum * quantum)
+    }
+
+    /// Adds one realisation's measured periods (CPU backend).
+    pub fn add_path(&mut self, peaks_m: &[f64], stick_time_s: f64, period_s: f64) {
+        self.realisations += 1;
+        for &p in peaks_m {
+            self.add_period(p, 0.0);
+        }
+        self.stick_units += stick_units(stick_time_s / period_s);
+    }
+
+    /// The `sweep.csv` row.
+    pub fn stats(&self, condition: Condition) -> PointStats {
+        let (mean, var) = self.moments();
+        PointStats {
+            excitation_frequency_hz: condition.excitation_frequency_hz,
+            normal_force_n: condition.normal_force_n,
+            realisations: self.realisations as u32,
+            peaks: self.peaks,
+            peak_mean_m: mean,
+            peak_var_m2: var,
+            peak_p05_m: self.quantile(0.05),
+            peak_p50_m: self.quantile(0.50),
+            peak_p95_m: self.quantile(0.95),
+            stick_fraction: self.stick_units as f64 / (STICK_UNITS_PER_PERIOD * self.peaks as f64),
+        }
+    }
+}
+
+/// Stuck share of a period in units of T/2^20. Mirrors the kernel.
+pub fn stick_units(stuck_share: f64) -> u64 {
+    ((stuck_share as f32) * STICK_UNITS_PER_PERIOD as f32).round_ties_even() as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn range() -> PeakRange {
+        PeakRange { lo_m: -1e-3, hi_m: 3e-3 }
+    }
+
+    #[test]
+    fn moments_match_direct_computation() {
+        let mut acc = PointAccumulator::new(range());
+        let peaks: Vec<f64> = (0..1000).map(|i| 1e-3 + 1e-4 * ((i as f64) * 0.37).sin()).collect();
+        for &p in &peaks {
+            acc.add_period(p, 0.0);
+        }
+        let n = peaks.len() as f64;
+        let mean = peaks.iter().sum::<f64>() / n;
+        let var = peaks.iter().map(|p| (p - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let (m, v) = acc.moments();
+        assert!((m / mean - 1.0).abs() < 1e-7, "{m} vs {mean}");
+        assert!((v / var - 1.0).abs() < 1e-5, "{v} vs {var}");
+    }
+
+    #[test]
+    fn merging_is_exact_in_any_order() {
+        let peaks: Vec<f64> = (0..500).map(|i| 1e-3 * (1.0 + 0.3 * ((i as f64) * 1.7).cos())).collect();
+        let mut whole = PointAccumulator::new(range());
+        peaks.iter().for_each(|&p| whole.add_period(p, 0.25));
+        let mut a = PointAccumulator::new(range());
+        let mut b = PointAccumulator::new(range());
+        peaks[..123].iter().for_each(|&p| a.add_period(p, 0.25));
+        peaks[123..].iter().rev().for_each(|&p| b.add_period(p, 0.25));
+        b.merge(&a);
+        assert_eq!(whole, b);
+        assert_eq!(whole.stats(Condition { excitation_frequency_hz: 7.0, normal_force_n: 1.0 }).stick_fraction, 0.25);
+    }
+
+    #[test]
+    fn histogram_quantiles_are_close_to_exact() {
+        let mut acc = PointAccumulator::new(range());
+        let peaks: Vec<f64> = (0..10_000).map(|i| 1e-3 + 2e-4 * (i as f64 / 10_000.0)).collect();
+        peaks.iter().for_each(|&p| acc.add_period(p, 0.0));
+        let bin = 4e-3 / f64::from(HISTOGRAM_BINS - 2);
+        assert!((acc.quantile(0.5) - 1.1e-3).abs() < bin);
+        assert!((acc.quantile(0.05) - 1.01e-3).abs() < bin);
+    }
+}

@@ -1,0 +1,140 @@
+//! A sweep's output set: `sweep.csv` (the columns of `interfaces.md`),
+//! `histograms.csv`, `accumulators.json` (what `merge` combines), the
+//! figures and the `sweep.json` sidecar. Every file is written under a
+//! temporary name and renamed into place.
+
+use std::path::Path;
+
+use crate::engine::{Model, PointStats};
+use crate::error::Result;
+use crate::io::{create_dir, write_atomically};
+use crate::sweep::SweepResult;
+use crate::sweep::plot;
+use crate::sweep::shard::{AccumulatorFile, RunIdentity, Shard};
+
+/// The columns of `sweep.csv` (`interfaces.md`).
+pub const SWEEP_COLUMNS: [&str; 10] = [
+    "excitation_frequency_hz",
+    "normal_force_n",
+    "realisations",
+    "peaks",
+    "peak_mean_m",
+    "peak_var_m2",
+    "peak_p05_m",
+    "peak_p50_m",
+    "peak_p95_m",
+    "stick_fraction",
+];
+
+/// Writes `sweep.csv` atomically.
+pub fn write_sweep_csv(path: &Path, rows: &[PointStats]) -> Result<()> {
+    write_atomically(path, |w| {
+        writeln!(w, "{}", SWEEP_COLUMNS.join(","))?;
+        for r in rows {
+            writeln!(
+                w,
+                "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{}",
+                r.excitation_frequency_hz,
+                r.normal_force_n,
+                r.realisations,
+                r.peaks,
+                r.peak_mean_m,
+                r.peak_var_m2,
+                r.peak_p05_m,
+                r.peak_p50_m,
+                r.peak_p95_m,
+                r.stick_fraction
+            )?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes `histograms.csv`: every non-empty bin of every point, in metres,
+/// with its probability density (1/m). The first and last bins of a point
+/// (below and above its range) have infinite outer edges.
+pub fn write_histograms_csv(path: &Path, result: &SweepResult) -> Result<()> {
+    write_atomically(path, |w| {
+        writeln!(w, "excitation_frequency_hz,normal_force_n,bin_lo_m,bin_hi_m,count,density_per_m")?;
+        for (c, a) in result.conditions.iter().zip(&result.accumulators) {
+            let last = a.histogram.len() as u32 - 1;
+            for (b, &count) in a.histogram.iter().enumerate() {
+                if count == 0 {
+                    continue;
+                }
+                let b = b as u32;
+                let (lo, hi) = if b == 0 {
+                    (f64::NEG_INFINITY, a.range.lo_m)
+                } else if b == last {
+                    (a.range.hi_m, f64::INFINITY)
+                } else {
+                    a.range.bin_edges(b)
+                };
+                let density =
+                    if lo.is_finite() && hi.is_finite() { count as f64 / (a.peaks as f64 * (hi - lo)) } else { 0.0 };
+                writeln!(
+                    w,
+                    "{},{},{:e},{:e},{count},{density:e}",
+                    c.excitation_frequency_hz, c.normal_force_n, lo, hi
+                )?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Writes `accumulators.json`.
+pub fn write_accumulators(path: &Path, file: &AccumulatorFile) -> Result<()> {
+    write_atomically(path, |w| {
+        serde_json::to_writer(&mut *w, file)?;
+        writeln!(w)
+    })
+}
+
+/// Writes everything a sweep (or a merge) produces into `out`: sweep.csv,
+/// histograms.csv, accumulators.json, sweep.json and, with `plots_at_hz`
+/// (Figure 8's frequency, Hz), the figures. `description` names the backend
+/// and adapter; `timings` goes into sweep.json as it is.
+#[allow(clippy::too_many_arguments)]
+pub fn write_output_set(
+    out: &Path,
+    model: &Model,
+    identity: &RunIdentity,
+    shard: Shard,
+    result: &SweepResult,
+    description: &str,
+    timings: serde_json::Value,
+    plots_at_hz: Option<f64>,
+) -> Result<()> {
+    create_dir(out)?;
+    write_sweep_csv(&out.join("sweep.csv"), &result.rows())?;
+    write_histograms_csv(&out.join("histograms.csv"), result)?;
+    write_accumulators(&out.join("accumulators.json"), &result.to_file(identity, shard))?;
+    let mut files = vec!["sweep.csv".to_string(), "histograms.csv".into(), "accumulators.json".into()];
+    if let Some(f) = plots_at_hz {
+        for path in plot::write_sweep_plots(out, result, f)? {
+            files.push(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        }
+    }
+    let sidecar = serde_json::json!({
+        "format": "stickslip-sweep/1",
+        "stickslip_version": env!("CARGO_PKG_VERSION"),
+        "model": model,
+        "model_toml": identity.model_toml,
+        "frequencies_hz": identity.frequencies_hz,
+        "normal_forces_n": identity.normal_forces_n,
+        "realisations": identity.realisations,
+        "warmup_cycles": identity.warmup_cycles,
+        "measured_cycles": identity.measured_cycles,
+        "seed": identity.seed,
+        "backend": identity.backend,
+        "adapter": description,
+        "shard": shard,
+        "files": files,
+        "timings": timings,
+    });
+    write_atomically(&out.join("sweep.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &sidecar)?;
+        writeln!(w)
+    })
+}

@@ -1,0 +1,123 @@
+//! `stickslip diagnose` and the blind benchmark, small enough for CI.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn stickslip(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_stickslip")).args(args).output().expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stickslip-diagnose-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn figure8() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/figure8")
+}
+
+#[test]
+fn refused_input_names_the_file_and_writes_nothing() {
+    let dir = scratch("refused");
+    let out = dir.join("out");
+    let set = dir.join("set");
+    std::fs::create_dir_all(&set).unwrap();
+    std::fs::write(set.join("manifest.json"), r#"{"format": "stickslip-measurements/2", "rig": {"mass_kg": 1, "natural_frequency_hz": 10, "damping_ratio": 0.01}, "runs": []}"#).unwrap();
+    let (ok, _, err) = stickslip(&["diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!ok && err.contains("manifest.json") && err.contains("format"), "{err}");
+    let (ok, _, err) = stickslip(&["diagnose", dir.join("absent").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!ok && err.contains("absent"), "{err}");
+    assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The paper's Figure 8 table: a report with the contract's keys, and model
+/// files that `sweep --config` runs as they are.
+#[test]
+fn figure8_report_and_models_run() {
+    let dir = scratch("figure8");
+    let out = dir.join("out");
+    let (ok, stdout, err) =
+        stickslip(&["diagnose", figure8().to_str().unwrap(), "--out", out.to_str().unwrap(), "--realisations", "12"]);
+    assert!(ok, "{err}");
+    println!("{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["format"], "stickslip-diagnosis/1");
+    let names = [
+        "none",
+        "normal_force_harmonics",
+        "non_gaussian_friction",
+        "friction_hysteresis",
+        "coloured_friction_noise",
+        "stiction",
+        "load_dependent_friction",
+        "normal_force_drift",
+    ];
+    assert!(names.contains(&report["verdict"]["effect"].as_str().unwrap()));
+    for key in ["metric", "baseline", "after", "shrink"] {
+        assert!(!report["gap"][key].is_null(), "gap.{key}");
+    }
+    assert_eq!(report["candidates"].as_array().unwrap().len(), 7);
+    assert!(report["locations"].is_array());
+    assert!(std::fs::read_to_string(out.join("report.html")).unwrap().contains("Verdict"));
+    for model in ["baseline-model.toml", "fitted-model.toml"] {
+        let sweep = dir.join(format!("sweep-{model}"));
+        let (ok, _, err) = stickslip(&[
+            "sweep",
+            "--config",
+            out.join(model).to_str().unwrap(),
+            "--frequencies",
+            "7",
+            "--normal-forces",
+            "7.519,16.39",
+            "--realisations",
+            "4",
+            "--cycles",
+            "5",
+            "--warmup-cycles",
+            "5",
+            "--out",
+            sweep.to_str().unwrap(),
+            "--no-plots",
+        ]);
+        assert!(ok, "{model} does not run: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A few blind sets: a null set and a strong drift, diagnosed without being
+/// told which is which.
+#[test]
+fn small_blind_benchmark() {
+    let dir = scratch("blind");
+    let (ok, stdout, err) = stickslip(&[
+        "benchmark-diagnosis",
+        "--out",
+        dir.to_str().unwrap(),
+        "--effects",
+        "normal_force_drift,normal_force_harmonics",
+        "--forms",
+        "1",
+        "--levels",
+        "1",
+        "--nulls",
+        "1",
+        "--duration",
+        "12",
+        "--replicates",
+        "6",
+    ]);
+    assert!(ok, "{err}");
+    println!("{stdout}");
+    assert!(stdout.contains("top-1 accuracy: 2/2"), "{stdout}");
+    assert!(stdout.contains("false-positive rate on null sets: 0/1"), "{stdout}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

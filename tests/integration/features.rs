@@ -1,0 +1,308 @@
+//! Run features on synthetic records with known answers, on degenerate
+//! records, and on a record simulated from the default model.
+
+use std::f64::consts::TAU;
+
+use stickslip::diagnose::features::{RunFeatures, run_features};
+use stickslip::diagnose::measure::Run;
+use stickslip::engine::{Condition, Model};
+
+use crate::common;
+
+const RATE_HZ: f64 = 600.0;
+const F_HZ: f64 = 7.0;
+
+/// A small deterministic generator (SplitMix64) with uniform, Gaussian and
+/// exponential draws, so the tests do not depend on any RNG crate.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in (0, 1).
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn gaussian(&mut self) -> f64 {
+        (-2.0 * self.uniform().ln()).sqrt() * (TAU * self.uniform()).cos()
+    }
+
+    /// Exponential with mean 1.
+    fn exponential(&mut self) -> f64 {
+        -self.uniform().ln()
+    }
+}
+
+/// Sample times of a `duration_s` record at 600 Hz starting at `t0_s`.
+fn times(t0_s: f64, duration_s: f64) -> Vec<f64> {
+    (0..(duration_s * RATE_HZ).round() as usize).map(|i| t0_s + i as f64 / RATE_HZ).collect()
+}
+
+/// A record with only `t` and `x`.
+fn run_tx(t: Vec<f64>, x: Vec<f64>) -> Run {
+    Run {
+        file: Default::default(),
+        excitation_frequency_hz: F_HZ,
+        excitation_amplitude_m: 0.0025,
+        normal_force_n: 16.0,
+        t_s: t,
+        x_m: x,
+        v_m_per_s: None,
+        normal_force: None,
+        friction_force: None,
+    }
+}
+
+/// A record with `x` and `v` of a sinusoid (amplitude 4 mm) and a normal force `n`.
+fn run_with_force(t: Vec<f64>, n: Vec<f64>) -> Run {
+    let x = t.iter().map(|t| 0.004 * (TAU * F_HZ * t).cos()).collect();
+    let mut run = run_tx(t, x);
+    run.normal_force = Some(n);
+    run
+}
+
+/// A slipping record: `v = V sin(Ωt)`, `N = 16 N`, `F = −μ N sgn(v)` with
+/// `μ = 0.4 + noise[i]`.
+fn friction_run(noise: &[f64]) -> Run {
+    let t = times(0.0, noise.len() as f64 / RATE_HZ);
+    let v: Vec<f64> = t.iter().map(|t| 0.15 * (TAU * F_HZ * t).sin()).collect();
+    let n = vec![16.0; t.len()];
+    let f: Vec<f64> = v.iter().zip(noise).map(|(v, e)| -(0.4 + e) * 16.0 * v.signum()).collect();
+    let x = t.iter().map(|t| -0.15 / (TAU * F_HZ) * (TAU * F_HZ * t).cos()).collect();
+    let mut run = run_tx(t, x);
+    run.v_m_per_s = Some(v);
+    run.normal_force = Some(n);
+    run.friction_force = Some(f);
+    run
+}
+
+fn value(features: &RunFeatures, name: &str) -> Option<f64> {
+    features.named_values().into_iter().find(|(o, _)| o.name() == name).map(|(_, v)| v)
+}
+
+#[test]
+fn sinusoid_peaks_equal_the_amplitude() {
+    let amplitude = 3.85e-3;
+    for (t0, phase) in [(0.0, 0.0), (12.345, 1.1), (-3.0, 2.9)] {
+        let t = times(t0, 50.0);
+        let x = t.iter().map(|t| amplitude * (TAU * F_HZ * t + phase).cos()).collect();
+        let features = run_features(&run_tx(t, x));
+        let peaks = features.peaks.as_ref().expect("peaks");
+        assert_eq!(peaks.count, 350);
+        assert!((peaks.mean_m / amplitude - 1.0).abs() < 1e-3, "{peaks:?}");
+        assert!(peaks.var_m2 < (1e-3 * amplitude).powi(2), "{peaks:?}");
+        assert!(peaks.trend_per_s.unwrap().abs() < 1e-5, "{peaks:?}");
+        // No velocity: the stick fraction comes from x differences; a sinusoid never rests long.
+        assert!(features.stick_fraction.unwrap() < 0.02, "{features:?}");
+    }
+    // A growing amplitude shows as a positive trend: 1 %/s.
+    let t = times(0.0, 20.0);
+    let x = t.iter().map(|t| amplitude * (1.0 + 0.01 * t) * (TAU * F_HZ * t).cos()).collect();
+    let peaks = run_features(&run_tx(t, x)).peaks.unwrap();
+    let expected = 0.01 / (1.0 + 0.01 * 10.0);
+    assert!((peaks.trend_per_s.unwrap() / expected - 1.0).abs() < 0.02, "{peaks:?}");
+}
+
+#[test]
+fn peak_skewness_has_the_sign_of_the_outliers() {
+    let mut rng = Rng(3);
+    let t = times(0.0, 50.0);
+    // A different random amplitude each period, exponentially distributed: skewness 2.
+    let bumps: Vec<f64> = (0..400).map(|_| 1e-4 * rng.exponential()).collect();
+    let x: Vec<f64> = t.iter().map(|t| (3e-3 + bumps[(t * F_HZ).floor() as usize]) * (TAU * F_HZ * t).cos()).collect();
+    let peaks = run_features(&run_tx(t, x)).peaks.unwrap();
+    assert!(peaks.skewness > 1.2 && peaks.skewness < 3.0, "{peaks:?}");
+}
+
+#[test]
+fn normal_force_harmonic_is_recovered() {
+    let mut rng = Rng(7);
+    let t = times(0.0, 50.0);
+    let n: Vec<f64> =
+        t.iter().map(|t| 16.0 + 0.3 * (2.0 * TAU * F_HZ * t + 0.7).cos() + 0.33 * rng.gaussian()).collect();
+    let features = run_features(&run_with_force(t, n));
+    let nf = features.normal_force.as_ref().expect("normal-force features");
+    let h = nf.harmonic_amplitude_n.map(|a| a.expect("all four harmonics are below Nyquist"));
+    assert!((h[1] / 0.3 - 1.0).abs() < 0.05, "{nf:?}");
+    for k in [0, 2, 3] {
+        assert!(h[k] < 0.02, "harmonic {}: {nf:?}", k + 1);
+    }
+    assert!((nf.mean_n - 16.0).abs() < 0.01, "{nf:?}");
+    // Total variance includes the harmonic (0.3²/2); the residual does not.
+    assert!((nf.var_n2 / (0.33f64.powi(2) + 0.045) - 1.0).abs() < 0.05, "{nf:?}");
+    assert!((nf.residual_var_n2.unwrap() / 0.33f64.powi(2) - 1.0).abs() < 0.05, "{nf:?}");
+    assert!(nf.drift_n_per_s.unwrap().abs() < 1e-3, "{nf:?}");
+    assert_eq!(value(&features, "normal_force_harmonic2_n"), Some(h[1]));
+}
+
+#[test]
+fn normal_force_drift_is_recovered() {
+    let mut rng = Rng(11);
+    let t = times(5.0, 50.0);
+    let n: Vec<f64> = t.iter().map(|t| 16.0 + 0.02 * t + 0.33 * rng.gaussian()).collect();
+    let nf = run_features(&run_with_force(t, n)).normal_force.unwrap();
+    assert!((nf.drift_n_per_s.unwrap() / 0.02 - 1.0).abs() < 0.05, "{nf:?}");
+    let mean = 16.0 + 0.02 * 30.0;
+    assert!((nf.mean_n - mean).abs() < 0.01, "{nf:?}");
+    assert!((nf.drift_per_s.unwrap() / (0.02 / mean) - 1.0).abs() < 0.05, "{nf:?}");
+    // The drift is fitted jointly, so it does not leak into the harmonics.
+    assert!(nf.harmonic_amplitude_n.iter().all(|a| a.unwrap() < 0.02), "{nf:?}");
+    assert!((nf.residual_var_n2.unwrap() / 0.33f64.powi(2) - 1.0).abs() < 0.05, "{nf:?}");
+}
+
+#[test]
+fn friction_residual_shape() {
+    let n = 30_000;
+    // Gaussian noise: no skew, no excess kurtosis, no correlation, no hysteresis.
+    let mut rng = Rng(13);
+    let gauss: Vec<f64> = (0..n).map(|_| 0.03 * rng.gaussian()).collect();
+    let fr = run_features(&friction_run(&gauss)).friction.expect("friction features");
+    assert!((fr.mu_mean - 0.4).abs() < 1e-3, "{fr:?}");
+    assert!((fr.residual_std / 0.03 - 1.0).abs() < 0.03, "{fr:?}");
+    assert!(fr.residual_skewness.abs() < 0.1, "{fr:?}");
+    assert!(fr.residual_excess_kurtosis.abs() < 0.2, "{fr:?}");
+    assert!(fr.residual_autocorr_lag1.unwrap().abs() < 0.05, "{fr:?}");
+    assert!(fr.residual_autocorr_lag10.unwrap().abs() < 0.05, "{fr:?}");
+    assert!(fr.hysteresis.unwrap().abs() < 0.003, "{fr:?}");
+    assert!(fr.breakaway_mean.is_none() && fr.stiction_excess.is_none(), "no stick phases: {fr:?}");
+    // Most samples slip (|v| > 5 % of max): all but 2·asin(0.05)/π ≈ 3 %.
+    assert!(fr.slip_samples > 29_000 && fr.slip_samples < 29_300, "{fr:?}");
+
+    // Exponential noise (skewness 2, excess kurtosis 6).
+    let mut rng = Rng(17);
+    let skewed: Vec<f64> = (0..n).map(|_| 0.03 * (rng.exponential() - 1.0)).collect();
+    let fr = run_features(&friction_run(&skewed)).friction.unwrap();
+    assert!(fr.residual_skewness > 1.5, "{fr:?}");
+    assert!(fr.residual_excess_kurtosis > 3.0, "{fr:?}");
+}
+
+#[test]
+fn friction_residual_correlation() {
+    let rho: f64 = 0.9;
+    let mut rng = Rng(19);
+    let mut e = 0.0;
+    let ar1: Vec<f64> = (0..30_000)
+        .map(|_| {
+            e = rho * e + (1.0 - rho * rho).sqrt() * 0.03 * rng.gaussian();
+            e
+        })
+        .collect();
+    let fr = run_features(&friction_run(&ar1)).friction.unwrap();
+    assert!((fr.residual_autocorr_lag1.unwrap() - rho).abs() < 0.05, "{fr:?}");
+    assert!((fr.residual_autocorr_lag10.unwrap() - rho.powi(10)).abs() < 0.1, "{fr:?}");
+}
+
+#[test]
+fn friction_hysteresis_and_stiction() {
+    // Friction 0.05 higher while |v| grows.
+    let t = times(0.0, 50.0);
+    let mut rng = Rng(23);
+    let noise: Vec<f64> = t
+        .iter()
+        .map(|t| {
+            let phase = (TAU * F_HZ * t).rem_euclid(TAU);
+            // |sin| grows in the first and third quarters of the cycle.
+            let accelerating = (phase % std::f64::consts::PI) < std::f64::consts::FRAC_PI_2;
+            0.05 * f64::from(u8::from(accelerating)) + 0.01 * rng.gaussian()
+        })
+        .collect();
+    let fr = run_features(&friction_run(&noise)).friction.unwrap();
+    assert!((fr.hysteresis.unwrap() - 0.05).abs() < 0.005, "{fr:?}");
+
+    // Stick phases where |sin| ≤ 0.1 (v = 0), with |F|/N 0.3 and 0.6 at the
+    // last stuck sample; μ = 0.4 while slipping.
+    let mut run = friction_run(&vec![0.0; t.len()]);
+    let v = run.v_m_per_s.as_mut().unwrap();
+    let f = run.friction_force.as_mut().unwrap();
+    let mut stuck = 0usize;
+    for i in 0..v.len() {
+        let s = (TAU * F_HZ * t[i]).sin();
+        if s.abs() <= 0.1 {
+            v[i] = 0.0;
+            stuck += 1;
+            let next_moves = i + 1 < t.len() && (TAU * F_HZ * t[i + 1]).sin().abs() > 0.1;
+            f[i] = if next_moves { 0.6 * 16.0 } else { 0.3 * 16.0 };
+        }
+    }
+    let features = run_features(&run);
+    let fr = features.friction.as_ref().unwrap();
+    assert!((fr.breakaway_mean.unwrap() - 0.6).abs() < 1e-9, "{fr:?}");
+    assert!((fr.low_speed_mu_mean.unwrap() - 0.4).abs() < 1e-9, "{fr:?}");
+    assert!((fr.stiction_excess.unwrap() - 0.2).abs() < 1e-9, "{fr:?}");
+    let expected_stick = stuck as f64 / t.len() as f64;
+    assert!((features.stick_fraction.unwrap() - expected_stick).abs() < 1e-12, "{features:?}");
+    assert!((expected_stick - 4.0 * 0.1f64.asin() / TAU).abs() < 0.005);
+}
+
+#[test]
+fn degenerate_records_give_no_nan() {
+    // Empty.
+    let empty = run_features(&run_tx(vec![], vec![]));
+    assert!(empty.peaks.is_none() && empty.stick_fraction.is_none() && empty.named_values().is_empty());
+
+    // At rest: constant x, v = 0, F = 0, N = 0.
+    let t = times(0.0, 5.0);
+    let len = t.len();
+    let mut run = run_tx(t, vec![1e-3; len]);
+    run.v_m_per_s = Some(vec![0.0; len]);
+    run.normal_force = Some(vec![0.0; len]);
+    run.friction_force = Some(vec![0.0; len]);
+    let features = run_features(&run);
+    let peaks = features.peaks.as_ref().unwrap();
+    assert_eq!((peaks.mean_m, peaks.var_m2, peaks.skewness), (1e-3, 0.0, 0.0));
+    assert!(features.friction.is_none(), "nothing slips");
+    assert_eq!(features.stick_fraction, Some(1.0));
+    let nf = features.normal_force.as_ref().unwrap();
+    assert_eq!(nf.var_n2, 0.0);
+    assert_eq!(nf.drift_per_s, None, "relative drift of a zero mean");
+    for (name, v) in features.all() {
+        assert!(v.is_none_or(f64::is_finite), "{name} = {v:?}");
+    }
+
+    // Shorter than two periods; a frequency of zero.
+    let short = run_tx(times(0.0, 0.2), vec![0.0; 120]);
+    assert!(run_features(&short).peaks.is_none());
+    let mut zero_f = run_tx(times(0.0, 2.0), vec![0.0; 1200]);
+    zero_f.excitation_frequency_hz = 0.0;
+    assert!(run_features(&zero_f).peaks.is_none());
+
+    // Names are unique.
+    let names: Vec<&str> = features.all().iter().map(|(o, _)| o.name()).collect();
+    let mut sorted = names.clone();
+    sorted.sort();
+    sorted.dedup();
+    assert_eq!(sorted.len(), names.len());
+}
+
+#[test]
+fn simulated_default_model_run() {
+    let model = Model::default();
+    let condition = Condition { excitation_frequency_hz: F_HZ, normal_force_n: 16.39 };
+    let samples = common::record(&model, condition, 1, 100, 20.0, RATE_HZ);
+    let run = Run::from_samples(&samples, F_HZ, model.excitation.amplitude_m, 16.39);
+    let features = run_features(&run);
+    let all = features.all();
+    for (name, v) in &all {
+        assert!(v.is_some(), "{name} missing: {features:#?}");
+        assert!(v.unwrap().is_finite(), "{name} = {v:?}");
+    }
+    assert_eq!(features.named_values().len(), all.len());
+    let peaks = features.peaks.as_ref().unwrap();
+    assert_eq!(peaks.count, 140);
+    assert!((peaks.mean_m / 3.85e-3 - 1.0).abs() < 0.1, "{peaks:?}");
+    let nf = features.normal_force.as_ref().unwrap();
+    assert!((nf.mean_n - 16.39).abs() < 0.02, "{nf:?}");
+    assert!((nf.var_n2 / model.normal_force.sigma.powi(2) - 1.0).abs() < 0.1, "{nf:?}");
+    let fr = features.friction.as_ref().unwrap();
+    assert!(fr.mu_mean > 0.3 && fr.mu_mean < 0.6, "{fr:?}");
+    let stick = features.stick_fraction.unwrap();
+    assert!(stick > 0.0 && stick < 1.0, "{stick}");
+    eprintln!("{features:#?}");
+}

@@ -1,0 +1,14 @@
+//! The integration tests, compiled as one binary so that wgpu is linked once.
+
+mod common;
+
+mod agreement;
+mod analytic;
+mod cli;
+mod diagnose;
+mod effects;
+mod features;
+mod layout;
+mod measure;
+mod rng;
+mod sweep;
