@@ -76,6 +76,8 @@ struct GridPoint {
     friction_offset: f32,
     // Non-Gaussian strength at this point's N0, –.
     non_gaussian_strength: f32,
+    // Phases are reduced as their deviation from this angle, rad.
+    phase_ref_rad: f32,
 }
 
 struct PathState {
@@ -98,6 +100,7 @@ struct PathState {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> points: array<GridPoint>;
 @group(0) @binding(2) var<storage, read_write> states: array<PathState>;
+// Per path and recorded cycle: (peak, phase) when params.record_peaks is 1.
 @group(0) @binding(3) var<storage, read_write> peaks: array<f32>;
 // Per grid point: ACCUMULATOR_WORDS words of exact integer sums.
 @group(0) @binding(4) var<storage, read_write> accumulators: array<atomic<u32>>;
@@ -157,16 +160,18 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = states[n];
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
-        s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, 0.0, 0.0);
-    tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u);
+        s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, 0.0, 0.0, 0.0, 0.0);
+    tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u));
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;
         run_period(measuring);
         if (measuring) {
+            let phase = phase_of(path.period_cos_integral, path.period_sin_integral);
             if (params.record_peaks != 0u) {
-                peaks[n * params.cycles + c] = path.period_max_x_m;
+                peaks[2u * (n * params.cycles + c)] = path.period_max_x_m;
+                peaks[2u * (n * params.cycles + c) + 1u] = phase;
             }
-            tally_period(path.period_max_x_m, path.period_stick_s / point.period_s);
+            tally_period(path.period_max_x_m, phase, path.period_stick_s / point.period_s);
             path.stick_time_s += path.period_stick_s;
         }
     }

@@ -29,6 +29,22 @@ struct Path {
     stiction_excess: f32,
     period_max_x_m: f32,
     period_stick_s: f32,
+    // ∫ x cos(Ωt) dt and ∫ x sin(Ωt) dt over the period so far (phase_of).
+    period_cos_integral: f32,
+    period_sin_integral: f32,
+}
+
+// One RK4 step of the slip ODE with what the phase quadrature needs: the
+// stage displacements and cos(Ωt) at the step's start, middle and end.
+struct SlipStep {
+    x_m: f32,
+    v_m_per_s: f32,
+    x2_m: f32,
+    x3_m: f32,
+    x4_m: f32,
+    cos0: f32,
+    cos1: f32,
+    cos2: f32,
 }
 
 var<private> path: Path;
@@ -94,36 +110,64 @@ fn breakaway_force() -> f32 {
     return max(mu_static, 0.0) * path.normal_force_n;
 }
 
-fn slip_acceleration(t_local_s: f32, x_m: f32, v_m_per_s: f32, sign: f32) -> f32 {
+fn slip_acceleration(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, sign: f32) -> f32 {
     let friction = sign * friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * path.normal_force_n;
-    return (spring_force(t_local_s, x_m) - params.damping_n_s_per_m * v_m_per_s - friction) / params.mass_kg;
+    let spring = params.stiffness_n_per_m * (params.base_amplitude_m * cos_omega_t - x_m);
+    return (spring - params.damping_n_s_per_m * v_m_per_s - friction) / params.mass_kg;
 }
 
-fn rk4_slip(t_local_s: f32, x_m: f32, v_m_per_s: f32, h_s: f32, sign: f32) -> vec2<f32> {
+// Stages 2 and 3 share the excitation's cos at the midpoint.
+fn rk4_slip(t_local_s: f32, x_m: f32, v_m_per_s: f32, h_s: f32, sign: f32) -> SlipStep {
+    let w = point.omega_rad_per_s;
     let half = 0.5 * h_s;
+    let cos0 = cos(w * t_local_s);
+    let cos1 = cos(w * (t_local_s + half));
+    let cos2 = cos(w * (t_local_s + h_s));
     let k1x = v_m_per_s;
-    let k1v = slip_acceleration(t_local_s, x_m, v_m_per_s, sign);
+    let k1v = slip_acceleration(cos0, x_m, v_m_per_s, sign);
     let k2x = v_m_per_s + half * k1v;
-    let k2v = slip_acceleration(t_local_s + half, x_m + half * k1x, k2x, sign);
+    let x2 = x_m + half * k1x;
+    let k2v = slip_acceleration(cos1, x2, k2x, sign);
     let k3x = v_m_per_s + half * k2v;
-    let k3v = slip_acceleration(t_local_s + half, x_m + half * k2x, k3x, sign);
+    let x3 = x_m + half * k2x;
+    let k3v = slip_acceleration(cos1, x3, k3x, sign);
     let k4x = v_m_per_s + h_s * k3v;
-    let k4v = slip_acceleration(t_local_s + h_s, x_m + h_s * k3x, k4x, sign);
-    return vec2<f32>(
+    let x4 = x_m + h_s * k3x;
+    let k4v = slip_acceleration(cos2, x4, k4x, sign);
+    return SlipStep(
         x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-        v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v));
+        v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+        x2, x3, x4, cos0, cos1, cos2);
+}
+
+// The RK4 quadrature of x cos(Ωt) and x sin(Ωt) over an accepted slip step.
+fn add_slip_phase(t_local_s: f32, h_s: f32, step: SlipStep) {
+    let w = point.omega_rad_per_s;
+    let sin0 = sin(w * t_local_s);
+    let sin1 = sin(w * (t_local_s + 0.5 * h_s));
+    let sin2 = sin(w * (t_local_s + h_s));
+    let x1 = path.x_m;
+    path.period_cos_integral += h_s / 6.0 * (x1 * step.cos0 + 2.0 * (step.x2_m + step.x3_m) * step.cos1 + step.x4_m * step.cos2);
+    path.period_sin_integral += h_s / 6.0 * (x1 * sin0 + 2.0 * (step.x2_m + step.x3_m) * sin1 + step.x4_m * sin2);
+}
+
+// A stuck interval [t_a, t_b] added exactly: x is constant.
+fn add_stick_phase(t_a: f32, t_b: f32) {
+    let w = point.omega_rad_per_s;
+    path.period_cos_integral += path.x_m * (sin(w * t_b) - sin(w * t_a)) / w;
+    path.period_sin_integral += path.x_m * (cos(w * t_a) - cos(w * t_b)) / w;
 }
 
 fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
     var lo = 0.0;
     var g_lo = sign * path.v_m_per_s;
     var hi = h_s;
-    var g_hi = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, h_s, sign).y;
+    var g_hi = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, h_s, sign).v_m_per_s;
     if (g_lo <= 0.0) {
         var probe = 0.5 * h_s;
         var found = false;
         for (var i = 0u; i < PROBE_HALVINGS; i++) {
-            let g_probe = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, probe, sign).y;
+            let g_probe = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, probe, sign).v_m_per_s;
             if (g_probe > 0.0) {
                 lo = probe;
                 g_lo = g_probe;
@@ -147,7 +191,7 @@ fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
         if (!(mid > lo && mid < hi)) {
             mid = 0.5 * (lo + hi);
         }
-        let g_mid = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, mid, sign).y;
+        let g_mid = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, mid, sign).v_m_per_s;
         if (g_mid > 0.0) {
             lo = mid;
             g_lo = g_mid;
@@ -192,6 +236,12 @@ fn earliest_entry(best: vec2<f32>, sign: f32, phase_a: f32, reach: f32, t_a: f32
     return best;
 }
 
+// The phase lag of a period's fundamental behind the base (see phase_of in
+// the CPU reference).
+fn phase_of(cos_integral: f32, sin_integral: f32) -> f32 {
+    return atan2(sin_integral, cos_integral);
+}
+
 // Earliest (time, direction) of breakaway in [t_a, t_b]; direction 0 = none.
 fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
     let force = spring_force(t_a, path.x_m);
@@ -228,6 +278,7 @@ fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
             let t_end = select(until.x, t_b, until.y == 0.0);
             if (measuring) {
                 path.period_stick_s += t_end - t_a;
+                add_stick_phase(t_a, t_end);
             }
             path.mode = i32(until.y);
             path.slip_start_x_m = path.x_m;
@@ -236,15 +287,22 @@ fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
         } else {
             let sign = f32(path.mode);
             let h = t_b - t_a;
-            let y1 = rk4_slip(t_a, path.x_m, path.v_m_per_s, h, sign);
-            if (sign * y1.y > 0.0) {
-                path.x_m = y1.x;
-                path.v_m_per_s = y1.y;
-                path.period_max_x_m = max(path.period_max_x_m, y1.x);
+            let step = rk4_slip(t_a, path.x_m, path.v_m_per_s, h, sign);
+            if (sign * step.v_m_per_s > 0.0) {
+                if (measuring) {
+                    add_slip_phase(t_a, h, step);
+                }
+                path.x_m = step.x_m;
+                path.v_m_per_s = step.v_m_per_s;
+                path.period_max_x_m = max(path.period_max_x_m, step.x_m);
                 t_a = t_b;
             } else {
                 let h_zero = locate_velocity_zero(t_a, h, sign);
-                let x_zero = rk4_slip(t_a, path.x_m, path.v_m_per_s, h_zero, sign).x;
+                let to_zero = rk4_slip(t_a, path.x_m, path.v_m_per_s, h_zero, sign);
+                if (measuring) {
+                    add_slip_phase(t_a, h_zero, to_zero);
+                }
+                let x_zero = to_zero.x_m;
                 path.x_m = x_zero;
                 path.v_m_per_s = 0.0;
                 path.period_max_x_m = max(path.period_max_x_m, x_zero);
@@ -266,6 +324,8 @@ fn run_period(measuring: bool) {
     let dt = point.period_s / f32(steps);
     path.period_max_x_m = path.x_m;
     path.period_stick_s = 0.0;
+    path.period_cos_integral = 0.0;
+    path.period_sin_integral = 0.0;
     var t = 0.0;
     var step = 0u;
     loop {

@@ -5,7 +5,8 @@
 
 // Accumulator words (ACCUMULATOR_WORDS per point): 0-1 peaks (u64),
 // 2-3 Σ(q + 2^31) (u64), 4-6 Σq² (u96), 7-8 stuck time in T/2^20 (u64),
-// 9 clamped peaks, 10-11 unused.
+// 9 clamped peaks, 10-11 Σ(s + 2^31) of the phases' quantised sines (u64),
+// 12-13 Σ of their quantised versines (u64), 14-15 unused.
 
 // This invocation's sums over the dispatch, flushed once at its end.
 struct Tally {
@@ -14,6 +15,8 @@ struct Tally {
     sum_squares: vec3<u32>,
     stick_units: vec2<u32>,
     clamped: u32,
+    phase_sin_biased: vec2<u32>,
+    phase_versine: vec2<u32>,
 }
 
 var<private> tally: Tally;
@@ -49,7 +52,7 @@ fn histogram_bin(peak_m: f32) -> u32 {
 }
 
 // Quantises and tallies one measured period; mirrors PointAccumulator::add_period.
-fn tally_period(peak_m: f32, stuck_share: f32) {
+fn tally_period(peak_m: f32, phase_rad: f32, stuck_share: f32) {
     let q_real = round((peak_m - point.peak_centre_m) * point.inv_quantum_per_m);
     let q = i32(clamp(q_real, -QUANTISE_LIMIT, QUANTISE_LIMIT));
     tally.peaks += 1u;
@@ -59,6 +62,13 @@ fn tally_period(peak_m: f32, stuck_share: f32) {
     tally.sum_squares = add_u96(tally.sum_squares, vec2<u32>(square.y, square.x));
     tally.stick_units = add_u64(tally.stick_units, u32(round(stuck_share * STICK_UNITS_PER_PERIOD)));
     tally.clamped += select(0u, 1u, abs(q_real) > QUANTISE_LIMIT);
+    // The phase's deviation from the reference: sine and versine (2 sin²(d/2)).
+    let d = phase_rad - point.phase_ref_rad;
+    let sine = i32(round(sin(d) * PHASE_QUANTA));
+    let half_sine = sin(0.5 * d);
+    let versine = u32(round(2.0 * half_sine * half_sine * PHASE_QUANTA));
+    tally.phase_sin_biased = add_u64(tally.phase_sin_biased, bitcast<u32>(sine) ^ 0x80000000u);
+    tally.phase_versine = add_u64(tally.phase_versine, versine);
     atomicAdd(&histograms[point_index * HISTOGRAM_BINS + histogram_bin(peak_m)], 1u);
 }
 
@@ -89,4 +99,6 @@ fn flush_tally() {
     atomic_add_u96(base + 4u, tally.sum_squares);
     atomic_add_u64(base + 7u, tally.stick_units);
     atomicAdd(&accumulators[base + 9u], tally.clamped);
+    atomic_add_u64(base + 10u, tally.phase_sin_biased);
+    atomic_add_u64(base + 12u, tally.phase_versine);
 }

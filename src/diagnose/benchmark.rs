@@ -69,8 +69,10 @@ pub fn peak_shift_in_noise_units(
     let b = ensemble_path_stats(engine, without, conditions, cycles, 32, 99, 60)?;
     let mut worst: f64 = 0.0;
     for (pa, pb) in a.iter().zip(&b) {
-        let (ma, mb): (Vec<f64>, Vec<f64>) = (pa.iter().map(|p| p.0).collect(), pb.iter().map(|p| p.0).collect());
-        let (va, vb): (Vec<f64>, Vec<f64>) = (pa.iter().map(|p| p.1).collect(), pb.iter().map(|p| p.1).collect());
+        let (ma, mb): (Vec<f64>, Vec<f64>) =
+            (pa.iter().map(|p| p.peak_mean_m).collect(), pb.iter().map(|p| p.peak_mean_m).collect());
+        let (va, vb): (Vec<f64>, Vec<f64>) =
+            (pa.iter().map(|p| p.peak_var_m2).collect(), pb.iter().map(|p| p.peak_var_m2).collect());
         let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
         worst = worst.max((mean(&ma) - mean(&mb)).abs() / (sd(&mb).max(1e-15) / runs));
         worst = worst.max((mean(&va) - mean(&vb)).abs() / (sd(&vb).max(1e-30) / runs));

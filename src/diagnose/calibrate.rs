@@ -65,7 +65,7 @@ fn solve_friction_level(
             .iter()
             .zip(&targets)
             .filter(|(_, t)| t.is_finite() && **t > 0.0)
-            .map(|(s, t)| mean(&s.iter().map(|p| p.0).collect::<Vec<_>>()) / t - 1.0)
+            .map(|(s, t)| mean(&s.iter().map(|p| p.peak_mean_m).collect::<Vec<_>>()) / t - 1.0)
             .collect();
         Ok(mean(&errs))
     };

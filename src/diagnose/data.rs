@@ -11,6 +11,7 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::cpu::effects::drift_factor;
+use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
 
 /// One group of measured data at one condition.
@@ -51,7 +52,18 @@ fn average_features(features: &[RunFeatures]) -> BTreeMap<Observable, f64> {
             }
         }
     }
-    sums.into_iter().filter(|(_, v)| v.len() == features.len()).map(|(k, v)| (k, mean(&v))).collect()
+    sums.into_iter()
+        .filter(|(_, v)| v.len() == features.len())
+        .map(|(k, v)| {
+            let average = if k.is_angle_deg() {
+                let radians: Vec<f64> = v.iter().map(|d| d.to_radians()).collect();
+                circular_mean_var(&radians).0.to_degrees()
+            } else {
+                mean(&v)
+            };
+            (k, average)
+        })
+        .collect()
 }
 
 pub(crate) fn condition_key(c: Condition) -> (i64, i64) {
@@ -108,9 +120,15 @@ impl<'a> Data<'a> {
             if let Some(i) = u.summary {
                 let row = &set.summary[i];
                 let mut m = BTreeMap::new();
-                m.insert(Observable::PeakMeanM, row.peak_mean_m);
-                if let Some(v) = row.peak_var_m2 {
-                    m.insert(Observable::PeakVarM2, v);
+                for (observable, value) in [
+                    (Observable::PeakMeanM, row.peak_mean_m),
+                    (Observable::PeakVarM2, row.peak_var_m2),
+                    (Observable::PhaseMeanDeg, row.phase_mean_deg),
+                    (Observable::PhaseVarDeg2, row.phase_var_deg2),
+                ] {
+                    if let Some(v) = value {
+                        m.insert(observable, v);
+                    }
                 }
                 measured.push(m);
                 record_s.push(row.n_peaks.unwrap_or(350) as f64 / row.excitation_frequency_hz);

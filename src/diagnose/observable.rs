@@ -13,6 +13,8 @@ pub enum Observable {
     PeakVarM2,
     PeakSkewness,
     PeakTrendPerS,
+    PhaseMeanDeg,
+    PhaseVarDeg2,
     NormalForceMeanN,
     NormalForceVarN2,
     NormalForceHarmonic1N,
@@ -41,6 +43,8 @@ pub enum Observable {
 pub enum MotionPhase {
     /// The per-period peak amplitude, over whole cycles.
     Peak,
+    /// The phase of the response's fundamental behind the base, per cycle.
+    Fundamental,
     /// The normal force, over whole cycles.
     NormalForce,
     /// Sliding: accelerating against decelerating branch.
@@ -60,6 +64,7 @@ impl MotionPhase {
     pub fn describe(self) -> &'static str {
         match self {
             MotionPhase::Peak => "whole cycle: per-period peak amplitude",
+            MotionPhase::Fundamental => "whole cycle: phase of the response's fundamental behind the base",
             MotionPhase::NormalForce => "whole cycle: normal force",
             MotionPhase::SlipBranches => "slip: accelerating against decelerating branch",
             MotionPhase::Breakaway => "stick to slip: breakaway",
@@ -72,12 +77,14 @@ impl MotionPhase {
 
 impl Observable {
     /// Every observable, in the order of a record's features.
-    pub const ALL: [Observable; 26] = [
+    pub const ALL: [Observable; 28] = [
         Observable::PeakCount,
         Observable::PeakMeanM,
         Observable::PeakVarM2,
         Observable::PeakSkewness,
         Observable::PeakTrendPerS,
+        Observable::PhaseMeanDeg,
+        Observable::PhaseVarDeg2,
         Observable::NormalForceMeanN,
         Observable::NormalForceVarN2,
         Observable::NormalForceHarmonic1N,
@@ -109,6 +116,8 @@ impl Observable {
             Observable::PeakVarM2 => "peak_var_m2",
             Observable::PeakSkewness => "peak_skewness",
             Observable::PeakTrendPerS => "peak_trend_per_s",
+            Observable::PhaseMeanDeg => "phase_mean_deg",
+            Observable::PhaseVarDeg2 => "phase_var_deg2",
             Observable::NormalForceMeanN => "normal_force_mean_n",
             Observable::NormalForceVarN2 => "normal_force_var_n2",
             Observable::NormalForceHarmonic1N => "normal_force_harmonic1_n",
@@ -157,6 +166,11 @@ impl Observable {
         )
     }
 
+    /// Whether the observable is an angle in degrees (compared modulo 360°).
+    pub fn is_angle_deg(self) -> bool {
+        self == Observable::PhaseMeanDeg
+    }
+
     /// The motion phase the observable describes.
     pub fn phase(self) -> MotionPhase {
         match self {
@@ -165,6 +179,7 @@ impl Observable {
             | Observable::PeakVarM2
             | Observable::PeakSkewness
             | Observable::PeakTrendPerS => MotionPhase::Peak,
+            Observable::PhaseMeanDeg | Observable::PhaseVarDeg2 => MotionPhase::Fundamental,
             Observable::NormalForceMeanN
             | Observable::NormalForceVarN2
             | Observable::NormalForceHarmonic1N

@@ -10,6 +10,7 @@ use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::simulate::{ensemble_path_stats, replicates};
 use crate::diagnose::{DiagnoseSettings, mean, sd};
+use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
 use crate::error::Result;
 
@@ -53,6 +54,22 @@ pub fn count_of(scores: &[Score], heldout: bool) -> usize {
     scores.iter().filter(|s| s.heldout == heldout).count()
 }
 
+/// A measured value against simulated replicate values: (the replicates'
+/// centre, measured − centre, the replicates' spread). Angles (degrees) are
+/// compared on the circle: the centre is their circular mean and every
+/// difference is wrapped into (−180°, 180°].
+pub(crate) fn compare(observable: Observable, measured: f64, values: &[f64]) -> (f64, f64, f64) {
+    if observable.is_angle_deg() {
+        let radians: Vec<f64> = values.iter().map(|v| v.to_radians()).collect();
+        let (centre, _) = circular_mean_var(&radians);
+        let deviations: Vec<f64> = radians.iter().map(|r| wrap_angle(r - centre).to_degrees()).collect();
+        (centre.to_degrees(), wrap_angle(measured.to_radians() - centre).to_degrees(), sd(&deviations))
+    } else {
+        let centre = mean(values);
+        (centre, measured - centre, sd(values))
+    }
+}
+
 /// Scores a model against the data: z per (unit, observable).
 pub(crate) fn score(
     engine: &Engine,
@@ -80,21 +97,22 @@ pub(crate) fn score(
         )?;
         for (&i, per_path) in summary_units.iter().zip(&stats) {
             let u = &data.units[i];
-            let means: Vec<f64> = per_path.iter().map(|p| p.0).collect();
-            let vars: Vec<f64> = per_path.iter().map(|p| p.1).collect();
-            for (observable, sim) in [(Observable::PeakMeanM, &means), (Observable::PeakVarM2, &vars)] {
-                if let Some(&m) = data.measured[i].get(&observable) {
-                    let spread = sd(sim).max(1e-9 * mean(sim).abs() + 1e-300);
-                    scores.push(Score {
-                        excitation_frequency_hz: u.condition.excitation_frequency_hz,
-                        normal_force_n: u.condition.normal_force_n,
-                        observable,
-                        measured: m,
-                        simulated: mean(sim),
-                        z: (m - mean(sim)) / (spread * (1.0 + 1.0 / sim.len() as f64).sqrt()),
-                        heldout: u.heldout,
-                    });
+            for (&observable, &m) in &data.measured[i] {
+                let sim: Vec<f64> = per_path.iter().filter_map(|p| p.get(observable)).collect();
+                if sim.len() < 2 {
+                    continue;
                 }
+                let (simulated, deviation, spread) = compare(observable, m, &sim);
+                let spread = spread.max(1e-9 * simulated.abs() + 1e-300);
+                scores.push(Score {
+                    excitation_frequency_hz: u.condition.excitation_frequency_hz,
+                    normal_force_n: u.condition.normal_force_n,
+                    observable,
+                    measured: m,
+                    simulated,
+                    z: deviation / (spread * (1.0 + 1.0 / sim.len() as f64).sqrt()),
+                    heldout: u.heldout,
+                });
             }
         }
     }
@@ -115,14 +133,15 @@ pub(crate) fn score(
             if values.len() < 2 {
                 continue;
             }
-            let spread = sd(&values).max(1e-6 * mean(&values).abs()).max(1e-12);
+            let (simulated, deviation, spread) = compare(observable, m, &values);
+            let spread = spread.max(1e-6 * simulated.abs()).max(1e-12);
             scores.push(Score {
                 excitation_frequency_hz: u.condition.excitation_frequency_hz,
                 normal_force_n: u.condition.normal_force_n,
                 observable,
                 measured: m,
-                simulated: mean(&values),
-                z: (m - mean(&values)) / (spread * (1.0 / n_meas + 1.0 / values.len() as f64).sqrt()),
+                simulated,
+                z: deviation / (spread * (1.0 / n_meas + 1.0 / values.len() as f64).sqrt()),
                 heldout: u.heldout,
             });
         }

@@ -7,8 +7,10 @@ use rayon::prelude::*;
 
 use crate::diagnose::data::Data;
 use crate::diagnose::measure::Run;
+use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
-use crate::engine::{Condition, Engine, Job, Model, Point, Record, RunPlan};
+use crate::engine::reduce::circular_mean_var;
+use crate::engine::{Condition, Engine, Job, Model, PathResult, Point, Record, RunPlan};
 use crate::error::Result;
 
 /// Realisation numbers of unit `u`'s replicates start at `u × REPLICATE_STRIDE`.
@@ -60,8 +62,34 @@ pub(crate) fn replicates_of(
     units.par_iter().map(|&u| replicates(engine, model, data, settings, u)).collect()
 }
 
-/// Per-path peak statistics of an ensemble: for each condition, every
-/// realisation's (mean, variance) of `cycles` peaks (m, m²).
+/// One realisation's statistics over its measured periods.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PathStats {
+    /// Mean peak, m.
+    pub(crate) peak_mean_m: f64,
+    /// Variance of the peaks, m².
+    pub(crate) peak_var_m2: f64,
+    /// Circular mean of the phases, degrees.
+    pub(crate) phase_mean_deg: f64,
+    /// Circular variance of the phases, degrees².
+    pub(crate) phase_var_deg2: f64,
+}
+
+impl PathStats {
+    /// The statistic a summary observable compares, if it is one.
+    pub(crate) fn get(&self, observable: Observable) -> Option<f64> {
+        match observable {
+            Observable::PeakMeanM => Some(self.peak_mean_m),
+            Observable::PeakVarM2 => Some(self.peak_var_m2),
+            Observable::PhaseMeanDeg => Some(self.phase_mean_deg),
+            Observable::PhaseVarDeg2 => Some(self.phase_var_deg2),
+            _ => None,
+        }
+    }
+}
+
+/// Per-path statistics of an ensemble: for each condition, every
+/// realisation's statistics over `cycles` measured periods.
 pub(crate) fn ensemble_path_stats(
     engine: &Engine,
     model: &Model,
@@ -70,7 +98,7 @@ pub(crate) fn ensemble_path_stats(
     realisations: u32,
     seed: u64,
     warmup: u32,
-) -> Result<Vec<Vec<(f64, f64)>>> {
+) -> Result<Vec<Vec<PathStats>>> {
     let points: Vec<Point> = conditions.iter().map(|&c| Point::steady(model, c)).collect();
     let job = Job {
         model,
@@ -82,6 +110,14 @@ pub(crate) fn ensemble_path_stats(
         record: Record::Peaks,
     };
     let paths = engine.paths(&job)?;
-    let stats = |peaks: &[f64]| (mean(peaks), sd(peaks).powi(2));
-    Ok(paths.chunks(realisations as usize).map(|chunk| chunk.iter().map(|p| stats(&p.peaks_m)).collect()).collect())
+    let stats = |p: &PathResult| {
+        let (phase_mean, phase_var) = circular_mean_var(&p.phases_rad);
+        PathStats {
+            peak_mean_m: mean(&p.peaks_m),
+            peak_var_m2: sd(&p.peaks_m).powi(2),
+            phase_mean_deg: phase_mean.to_degrees(),
+            phase_var_deg2: phase_var.to_degrees().to_degrees(),
+        }
+    };
+    Ok(paths.chunks(realisations as usize).map(|chunk| chunk.iter().map(stats).collect()).collect())
 }

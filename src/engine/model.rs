@@ -260,6 +260,13 @@ impl Model {
         self.excitation.amplitude_m / ((1.0 - eta * eta).powi(2) + (2.0 * zeta * eta).powi(2)).sqrt()
     }
 
+    /// Frictionless steady-state phase lag of the response behind the base,
+    /// `atan2(2ζη, 1 − η²)`, rad.
+    pub fn linear_phase_rad(&self, excitation_frequency_hz: f64) -> f64 {
+        let eta = excitation_frequency_hz / self.rig.natural_frequency_hz;
+        (2.0 * self.rig.damping_ratio * eta).atan2(1.0 - eta * eta)
+    }
+
     /// The frictionless steady-state solution's displacement (m) and velocity
     /// (m/s) at t = 0: the default initial state of every realisation.
     pub fn linear_steady_state_at_zero(&self, excitation_frequency_hz: f64) -> (f64, f64) {

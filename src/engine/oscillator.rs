@@ -71,6 +71,9 @@ impl Point {
 pub struct PathResult {
     /// Peak displacement of each measured period, m.
     pub peaks_m: Vec<f64>,
+    /// Phase lag of each measured period's fundamental behind the base, rad
+    /// in (−π, π] (`interfaces.md`).
+    pub phases_rad: Vec<f64>,
     /// Time spent stuck during the measured periods, s.
     pub stick_time_s: f64,
 }

@@ -12,6 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::engine::model::{Condition, Model};
+use crate::engine::oscillator::PathResult;
 
 /// Histogram bins per grid point, including the underflow and overflow bins.
 pub const HISTOGRAM_BINS: u32 = 2048;
@@ -21,6 +22,8 @@ pub const QUANTA_PER_RANGE: f64 = (1u64 << 28) as f64;
 pub const STICK_UNITS_PER_PERIOD: f64 = (1u64 << 20) as f64;
 /// Largest quantised peak magnitude: the largest f32 below 2^31.
 pub const QUANTISE_LIMIT: f32 = 2_147_483_520.0;
+/// Quantisation steps per unit of a phase's sine and versine (2^30).
+pub const PHASE_QUANTA: f64 = (1u64 << 30) as f64;
 
 /// Statistics of the peak amplitudes at one grid point (one `sweep.csv` row).
 #[derive(Clone, Debug, PartialEq)]
@@ -43,15 +46,53 @@ pub struct PointStats {
     pub peak_p95_m: f64,
     /// Share of measured time spent stuck, –.
     pub stick_fraction: f64,
+    /// Circular mean of the per-period phase lag of the response's
+    /// fundamental behind the base, degrees in (−180, 180].
+    pub phase_mean_deg: f64,
+    /// Circular variance of that phase, degrees² (see [`circular_mean_var`]).
+    pub phase_var_deg2: f64,
 }
 
-/// Where a point's peaks are binned and how they are quantised.
+/// Circular mean (rad, in (−π, π]) and circular variance (rad²) of phases:
+/// with `R̄` the mean resultant length, the variance is `n/(n−1) · (−2 ln R̄)`,
+/// which for small spreads is the ordinary unbiased variance of the phases
+/// (and stays defined for any spread). `(NaN, NaN)` for no phases.
+pub fn circular_mean_var(phases_rad: &[f64]) -> (f64, f64) {
+    let (s, c) = phases_rad.iter().fold((0.0, 0.0), |(s, c), p| (s + p.sin(), c + p.cos()));
+    let versine: f64 = phases_rad.iter().map(|p| 2.0 * (0.5 * p).sin().powi(2)).sum();
+    circular_from_sums(phases_rad.len() as f64, s, versine, s.atan2(c))
+}
+
+/// Circular mean and variance from `n` phases' `Σ sin`, `Σ (1 − cos)` (the
+/// versine, which keeps tiny spreads precise) and the mean angle.
+fn circular_from_sums(n: f64, sum_sin: f64, sum_versine: f64, mean_rad: f64) -> (f64, f64) {
+    if n < 1.0 {
+        return (f64::NAN, f64::NAN);
+    }
+    // With C = n − V: 1 − R̄² = (n² − S² − C²)/n², and n² − C² = V (2n − V).
+    let one_minus_r2 = ((sum_versine * (2.0 * n - sum_versine) - sum_sin * sum_sin) / (n * n)).clamp(0.0, 1.0);
+    let var = if n > 1.0 { n / (n - 1.0) * -(-one_minus_r2).ln_1p() } else { 0.0 };
+    (wrap_angle(mean_rad), var)
+}
+
+/// An angle wrapped into (−π, π], rad.
+pub fn wrap_angle(rad: f64) -> f64 {
+    let w = rad.rem_euclid(std::f64::consts::TAU);
+    if w > std::f64::consts::PI { w - std::f64::consts::TAU } else { w }
+}
+
+/// Where a point's peaks are binned and how they are quantised, and the
+/// reference its phases are measured from.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PeakRange {
     /// Lower edge of the first inner bin, m.
     pub lo_m: f64,
     /// Upper edge of the last inner bin, m.
     pub hi_m: f64,
+    /// Phases are reduced as their deviation from this angle, rad (the
+    /// frictionless phase at the point; any reference gives the same
+    /// statistics, a near one keeps tiny spreads precise).
+    pub phase_ref_rad: f64,
 }
 
 impl PeakRange {
@@ -61,7 +102,26 @@ impl PeakRange {
     pub fn for_point(model: &Model, condition: Condition) -> PeakRange {
         let a = model.linear_amplitude_m(condition.excitation_frequency_hz);
         let a = if a.is_finite() && a > 0.0 { a } else { model.excitation.amplitude_m.max(1e-6) };
-        PeakRange { lo_m: -0.5 * a, hi_m: 1.5 * a }
+        PeakRange {
+            lo_m: -0.5 * a,
+            hi_m: 1.5 * a,
+            phase_ref_rad: model.linear_phase_rad(condition.excitation_frequency_hz),
+        }
+    }
+
+    /// The phase reference, rad, as the kernel sees it (f32).
+    pub fn phase_ref_f32(&self) -> f32 {
+        self.phase_ref_rad as f32
+    }
+
+    /// The quantised sine and versine (`1 − cos`, as `2 sin²(d/2)`) of a
+    /// phase's deviation `d` from the reference, in units of 2^-30.
+    /// Mirrors `tally_period` in `reduce.wgsl` (which computes in f32).
+    pub fn quantise_phase(&self, phase_rad: f64) -> (i64, u64) {
+        let d = phase_rad - f64::from(self.phase_ref_f32());
+        let sine = (d.sin() * PHASE_QUANTA).round_ties_even() as i64;
+        let versine = (2.0 * (0.5 * d).sin().powi(2) * PHASE_QUANTA).round_ties_even() as u64;
+        (sine, versine)
     }
 
     /// Centre of the range, m (as the kernel sees it, f32).
@@ -128,6 +188,10 @@ pub struct PointAccumulator {
     pub clamped: u64,
     /// Counts per bin; bin 0 is below the range, the last bin above it.
     pub histogram: Vec<u64>,
+    /// Σ of the quantised sines of the phases' deviations from the reference.
+    pub sum_phase_sin: i128,
+    /// Σ of their quantised versines.
+    pub sum_phase_versine: u128,
 }
 
 impl PointAccumulator {
@@ -141,13 +205,19 @@ impl PointAccumulator {
             stick_units: 0,
             clamped: 0,
             histogram: vec![0; HISTOGRAM_BINS as usize],
+            sum_phase_sin: 0,
+            sum_phase_versine: 0,
         }
     }
 
-    /// Adds one measured period: its peak (m) and stuck share of the period.
-    pub fn add_period(&mut self, peak_m: f64, stuck_share: f64) {
+    /// Adds one measured period: its peak (m), phase (rad) and stuck share
+    /// of the period.
+    pub fn add_period(&mut self, peak_m: f64, phase_rad: f64, stuck_share: f64) {
         let peak = peak_m as f32;
         let (q, clamped) = self.range.quantise(peak);
+        let (sine, versine) = self.range.quantise_phase(phase_rad);
+        self.sum_phase_sin += i128::from(sine);
+        self.sum_phase_versine += u128::from(versine);
         self.peaks += 1;
         self.sum_q += i128::from(q);
         self.sum_q2 += (i128::from(q) * i128::from(q)) as u128;
@@ -165,6 +235,8 @@ impl PointAccumulator {
         self.sum_q2 += other.sum_q2;
         self.stick_units += other.stick_units;
         self.clamped += other.clamped;
+        self.sum_phase_sin += other.sum_phase_sin;
+        self.sum_phase_versine += other.sum_phase_versine;
         for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
             *a += b;
         }
@@ -213,18 +285,28 @@ impl PointAccumulator {
         (f64::from(self.range.centre_f32()) + mean_q * quantum, var_q * quantum * quantum)
     }
 
+    /// Circular mean (rad, in (−π, π]) and circular variance (rad²) of the
+    /// phases, from the exact sums (see [`circular_mean_var`]).
+    pub fn phase_moments(&self) -> (f64, f64) {
+        let (s, v) = (self.sum_phase_sin as f64 / PHASE_QUANTA, self.sum_phase_versine as f64 / PHASE_QUANTA);
+        let n = self.peaks as f64;
+        let mean = f64::from(self.range.phase_ref_f32()) + s.atan2(n - v);
+        circular_from_sums(n, s, v, mean)
+    }
+
     /// Adds one realisation's measured periods (CPU backend).
-    pub fn add_path(&mut self, peaks_m: &[f64], stick_time_s: f64, period_s: f64) {
+    pub fn add_path(&mut self, path: &PathResult, period_s: f64) {
         self.realisations += 1;
-        for &p in peaks_m {
-            self.add_period(p, 0.0);
+        for (&p, &phase) in path.peaks_m.iter().zip(&path.phases_rad) {
+            self.add_period(p, phase, 0.0);
         }
-        self.stick_units += stick_units(stick_time_s / period_s);
+        self.stick_units += stick_units(path.stick_time_s / period_s);
     }
 
     /// The `sweep.csv` row.
     pub fn stats(&self, condition: Condition) -> PointStats {
         let (mean, var) = self.moments();
+        let (phase_mean, phase_var) = self.phase_moments();
         PointStats {
             excitation_frequency_hz: condition.excitation_frequency_hz,
             normal_force_n: condition.normal_force_n,
@@ -236,6 +318,8 @@ impl PointAccumulator {
             peak_p50_m: self.quantile(0.50),
             peak_p95_m: self.quantile(0.95),
             stick_fraction: self.stick_units as f64 / (STICK_UNITS_PER_PERIOD * self.peaks as f64),
+            phase_mean_deg: phase_mean.to_degrees(),
+            phase_var_deg2: phase_var.to_degrees().to_degrees(),
         }
     }
 }
@@ -250,7 +334,7 @@ mod tests {
     use super::*;
 
     fn range() -> PeakRange {
-        PeakRange { lo_m: -1e-3, hi_m: 3e-3 }
+        PeakRange { lo_m: -1e-3, hi_m: 3e-3, phase_ref_rad: 0.3 }
     }
 
     #[test]
@@ -258,7 +342,7 @@ mod tests {
         let mut acc = PointAccumulator::new(range());
         let peaks: Vec<f64> = (0..1000).map(|i| 1e-3 + 1e-4 * ((i as f64) * 0.37).sin()).collect();
         for &p in &peaks {
-            acc.add_period(p, 0.0);
+            acc.add_period(p, 0.3, 0.0);
         }
         let n = peaks.len() as f64;
         let mean = peaks.iter().sum::<f64>() / n;
@@ -272,21 +356,40 @@ mod tests {
     fn merging_is_exact_in_any_order() {
         let peaks: Vec<f64> = (0..500).map(|i| 1e-3 * (1.0 + 0.3 * ((i as f64) * 1.7).cos())).collect();
         let mut whole = PointAccumulator::new(range());
-        peaks.iter().for_each(|&p| whole.add_period(p, 0.25));
+        peaks.iter().for_each(|&p| whole.add_period(p, 0.3, 0.25));
         let mut a = PointAccumulator::new(range());
         let mut b = PointAccumulator::new(range());
-        peaks[..123].iter().for_each(|&p| a.add_period(p, 0.25));
-        peaks[123..].iter().rev().for_each(|&p| b.add_period(p, 0.25));
+        peaks[..123].iter().for_each(|&p| a.add_period(p, 0.3, 0.25));
+        peaks[123..].iter().rev().for_each(|&p| b.add_period(p, 0.3, 0.25));
         b.merge(&a);
         assert_eq!(whole, b);
         assert_eq!(whole.stats(Condition { excitation_frequency_hz: 7.0, normal_force_n: 1.0 }).stick_fraction, 0.25);
     }
 
     #[test]
+    fn phase_sums_give_the_circular_mean_and_variance() {
+        let mut acc = PointAccumulator::new(range());
+        let phases: Vec<f64> = (0..2000).map(|i| 2.5 + 0.01 * ((i as f64) * 0.77).sin()).collect();
+        phases.iter().for_each(|&p| acc.add_period(1e-3, p, 0.0));
+        let (mean, var) = acc.phase_moments();
+        let (direct_mean, direct_var) = circular_mean_var(&phases);
+        let n = phases.len() as f64;
+        let linear_mean = phases.iter().sum::<f64>() / n;
+        let linear_var = phases.iter().map(|p| (p - linear_mean).powi(2)).sum::<f64>() / (n - 1.0);
+        assert!((mean - linear_mean).abs() < 1e-8, "{mean} vs {linear_mean}");
+        assert!((direct_mean - linear_mean).abs() < 1e-8, "{direct_mean} vs {linear_mean}");
+        assert!((var / linear_var - 1.0).abs() < 1e-3, "{var} vs {linear_var}");
+        assert!((direct_var / linear_var - 1.0).abs() < 1e-3, "{direct_var} vs {linear_var}");
+        // Wrapped phases near ±π average to π, not 0.
+        let (wrapped, _) = circular_mean_var(&[3.1, -3.1, 3.12, -3.12]);
+        assert!((wrapped.abs() - std::f64::consts::PI).abs() < 1e-9, "{wrapped}");
+    }
+
+    #[test]
     fn histogram_quantiles_are_close_to_exact() {
         let mut acc = PointAccumulator::new(range());
         let peaks: Vec<f64> = (0..10_000).map(|i| 1e-3 + 2e-4 * (i as f64 / 10_000.0)).collect();
-        peaks.iter().for_each(|&p| acc.add_period(p, 0.0));
+        peaks.iter().for_each(|&p| acc.add_period(p, 0.3, 0.0));
         let bin = 4e-3 / f64::from(HISTOGRAM_BINS - 2);
         assert!((acc.quantile(0.5) - 1.1e-3).abs() < bin);
         assert!((acc.quantile(0.05) - 1.01e-3).abs() < bin);

@@ -13,7 +13,7 @@ use crate::sweep::plot;
 use crate::sweep::shard::{AccumulatorFile, RunIdentity, Shard};
 
 /// The columns of `sweep.csv` (`interfaces.md`).
-pub const SWEEP_COLUMNS: [&str; 10] = [
+pub const SWEEP_COLUMNS: [&str; 12] = [
     "excitation_frequency_hz",
     "normal_force_n",
     "realisations",
@@ -24,6 +24,8 @@ pub const SWEEP_COLUMNS: [&str; 10] = [
     "peak_p50_m",
     "peak_p95_m",
     "stick_fraction",
+    "phase_mean_deg",
+    "phase_var_deg2",
 ];
 
 /// Writes `sweep.csv` atomically.
@@ -33,7 +35,7 @@ pub fn write_sweep_csv(path: &Path, rows: &[PointStats]) -> Result<()> {
         for r in rows {
             writeln!(
                 w,
-                "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{}",
+                "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{},{},{:e}",
                 r.excitation_frequency_hz,
                 r.normal_force_n,
                 r.realisations,
@@ -43,7 +45,9 @@ pub fn write_sweep_csv(path: &Path, rows: &[PointStats]) -> Result<()> {
                 r.peak_p05_m,
                 r.peak_p50_m,
                 r.peak_p95_m,
-                r.stick_fraction
+                r.stick_fraction,
+                r.phase_mean_deg,
+                r.phase_var_deg2
             )?;
         }
         Ok(())

@@ -1,5 +1,5 @@
 //! Pictures of a sweep: Figure 9(a) mean peak with its 5–95% band, Figure
-//! 9(b) peak variance, and Figure 8-style peak densities with the Gaussian of
+//! 9(b) peak variance, a phase panel (fig9c), and Figure 8-style peak densities with the Gaussian of
 //! the same mean and variance. Each is written as PNG and SVG, atomically.
 
 use std::path::{Path, PathBuf};
@@ -129,6 +129,57 @@ where
     legend_box(&mut chart, 15, SeriesLabelPosition::UpperRight, "fig9")
 }
 
+/// Figure 9's phase panel: the circular mean phase lag of the response's
+/// fundamental (degrees) against frequency, one curve per normal force, with
+/// a band of ± one circular standard deviation.
+fn figure9c<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, result: &SweepResult, title: &str) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9c", e);
+    let series = curves(result);
+    let (f_lo, f_hi) = frequency_span(result);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (FONT, 22))
+        .margin(14)
+        .x_label_area_size(48)
+        .y_label_area_size(68)
+        .build_cartesian_2d(f_lo..f_hi, -10.0..190.0)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("excitation frequency (Hz)")
+        .y_desc("phase lag behind the base (degrees)")
+        .y_labels(11)
+        .label_style((FONT, 15))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(e)?;
+    // Lags are drawn in [0°, 360°) so curves above resonance do not jump.
+    let lag = |a: &PointAccumulator| {
+        let (mean, var) = a.phase_moments();
+        (mean.to_degrees().rem_euclid(360.0), var.max(0.0).sqrt().to_degrees())
+    };
+    for (i, (n, pts)) in series.iter().enumerate() {
+        let c = colour(i);
+        let band: Vec<(f64, f64)> = pts
+            .iter()
+            .map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 + lag(a).1))
+            .chain(pts.iter().rev().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 - lag(a).1)))
+            .collect();
+        chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.18).filled()))).map_err(e)?;
+        chart
+            .draw_series(LineSeries::new(
+                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0)),
+                c.stroke_width(2),
+            ))
+            .map_err(e)?
+            .label(format!("N0 = {n} N"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+    }
+    legend_box(&mut chart, 15, SeriesLabelPosition::LowerRight, "fig9c")
+}
+
 /// Density bars (mm, 1/mm) over about `mean ± 4σ`. Each bar is a whole
 /// number of the histogram's bins, aligned to its edges (no aliasing).
 fn density_bars(a: &PointAccumulator, target_bars: usize) -> (Vec<(f64, f64, f64)>, f64, f64) {
@@ -253,6 +304,10 @@ pub fn write_sweep_plots(dir: &Path, result: &SweepResult, figure8_frequency_hz:
     let title_b = "Peak-amplitude variance";
     files.extend(render(dir, "fig9b", (1000, 650), &|r| figure9b(r, result, title_b), &|r| {
         figure9b(r, result, title_b)
+    })?);
+    let title_c = "Phase lag of the response's fundamental, band: ± 1 sd";
+    files.extend(render(dir, "fig9c", (1000, 650), &|r| figure9c(r, result, title_c), &|r| {
+        figure9c(r, result, title_c)
     })?);
     let pts = figure8_points(result, figure8_frequency_hz);
     let rows = pts.len().div_ceil(2).max(1) as u32;

@@ -75,11 +75,13 @@ pub struct StoredPoint {
     pub sum_q2: String,
     pub stick_units: u64,
     pub clamped: u64,
+    pub sum_phase_sin: String,
+    pub sum_phase_versine: String,
     pub histogram: Vec<(u32, u64)>,
 }
 
 /// Format tag of `accumulators.json`.
-pub const ACCUMULATOR_FORMAT: &str = "stickslip-accumulators/1";
+pub const ACCUMULATOR_FORMAT: &str = "stickslip-accumulators/2";
 
 impl StoredPoint {
     fn from_accumulator(c: Condition, a: &PointAccumulator) -> Self {
@@ -93,6 +95,8 @@ impl StoredPoint {
             sum_q2: a.sum_q2.to_string(),
             stick_units: a.stick_units,
             clamped: a.clamped,
+            sum_phase_sin: a.sum_phase_sin.to_string(),
+            sum_phase_versine: a.sum_phase_versine.to_string(),
             histogram: a.histogram.iter().enumerate().filter(|(_, c)| **c > 0).map(|(b, c)| (b as u32, *c)).collect(),
         }
     }
@@ -106,6 +110,14 @@ impl StoredPoint {
         a.sum_q2 = self.sum_q2.parse().map_err(|_| bad(format!("sum_q2 `{}` is not an integer", self.sum_q2)))?;
         a.stick_units = self.stick_units;
         a.clamped = self.clamped;
+        a.sum_phase_sin = self
+            .sum_phase_sin
+            .parse()
+            .map_err(|_| bad(format!("sum_phase_sin `{}` is not an integer", self.sum_phase_sin)))?;
+        a.sum_phase_versine = self
+            .sum_phase_versine
+            .parse()
+            .map_err(|_| bad(format!("sum_phase_versine `{}` is not an integer", self.sum_phase_versine)))?;
         for &(b, c) in &self.histogram {
             *a.histogram.get_mut(b as usize).ok_or_else(|| bad(format!("histogram bin {b} out of range")))? = c;
         }

@@ -44,6 +44,16 @@ fn cpu_and_gpu_agree_path_by_path() {
             }
         }
         let fraction = within as f64 / total as f64;
+        // The phase of each period's fundamental, path by path, within 1e-3 rad.
+        let phases_within = cpu
+            .iter()
+            .zip(&gpu)
+            .flat_map(|(c, g)| c.phases_rad.iter().zip(&g.phases_rad))
+            .filter(|(pc, pg)| stickslip::engine::reduce::wrap_angle(*pg - *pc).abs() <= 1e-3)
+            .count();
+        let phase_fraction = phases_within as f64 / total as f64;
+        println!("{f} Hz, {n} N: {:.4}% of phases within 1e-3 rad", 100.0 * phase_fraction);
+        assert!(phase_fraction >= 0.99, "{f} Hz, {n} N: only {phase_fraction} of phases agree within 1e-3 rad");
         let (sc, sg) = (stick_fraction(&cpu, &osc), stick_fraction(&gpu, &osc));
         max_stick = max_stick.max(sc);
         println!(

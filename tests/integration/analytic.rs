@@ -1,7 +1,8 @@
 //! The integrators against closed-form results: the linear response and
-//! Den Hartog's exact Coulomb solution, on the CPU (1e-4) and the GPU (1e-3).
+//! Den Hartog's exact Coulomb solution, amplitude and phase, on the CPU (1e-4)
+//! and the GPU (1e-3).
 
-use stickslip::engine::analytic::{DenHartog, linear_amplitude_ratio};
+use stickslip::engine::analytic::{DenHartog, linear_amplitude_ratio, linear_phase_rad};
 use stickslip::engine::{Condition, InitialState, Model, PathResult, RunPlan};
 
 use crate::common;
@@ -21,6 +22,15 @@ fn model(extra: &[&str]) -> Model {
 /// Largest relative deviation of every peak from `exact`.
 fn worst_error(peaks: &[f64], exact: f64) -> f64 {
     peaks.iter().map(|p| (p / exact - 1.0).abs()).fold(0.0, f64::max)
+}
+
+/// Largest deviation (rad) of every period's phase from `exact`, modulo 2π.
+fn worst_phase_error(paths: &[PathResult], exact: f64) -> f64 {
+    paths
+        .iter()
+        .flat_map(|p| &p.phases_rad)
+        .map(|phase| stickslip::engine::reduce::wrap_angle(phase - exact).abs())
+        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -44,6 +54,26 @@ fn linear_response_cpu_and_gpu() {
     }
 }
 
+/// The per-period phase of the fundamental against `atan2(2ζη, 1 − η²)`
+/// (friction and noise off, ζ = 0.02) at ten frequency ratios, on the CPU
+/// (1e-4 rad) and the GPU (1e-3 rad).
+#[test]
+fn linear_phase_cpu_and_gpu() {
+    let zeta = 0.02;
+    let m = model(&["friction.a=0", "friction.b=0", "rig.damping_ratio=0.02"]);
+    let plan = RunPlan { warmup_cycles: 5, measured_cycles: 20 };
+    for eta in [0.3, 0.5, 0.7, 0.8, 0.9, 1.1, 1.2, 1.5, 2.0, 3.0] {
+        let cond = Condition { excitation_frequency_hz: eta * m.rig.natural_frequency_hz, normal_force_n: 10.0 };
+        let initial = InitialState::steady(&m, cond);
+        let exact = linear_phase_rad(eta, zeta);
+        let cpu_err = worst_phase_error(&[cpu_path(&m, cond, 1, plan, initial)], exact);
+        let gpu_err = worst_phase_error(&common::paths(common::gpu(), &m, cond, initial, 1, 64, plan), exact);
+        println!("linear phase eta {eta}: exact {:.4} rad; cpu error {cpu_err:.2e}, gpu {gpu_err:.2e} rad", exact);
+        assert!(cpu_err < 1e-4, "CPU linear phase at eta {eta}: error {cpu_err:e} rad");
+        assert!(gpu_err < 1e-3, "GPU linear phase at eta {eta}: error {gpu_err:e} rad");
+    }
+}
+
 /// Den Hartog points: (η, friction as a share of the no-stop threshold).
 const DEN_HARTOG_POINTS: [(f64, f64); 10] = [
     (0.6, 0.8),
@@ -58,6 +88,10 @@ const DEN_HARTOG_POINTS: [(f64, f64); 10] = [
     (3.0, 0.8),
 ];
 
+/// Amplitude against `x0 = U0 sqrt(V² − β² U²)`, and the per-period phase
+/// of the fundamental against that of Den Hartog's exact solution (its
+/// Fourier coefficients; `model.md`'s `sin φ = −βU/V` is the angle of the
+/// solution's maximum, which the initial state is built from).
 #[test]
 fn den_hartog_cpu_and_gpu() {
     let normal_force_n = 10.0;
@@ -77,7 +111,15 @@ fn den_hartog_cpu_and_gpu() {
         let cpu_err = worst_error(&cpu.peaks_m, exact);
         let gpu = common::paths(common::gpu(), &m, cond, initial, 1, 64, plan);
         let gpu_err = gpu.iter().map(|p| worst_error(&p.peaks_m, exact)).fold(0.0, f64::max);
-        println!("Den Hartog eta {eta} beta {beta:.4}: cpu {cpu_err:.2e}, gpu {gpu_err:.2e}");
+        let exact_phase = dh.phase_rad().unwrap();
+        let cpu_phase_err = worst_phase_error(std::slice::from_ref(&cpu), exact_phase);
+        let gpu_phase_err = worst_phase_error(&gpu, exact_phase);
+        println!(
+            "Den Hartog eta {eta} beta {beta:.4}: cpu {cpu_err:.2e}, gpu {gpu_err:.2e}; phase {exact_phase:.4} rad, \
+             cpu {cpu_phase_err:.2e}, gpu {gpu_phase_err:.2e} rad"
+        );
+        assert!(cpu_phase_err < 1e-4, "CPU phase vs Den Hartog at eta {eta}, beta {beta}: {cpu_phase_err:e} rad");
+        assert!(gpu_phase_err < 1e-3, "GPU phase vs Den Hartog at eta {eta}, beta {beta}: {gpu_phase_err:e} rad");
         assert_eq!(cpu.stick_time_s, 0.0, "Den Hartog's solution has no stops (eta {eta}, beta {beta})");
         assert!(cpu_err < 1e-4, "CPU vs Den Hartog at eta {eta}, beta {beta}: {cpu_err:e}");
         assert!(gpu_err < 1e-3, "GPU vs Den Hartog at eta {eta}, beta {beta}: {gpu_err:e}");

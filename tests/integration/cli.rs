@@ -114,7 +114,7 @@ fn sweep_writes_the_contract_columns() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "excitation_frequency_hz,normal_force_n,realisations,peaks,peak_mean_m,peak_var_m2,peak_p05_m,peak_p50_m,peak_p95_m,stick_fraction"
+        "excitation_frequency_hz,normal_force_n,realisations,peaks,peak_mean_m,peak_var_m2,peak_p05_m,peak_p50_m,peak_p95_m,stick_fraction,phase_mean_deg,phase_var_deg2"
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), 4);

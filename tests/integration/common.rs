@@ -32,7 +32,8 @@ pub fn paths(
     realisations: u32,
     plan: RunPlan,
 ) -> Vec<PathResult> {
-    let points = [Point { condition, initial, range: PeakRange { lo_m: -0.01, hi_m: 0.01 } }];
+    let range = PeakRange { lo_m: -0.01, hi_m: 0.01, phase_ref_rad: 0.0 };
+    let points = [Point { condition, initial, range }];
     let job = Job { model, points: &points, realisations, first_realisation: 0, seed, plan, record: Record::Peaks };
     engine.paths(&job).expect("the ensemble runs")
 }

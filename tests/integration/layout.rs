@@ -93,6 +93,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 histogram_bins_per_m,
                 friction_offset,
                 non_gaussian_strength,
+                phase_ref_rad,
             }),
             "ensemble.wgsl",
         ),

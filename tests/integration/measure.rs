@@ -110,7 +110,7 @@ fn figure8_summary_set() {
     assert_eq!(last.line, 5);
     assert_eq!(last.excitation_frequency_hz, 7.0);
     assert_eq!(last.excitation_amplitude_m, 0.0025);
-    assert_eq!(last.peak_mean_m, 3.854e-3);
+    assert_eq!(last.peak_mean_m, Some(3.854e-3));
     assert_eq!(last.peak_var_m2, Some(2.796425e-8));
     assert_eq!(last.normal_force_var_n2, Some(0.1102));
     assert_eq!(last.n_peaks, Some(350));
@@ -399,4 +399,37 @@ fn simulated_set_round_trips() {
     expected.file = s.0.join("sim.csv");
     assert_eq!(set.runs[0], expected, "every value comes back bit for bit");
     assert!((measure::sample_rate_hz(&set.runs[0]) - rate_hz).abs() < 1e-6);
+}
+
+/// Some rigs publish only phases: a summary row needs a mean peak or a mean
+/// phase, its other statistics may be blank, and a row with neither is
+/// refused by line.
+#[test]
+fn phase_only_summary_rows() {
+    let s = Scratch::new("phase-only");
+    s.write(
+        "manifest.json",
+        &format!(r#"{{ "format": "stickslip-measurements/1", "rig": {RIG}, "summary": "s.csv" }}"#),
+    );
+    s.write(
+        "s.csv",
+        "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,phase_mean_deg,phase_var_deg2\n\
+         7,0.0025,8,24.5,0.4\n9,0.0025,8,27.0,\n",
+    );
+    let set = read_measurement_set(&s.0).expect("a phase-only table reads");
+    assert_eq!(set.summary.len(), 2);
+    assert_eq!((set.summary[0].peak_mean_m, set.summary[0].phase_mean_deg), (None, Some(24.5)));
+    assert_eq!((set.summary[1].phase_var_deg2, set.summary[1].line), (None, 3));
+
+    s.write(
+        "s.csv",
+        "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,peak_mean_m,phase_mean_deg\n\
+         7,0.0025,8,0.004,\n9,0.0025,8,,\n",
+    );
+    refused(&s.0, "s.csv", Some(3), &["neither `peak_mean_m` nor `phase_mean_deg`"]);
+    s.write(
+        "s.csv",
+        "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,phase_mean_deg\n7,0.0025,8,west\n",
+    );
+    refused(&s.0, "s.csv", Some(2), &["`west` is not a number"]);
 }

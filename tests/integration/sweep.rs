@@ -59,5 +59,11 @@ fn gpu_reduction_matches_cpu_reduction() {
             g.stick_fraction,
             c.stick_fraction
         );
+        assert!(
+            (g.phase_mean_deg - c.phase_mean_deg).abs() < 1e-2,
+            "{cond:?}: phase {} vs {} degrees",
+            g.phase_mean_deg,
+            c.phase_mean_deg
+        );
     }
 }

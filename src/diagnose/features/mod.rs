@@ -7,6 +7,7 @@
 //! | group | features | effect it looks at |
 //! | --- | --- | --- |
 //! | peaks | mean, variance, skewness, count, trend | the paper's Figures 8 and 9 |
+//! | phase | circular mean and variance of each period's fundamental | the response phase (`interfaces.md`) |
 //! | normal force | mean, variance, harmonics 1×–4×, residual variance, drift | `normal_force_harmonics`, `normal_force_drift` |
 //! | friction | mean μ, residual std / skewness / excess kurtosis | `non_gaussian_friction`, `load_dependent_friction` |
 //! | friction | residual autocorrelation at lags 1 and 10 | `coloured_friction_noise` |
@@ -85,6 +86,14 @@ pub struct PeakFeatures {
     /// Least-squares slope of the peaks against time divided by their mean,
     /// 1/s; `None` when the mean peak is 0.
     pub trend_per_s: Option<f64>,
+    /// Circular mean of the per-period phase lag of the response's
+    /// fundamental behind the base `U0 cos(Ωt)` (with the record's own `t`),
+    /// degrees in (−180, 180]: per window, `x ≈ c + a cos Ωt + b sin Ωt` by
+    /// least squares and `φ = atan2(b, a)`.
+    pub phase_mean_deg: f64,
+    /// Circular variance of those phases, degrees²
+    /// ([`circular_mean_var`](crate::engine::reduce::circular_mean_var)).
+    pub phase_var_deg2: f64,
 }
 
 /// Features of the measured normal force `N(t)`.
@@ -179,6 +188,8 @@ impl RunFeatures {
             (Observable::PeakVarM2, p.map(|p| p.var_m2)),
             (Observable::PeakSkewness, p.map(|p| p.skewness)),
             (Observable::PeakTrendPerS, p.and_then(|p| p.trend_per_s)),
+            (Observable::PhaseMeanDeg, p.map(|p| p.phase_mean_deg)),
+            (Observable::PhaseVarDeg2, p.map(|p| p.phase_var_deg2)),
             (Observable::NormalForceMeanN, n.map(|n| n.mean_n)),
             (Observable::NormalForceVarN2, n.map(|n| n.var_n2)),
             (Observable::NormalForceHarmonic1N, harmonic(0)),

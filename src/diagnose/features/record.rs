@@ -4,6 +4,7 @@
 use super::stats::{least_squares, moments, shape, slope};
 use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, STICK_SPEED_FRACTION};
 use crate::diagnose::measure::{self, Run};
+use crate::engine::reduce::circular_mean_var;
 
 /// Per-period peaks (see [`PeakFeatures`]).
 pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
@@ -21,13 +22,18 @@ pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
     }
     let windows = windows as usize;
     let mut peak = vec![f64::NEG_INFINITY; windows];
+    let mut fundamental = vec![FundamentalSums::default(); windows];
+    let omega = std::f64::consts::TAU * f;
     for i in 0..n {
         let k = ((run.t_s[i] - t0) / period_s).floor();
         if k >= 0.0 && (k as usize) < windows && run.x_m[i].is_finite() {
             let k = k as usize;
             peak[k] = peak[k].max(run.x_m[i]);
+            fundamental[k].add(omega * run.t_s[i], run.x_m[i]);
         }
     }
+    let phases: Vec<f64> = fundamental.iter().filter_map(FundamentalSums::phase_rad).collect();
+    let (phase_mean, phase_var) = circular_mean_var(&phases);
     let (times, peaks): (Vec<f64>, Vec<f64>) =
         peak.iter().enumerate().filter(|(_, p)| p.is_finite()).map(|(k, &p)| ((k as f64 + 0.5) * period_s, p)).unzip();
     let count = peaks.len();
@@ -40,7 +46,67 @@ pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
         Some(s) if mean != 0.0 => Some(s / mean),
         _ => None,
     };
-    Some(PeakFeatures { count, mean_m: mean, var_m2: m2 * count as f64 / (count - 1) as f64, skewness, trend_per_s })
+    Some(PeakFeatures {
+        count,
+        mean_m: mean,
+        var_m2: m2 * count as f64 / (count - 1) as f64,
+        skewness,
+        trend_per_s,
+        phase_mean_deg: if phases.is_empty() { 0.0 } else { phase_mean.to_degrees() },
+        phase_var_deg2: if phases.len() < 2 { 0.0 } else { phase_var.to_degrees().to_degrees() },
+    })
+}
+
+/// Sums of one window for the least-squares fit `x ≈ c0 + a cos θ + b sin θ`
+/// (θ = Ωt): the response's fundamental in that window.
+#[derive(Clone, Copy, Debug, Default)]
+struct FundamentalSums {
+    n: f64,
+    c: f64,
+    s: f64,
+    x: f64,
+    cc: f64,
+    ss: f64,
+    cs: f64,
+    xc: f64,
+    xs: f64,
+}
+
+impl FundamentalSums {
+    fn add(&mut self, theta: f64, x: f64) {
+        let (s, c) = theta.sin_cos();
+        self.n += 1.0;
+        self.c += c;
+        self.s += s;
+        self.x += x;
+        self.cc += c * c;
+        self.ss += s * s;
+        self.cs += c * s;
+        self.xc += x * c;
+        self.xs += x * s;
+    }
+
+    /// `atan2(b, a)`, rad; `None` with too few samples or a singular fit.
+    fn phase_rad(&self) -> Option<f64> {
+        if self.n < 4.0 {
+            return None;
+        }
+        let n = self.n;
+        // Centred cross-products (the constant c0 eliminated).
+        let cc = self.cc - self.c * self.c / n;
+        let ss = self.ss - self.s * self.s / n;
+        let cs = self.cs - self.c * self.s / n;
+        let xc = self.xc - self.x * self.c / n;
+        let xs = self.xs - self.x * self.s / n;
+        let det = cc * ss - cs * cs;
+        let singular = det.is_nan() || det <= 1e-12 * n * n;
+        if singular {
+            return None;
+        }
+        let a = (xc * ss - xs * cs) / det;
+        let b = (xs * cc - xc * cs) / det;
+        (a != 0.0 || b != 0.0).then(|| b.atan2(a))
+    }
 }
 
 /// Normal-force features (see [`NormalForceFeatures`]).

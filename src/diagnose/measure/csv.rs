@@ -12,6 +12,23 @@ use crate::error::{Error, Result};
 struct Column {
     name: &'static str,
     required: bool,
+    /// An empty field means "not given" for this row (summary statistics a
+    /// row may lack); otherwise an empty field is refused.
+    blank_allowed: bool,
+}
+
+impl Column {
+    const fn required(name: &'static str) -> Column {
+        Column { name, required: true, blank_allowed: false }
+    }
+
+    const fn optional(name: &'static str) -> Column {
+        Column { name, required: false, blank_allowed: false }
+    }
+
+    const fn per_row(name: &'static str) -> Column {
+        Column { name, required: false, blank_allowed: true }
+    }
 }
 
 /// A CSV file read with its header checked: where each wanted column is.
@@ -22,6 +39,8 @@ struct Table {
     line_ends: Vec<usize>,
     /// Field index of each wanted column, `None` where an optional one is absent.
     index: Vec<Option<usize>>,
+    /// The header's line (counted from 1).
+    header_line: u64,
 }
 
 impl Table {
@@ -38,7 +57,7 @@ impl Table {
             .trim(csv::Trim::All)
             .flexible(false)
             .from_reader(std::io::Cursor::new(bytes));
-        let mut table = Table { file: path.to_path_buf(), reader, line_ends, index: Vec::new() };
+        let mut table = Table { file: path.to_path_buf(), reader, line_ends, index: Vec::new(), header_line: 1 };
         let header = match table.reader.headers() {
             Ok(header) => header.clone(),
             Err(e) => return Err(table.csv_error(e)),
@@ -47,6 +66,7 @@ impl Table {
             return Err(bad(path, Some(1), "the file is empty: a header row is required"));
         }
         let header_line = header.position().map_or(1, |p| table.line(p.byte()));
+        table.header_line = header_line;
         let mut positions: HashMap<&str, usize> = HashMap::new();
         for (i, name) in header.iter().enumerate() {
             if columns.iter().any(|c| c.name == name) && positions.insert(name, i).is_some() {
@@ -118,9 +138,10 @@ impl Table {
             }
             let line = record.position().map_or(0, |p| self.line(p.byte()));
             for (j, c) in columns.iter().enumerate() {
-                values[j] = match self.index[j] {
+                values[j] = match self.index[j].map(|i| record.get(i).unwrap_or("")) {
                     None => None,
-                    Some(i) => Some(parse_number(&self.file, line, c.name, record.get(i).unwrap_or(""))?),
+                    Some("") if c.blank_allowed => None,
+                    Some(text) => Some(parse_number(&self.file, line, c.name, text)?),
                 };
             }
             row(line, &values)?;
@@ -142,11 +163,11 @@ fn parse_number(file: &Path, line: u64, column: &str, text: &str) -> Result<f64>
 }
 
 const RUN_COLUMNS: [Column; 5] = [
-    Column { name: "t", required: true },
-    Column { name: "x", required: true },
-    Column { name: "v", required: false },
-    Column { name: "normal_force", required: false },
-    Column { name: "friction_force", required: false },
+    Column::required("t"),
+    Column::required("x"),
+    Column::optional("v"),
+    Column::optional("normal_force"),
+    Column::optional("friction_force"),
 ];
 
 /// Reads and checks one run file; the manifest entry `ctx` named it.
@@ -238,19 +259,28 @@ pub(super) fn read_run_file(path: &Path, ctx: &str, frequency_hz: f64, amplitude
     })
 }
 
-const SUMMARY_COLUMNS: [Column; 7] = [
-    Column { name: "excitation_frequency_hz", required: true },
-    Column { name: "excitation_amplitude_m", required: true },
-    Column { name: "normal_force_mean_n", required: true },
-    Column { name: "normal_force_var_n2", required: false },
-    Column { name: "peak_mean_m", required: true },
-    Column { name: "peak_var_m2", required: false },
-    Column { name: "n_peaks", required: false },
+const SUMMARY_COLUMNS: [Column; 9] = [
+    Column::required("excitation_frequency_hz"),
+    Column::required("excitation_amplitude_m"),
+    Column::required("normal_force_mean_n"),
+    Column::per_row("normal_force_var_n2"),
+    Column::per_row("peak_mean_m"),
+    Column::per_row("peak_var_m2"),
+    Column::per_row("n_peaks"),
+    Column::per_row("phase_mean_deg"),
+    Column::per_row("phase_var_deg2"),
 ];
 
 /// Reads and checks the summary table.
 pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
     let table = Table::open(path, "manifest.json summary", &SUMMARY_COLUMNS)?;
+    if table.index[4].is_none() && table.index[7].is_none() {
+        return Err(bad(
+            path,
+            Some(table.header_line),
+            "missing required column `peak_mean_m` (or `phase_mean_deg`, for a table of phases only)",
+        ));
+    }
     let mut rows = Vec::new();
     table.for_each_row(&SUMMARY_COLUMNS, |line, values| {
         let check = |j: usize, bound: Bound, unit: &str| -> Result<Option<f64>> {
@@ -277,14 +307,25 @@ pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
                 return Err(bad(path, Some(line), format!("column `n_peaks`: {value} is not a whole number ≥ 0")));
             }
         };
+        let peak_mean_m = check(4, Bound::Finite, "m")?;
+        let phase_mean_deg = check(7, Bound::Finite, "degrees")?;
+        if peak_mean_m.is_none() && phase_mean_deg.is_none() {
+            return Err(bad(
+                path,
+                Some(line),
+                "the row gives neither `peak_mean_m` nor `phase_mean_deg`; a summary row needs at least one of them",
+            ));
+        }
         rows.push(SummaryRow {
             excitation_frequency_hz: required(0, Bound::Positive, "Hz")?,
             excitation_amplitude_m: required(1, Bound::NonNegative, "m")?,
             normal_force_mean_n: required(2, Bound::NonNegative, "N")?,
             normal_force_var_n2: check(3, Bound::NonNegative, "N²")?,
-            peak_mean_m: required(4, Bound::Finite, "m")?,
+            peak_mean_m,
             peak_var_m2: check(5, Bound::NonNegative, "m²")?,
             n_peaks,
+            phase_mean_deg,
+            phase_var_deg2: check(8, Bound::NonNegative, "degrees²")?,
             line,
         });
         Ok(())

@@ -10,7 +10,8 @@
 //!
 //! - a missing or unreadable file (manifest, run file or summary);
 //! - a `format` other than exactly `stickslip-measurements/1`;
-//! - a missing required key or column;
+//! - a missing required key or column (a summary row needs at least one of
+//!   `peak_mean_m` and `phase_mean_deg`; its other statistics may be blank);
 //! - a value that is not a finite number;
 //! - a mass or frequency that is not positive (zero is refused as well as
 //!   negative values; also a negative damping ratio, excitation amplitude,
@@ -110,12 +111,17 @@ pub struct SummaryRow {
     pub normal_force_mean_n: f64,
     /// Variance of the normal force, N² (≥ 0), if given.
     pub normal_force_var_n2: Option<f64>,
-    /// Mean peak amplitude, m.
-    pub peak_mean_m: f64,
+    /// Mean peak amplitude, m, if given.
+    pub peak_mean_m: Option<f64>,
     /// Variance of the peak amplitude, m² (≥ 0), if given.
     pub peak_var_m2: Option<f64>,
     /// Number of peaks behind the statistics, if given.
     pub n_peaks: Option<u64>,
+    /// Mean phase lag of the response's fundamental behind the base,
+    /// degrees, if given (`interfaces.md`).
+    pub phase_mean_deg: Option<f64>,
+    /// Variance of that phase, degrees² (≥ 0), if given.
+    pub phase_var_deg2: Option<f64>,
     /// The row's line in the summary file (header = line 1).
     pub line: u64,
 }

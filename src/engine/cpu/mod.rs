@@ -12,7 +12,7 @@ pub mod oscillator;
 
 use rayon::prelude::*;
 
-use crate::engine::oscillator::{Oscillator, PathResult, Sample};
+use crate::engine::oscillator::{PathResult, Sample};
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
 use crate::error::Result;
@@ -70,8 +70,7 @@ impl Backend for CpuBackend {
                 })
                 .collect();
             for (&(p, _), path) in chunk.iter().zip(&paths) {
-                let osc: &Oscillator = &oscillators[p];
-                output.sums[p].add_path(&path.peaks_m, path.stick_time_s, osc.period_s);
+                output.sums[p].add_path(path, oscillators[p].period_s);
             }
             if job.record == Record::Peaks {
                 output.paths.extend(paths);

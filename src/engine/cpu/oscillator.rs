@@ -76,6 +76,28 @@ struct Path<'a> {
     period_max_x_m: f64,
     /// Time stuck so far in the current period, s.
     period_stick_s: f64,
+    /// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the current period so far,
+    /// m·s (the response's fundamental; see [`phase_of`]).
+    period_cos_integral: f64,
+    period_sin_integral: f64,
+}
+
+/// One RK4 step of the slip ODE, with what the phase quadrature needs: the
+/// four stage displacements (m) and `cos(Ωt)` at the step's start, middle
+/// and end.
+#[derive(Clone, Copy, Debug)]
+struct SlipStep {
+    x_m: f64,
+    v_m_per_s: f64,
+    stage_x_m: [f64; 4],
+    cos: [f64; 3],
+}
+
+/// The phase lag (rad) of a period's fundamental behind the base, from
+/// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the period: the fundamental is
+/// `sqrt(a² + b²) cos(Ωt − φ)` with `φ = atan2(b, a)` (`interfaces.md`).
+pub fn phase_of(cos_integral: f64, sin_integral: f64) -> f64 {
+    sin_integral.atan2(cos_integral)
 }
 
 impl<'a> Path<'a> {
@@ -98,6 +120,8 @@ impl<'a> Path<'a> {
             stiction_excess: 0.0,
             period_max_x_m: initial.x_m,
             period_stick_s: 0.0,
+            period_cos_integral: 0.0,
+            period_sin_integral: 0.0,
         };
         path.draw_noise();
         path.mode = if initial.v_m_per_s > 0.0 {
@@ -189,34 +213,65 @@ impl<'a> Path<'a> {
         mu_static.max(0.0) * self.normal_force_n
     }
 
-    /// Acceleration while slipping in direction `sign`, m/s².
-    fn slip_acceleration(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, sign: f64) -> f64 {
+    /// Acceleration while slipping in direction `sign`, m/s², with the
+    /// base at `cos_omega_t` of its amplitude.
+    fn slip_acceleration(&self, cos_omega_t: f64, x_m: f64, v_m_per_s: f64, sign: f64) -> f64 {
         let o = self.osc;
         let friction = sign * self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * self.normal_force_n;
-        (self.spring_force(t_local_s, x_m) - o.damping_n_s_per_m * v_m_per_s - friction) / o.mass_kg
+        let spring = o.stiffness_n_per_m * (o.base_amplitude_m * cos_omega_t - x_m);
+        (spring - o.damping_n_s_per_m * v_m_per_s - friction) / o.mass_kg
     }
 
     /// One classical RK4 step of the slip ODE from `t` over `h` seconds.
-    fn rk4_slip(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, h_s: f64, sign: f64) -> (f64, f64) {
+    /// Stages 2 and 3 share the excitation's `cos` at the midpoint.
+    fn rk4_slip(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, h_s: f64, sign: f64) -> SlipStep {
+        let w = self.osc.omega_rad_per_s;
         let half = 0.5 * h_s;
+        let cos = [(w * t_local_s).cos(), (w * (t_local_s + half)).cos(), (w * (t_local_s + h_s)).cos()];
         let k1x = v_m_per_s;
-        let k1v = self.slip_acceleration(t_local_s, x_m, v_m_per_s, sign);
+        let k1v = self.slip_acceleration(cos[0], x_m, v_m_per_s, sign);
         let k2x = v_m_per_s + half * k1v;
-        let k2v = self.slip_acceleration(t_local_s + half, x_m + half * k1x, k2x, sign);
+        let x2 = x_m + half * k1x;
+        let k2v = self.slip_acceleration(cos[1], x2, k2x, sign);
         let k3x = v_m_per_s + half * k2v;
-        let k3v = self.slip_acceleration(t_local_s + half, x_m + half * k2x, k3x, sign);
+        let x3 = x_m + half * k2x;
+        let k3v = self.slip_acceleration(cos[1], x3, k3x, sign);
         let k4x = v_m_per_s + h_s * k3v;
-        let k4v = self.slip_acceleration(t_local_s + h_s, x_m + h_s * k3x, k4x, sign);
-        (
-            x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-            v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
-        )
+        let x4 = x_m + h_s * k3x;
+        let k4v = self.slip_acceleration(cos[2], x4, k4x, sign);
+        SlipStep {
+            x_m: x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v_m_per_s: v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+            stage_x_m: [x_m, x2, x3, x4],
+            cos,
+        }
+    }
+
+    /// Adds an accepted slip step to the period's phase integrals: the RK4
+    /// quadrature of `x cos(Ωt)` and `x sin(Ωt)` over the step, with the
+    /// step's own stage displacements (the integrals are two more RK4 states).
+    fn add_slip_phase(&mut self, t_local_s: f64, h_s: f64, step: &SlipStep) {
+        let w = self.osc.omega_rad_per_s;
+        let sin = [(w * t_local_s).sin(), (w * (t_local_s + 0.5 * h_s)).sin(), (w * (t_local_s + h_s)).sin()];
+        let [x1, x2, x3, x4] = step.stage_x_m;
+        self.period_cos_integral += h_s / 6.0 * (x1 * step.cos[0] + 2.0 * (x2 + x3) * step.cos[1] + x4 * step.cos[2]);
+        self.period_sin_integral += h_s / 6.0 * (x1 * sin[0] + 2.0 * (x2 + x3) * sin[1] + x4 * sin[2]);
+    }
+
+    /// Adds a stuck interval `[t_a, t_b]` to the period's phase integrals,
+    /// exactly: x is constant.
+    fn add_stick_phase(&mut self, t_a: f64, t_b: f64) {
+        let w = self.osc.omega_rad_per_s;
+        let (sin_a, cos_a) = (w * t_a).sin_cos();
+        let (sin_b, cos_b) = (w * t_b).sin_cos();
+        self.period_cos_integral += self.x_m * (sin_b - sin_a) / w;
+        self.period_sin_integral += self.x_m * (cos_a - cos_b) / w;
     }
 
     /// The step length `h* ∈ (0, h]` at which the RK4 map's velocity reaches
     /// zero, given that `sign · v` is ≤ 0 after the full step `h`.
     fn locate_velocity_zero(&self, t_local_s: f64, h_s: f64, sign: f64) -> f64 {
-        let g = |h: f64| sign * self.rk4_slip(t_local_s, self.x_m, self.v_m_per_s, h, sign).1;
+        let g = |h: f64| sign * self.rk4_slip(t_local_s, self.x_m, self.v_m_per_s, h, sign).v_m_per_s;
         let (mut lo, mut g_lo) = (0.0, sign * self.v_m_per_s);
         let (mut hi, mut g_hi) = (h_s, g(h_s));
         if g_lo <= 0.0 {
@@ -335,6 +390,7 @@ impl<'a> Path<'a> {
                     };
                     if measuring {
                         self.period_stick_s += t_end - t_a;
+                        self.add_stick_phase(t_a, t_end);
                     }
                     self.mode = next;
                     self.slip_start_x_m = self.x_m;
@@ -344,15 +400,22 @@ impl<'a> Path<'a> {
                 Mode::Slip(s) => {
                     let sign = f64::from(s);
                     let h = t_b - t_a;
-                    let (x1, v1) = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h, sign);
-                    if sign * v1 > 0.0 {
-                        self.x_m = x1;
-                        self.v_m_per_s = v1;
-                        self.period_max_x_m = self.period_max_x_m.max(x1);
+                    let step = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h, sign);
+                    if sign * step.v_m_per_s > 0.0 {
+                        if measuring {
+                            self.add_slip_phase(t_a, h, &step);
+                        }
+                        self.x_m = step.x_m;
+                        self.v_m_per_s = step.v_m_per_s;
+                        self.period_max_x_m = self.period_max_x_m.max(step.x_m);
                         t_a = t_b;
                     } else {
                         let h_zero = self.locate_velocity_zero(t_a, h, sign);
-                        let (x_zero, _) = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h_zero, sign);
+                        let to_zero = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h_zero, sign);
+                        if measuring {
+                            self.add_slip_phase(t_a, h_zero, &to_zero);
+                        }
+                        let x_zero = to_zero.x_m;
                         self.x_m = x_zero;
                         self.v_m_per_s = 0.0;
                         self.period_max_x_m = self.period_max_x_m.max(x_zero);
@@ -386,6 +449,8 @@ impl<'a> Path<'a> {
         let period_start_s = self.period as f64 * o.period_s;
         self.period_max_x_m = self.x_m;
         self.period_stick_s = 0.0;
+        self.period_cos_integral = 0.0;
+        self.period_sin_integral = 0.0;
         let mut t = 0.0;
         let mut step = 0u32;
         loop {
@@ -494,14 +559,16 @@ pub(crate) fn simulate_path(
 ) -> PathResult {
     let mut path = Path::new(osc, seed, realisation, initial);
     let mut peaks_m = Vec::with_capacity(plan.measured_cycles as usize);
+    let mut phases_rad = Vec::with_capacity(plan.measured_cycles as usize);
     let mut stick_time_s = 0.0;
     for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
         let measuring = cycle >= plan.warmup_cycles;
         path.run_period(measuring, sampler.as_deref_mut());
         if measuring {
             peaks_m.push(path.period_max_x_m);
+            phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
             stick_time_s += path.period_stick_s;
         }
     }
-    PathResult { peaks_m, stick_time_s }
+    PathResult { peaks_m, phases_rad, stick_time_s }
 }

@@ -28,7 +28,7 @@ pub const ILLINOIS_ITERATIONS: u32 = 40;
 /// Illinois stops when the bracket is below this fraction of the step (CPU: 1e-15).
 pub const ILLINOIS_TOLERANCE: f64 = 2e-7;
 /// Words of one point's accumulator in `reduce.wgsl`.
-pub const ACCUMULATOR_WORDS: usize = 12;
+pub const ACCUMULATOR_WORDS: usize = 16;
 
 /// Checks that a job can run on the GPU: one rig and friction law for all
 /// points, noise intervals and periods that fit the kernel's counters.
@@ -80,6 +80,8 @@ fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histog
     acc.sum_q2 = wide(&words[4..7]);
     acc.stick_units = wide(&words[7..9]) as u64;
     acc.clamped = u64::from(words[9]);
+    acc.sum_phase_sin = wide(&words[10..12]) as i128 - (i128::from(peaks) << 31);
+    acc.sum_phase_versine = wide(&words[12..14]);
     acc.histogram = histogram.iter().map(|&c| u64::from(c)).collect();
     acc
 }
@@ -123,7 +125,7 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
         let cycles_per_dispatch = (options.steps_per_dispatch / (u64::from(invocations) * steps))
             .min(LOOP_ITERATIONS_PER_DISPATCH / loop_bound)
             .clamp(1, u64::from(total_cycles.max(1)))
-            .min(binding_limit / (4 * u64::from(invocations))) as u32;
+            .min(binding_limit / (8 * u64::from(invocations))) as u32;
         let mut params =
             Params::new(&chunk_oscillators[0], job.seed, plan, job.realisations, job.first_realisation, record_peaks);
         params.invocations = invocations;
@@ -146,7 +148,8 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
         });
         let states =
             storage_buffer(device, "path states", u64::from(invocations) * std::mem::size_of::<PathState>() as u64);
-        let peaks_len = if record_peaks { u64::from(invocations) * u64::from(cycles_per_dispatch) } else { 1 };
+        // Two floats, the peak and the phase, per path and cycle.
+        let peaks_len = if record_peaks { 2 * u64::from(invocations) * u64::from(cycles_per_dispatch) } else { 1 };
         let peaks = storage_buffer(device, "peaks", peaks_len * 4);
         let sums_bytes = (chunk.len() * ACCUMULATOR_WORDS * 4) as u64;
         let sums = storage_buffer(device, "point sums", sums_bytes);
@@ -177,8 +180,14 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
             queue.submit([encoder.finish()]);
         };
         dispatch(&kernels.init_paths, &params);
-        let mut chunk_peaks: Vec<Vec<f64>> = if record_peaks {
-            vec![Vec::with_capacity(plan.measured_cycles as usize); invocations as usize]
+        let mut chunk_paths: Vec<PathResult> = if record_peaks {
+            let capacity = plan.measured_cycles as usize;
+            let empty = PathResult {
+                peaks_m: Vec::with_capacity(capacity),
+                phases_rad: Vec::with_capacity(capacity),
+                stick_time_s: 0.0,
+            };
+            vec![empty; invocations as usize]
         } else {
             Vec::new()
         };
@@ -190,11 +199,15 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
             dispatch(&kernels.run_cycles, &params);
             let measured_from = plan.warmup_cycles.saturating_sub(first_cycle).min(cycles);
             if record_peaks && measured_from < cycles {
-                let bytes = read_back(device, queue, &peaks, u64::from(invocations) * u64::from(cycles) * 4)?;
+                let bytes = read_back(device, queue, &peaks, 2 * u64::from(invocations) * u64::from(cycles) * 4)?;
                 let values: &[f32] = bytemuck::cast_slice(&bytes);
-                for (n, path_peaks) in chunk_peaks.iter_mut().enumerate() {
-                    let row = &values[n * cycles as usize..(n + 1) * cycles as usize];
-                    path_peaks.extend(row[measured_from as usize..].iter().map(|&p| f64::from(p)));
+                let row_len = 2 * cycles as usize;
+                for (n, path) in chunk_paths.iter_mut().enumerate() {
+                    let row = &values[n * row_len..(n + 1) * row_len];
+                    for pair in row[2 * measured_from as usize..].chunks_exact(2) {
+                        path.peaks_m.push(f64::from(pair[0]));
+                        path.phases_rad.push(f64::from(pair[1]));
+                    }
                 }
             } else {
                 device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
@@ -214,8 +227,9 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
             )));
         }
         if record_peaks {
-            for (peaks_m, state) in chunk_peaks.into_iter().zip(final_states) {
-                output.paths.push(PathResult { peaks_m, stick_time_s: f64::from(state.stick_time_s) });
+            for (mut path, state) in chunk_paths.into_iter().zip(final_states) {
+                path.stick_time_s = f64::from(state.stick_time_s);
+                output.paths.push(path);
             }
         }
         let sum_words = read_back(device, queue, &sums, sums_bytes)?;

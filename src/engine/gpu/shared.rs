@@ -154,6 +154,8 @@ pub struct GridPoint {
     pub friction_offset: f32,
     /// Non-Gaussian strength at this point's N0, –.
     pub non_gaussian_strength: f32,
+    /// Phases are reduced as their deviation from this angle, rad.
+    pub phase_ref_rad: f32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -242,6 +244,7 @@ impl GridPoint {
             histogram_bins_per_m: point.range.bins_per_m_f32(),
             friction_offset: o.effects.friction_offset as f32,
             non_gaussian_strength: o.effects.non_gaussian_strength as f32,
+            phase_ref_rad: point.range.phase_ref_f32(),
         }
     }
 }

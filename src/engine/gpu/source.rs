@@ -21,7 +21,7 @@ use crate::engine::gpu::ensemble::{
     ACCUMULATOR_WORDS, ILLINOIS_ITERATIONS, ILLINOIS_TOLERANCE, MAX_EVENTS_PER_SEGMENT, PROBE_HALVINGS,
 };
 use crate::engine::gpu::{MAX_WORKGROUPS_PER_DIMENSION, WORKGROUP_SIZE};
-use crate::engine::reduce::{HISTOGRAM_BINS, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
+use crate::engine::reduce::{HISTOGRAM_BINS, PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
 use crate::engine::rng;
 
 const RNG: &str = include_str!("../../../shaders/rng.wgsl");
@@ -80,6 +80,7 @@ fn constants() -> String {
         ("ILLINOIS_TOLERANCE", ILLINOIS_TOLERANCE),
         ("QUANTISE_LIMIT", f64::from(QUANTISE_LIMIT)),
         ("STICK_UNITS_PER_PERIOD", STICK_UNITS_PER_PERIOD),
+        ("PHASE_QUANTA", PHASE_QUANTA),
         ("DRIFT_SATURATION_S", DRIFT_SATURATION_S),
         ("DRIFT_WANDER_S", DRIFT_WANDER_S),
         ("STICTION_DECAY_M", STICTION_DECAY_M),
