@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # Peer comparison in one command: stickslip (GPU via wgpu, and its f64 CPU
-# reference) against vectorised NumPy and Numba-parallel versions of the same
-# model, on the same Den Hartog workload, tuned to the same accuracy.
+# reference) against the same model written without it -- NumPy and Numba
+# (prange) fixed-step RK4, Numba (prange) with exact event location, and JAX
+# (vmap + lax.scan) fixed-step RK4 -- on Den Hartog's case and on the noisy
+# default, each tuned to the same accuracy.
 # Usage: benches/peers/run.sh [peers.py options]   (see peers.py --help)
-# Output goes to the terminal and to benches/peers/last-run.txt.
+#        benches/peers/run.sh --quick              (small smoke run, not a benchmark)
+# Output goes to the terminal and to benches/peers/last-run.txt
+# (last-run-quick.txt for --quick).
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -14,13 +18,15 @@ python="${PYTHON:-python3}"
 # Versions this comparison was run with.
 NUMPY_VERSION=2.4.6
 NUMBA_VERSION=0.68.1
+JAX_VERSION=0.10.2          # jax and jaxlib, CPU wheels
 
 if [[ ! -x "$venv/bin/python" ]]; then
     echo "creating $venv" >&2
     "$python" -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c "import numpy, numba, sys; sys.exit(not (numpy.__version__ == '$NUMPY_VERSION' and numba.__version__ == '$NUMBA_VERSION'))" 2>/dev/null; then
-    "$venv/bin/python" -m pip install --quiet "numpy==$NUMPY_VERSION" "numba==$NUMBA_VERSION"
+if ! "$venv/bin/python" -c "import numpy, numba, jax, jaxlib, sys; sys.exit(not (numpy.__version__ == '$NUMPY_VERSION' and numba.__version__ == '$NUMBA_VERSION' and jax.__version__ == '$JAX_VERSION' and jaxlib.__version__ == '$JAX_VERSION'))" 2>/dev/null; then
+    "$venv/bin/python" -m pip install --quiet "numpy==$NUMPY_VERSION" "numba==$NUMBA_VERSION" \
+        "jax==$JAX_VERSION" "jaxlib==$JAX_VERSION"
 fi
 
 cd "$root"
@@ -42,9 +48,14 @@ fi
 snap="$(mktemp -d)"
 trap 'rm -rf "$snap"' EXIT
 cp target/release/stickslip "$snap/stickslip"
-echo "stickslip: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$root" diff --quiet HEAD -- src shaders Cargo.toml 2>/dev/null || echo ' + uncommitted changes in src/shaders'), binary built $(date -r target/release/stickslip '+%F %T')" | tee "$here/last-run.txt"
+# A --quick smoke run must not overwrite the last real run.
+log="$here/last-run.txt"
+for arg in "$@"; do
+    if [[ "$arg" == --quick ]]; then log="$here/last-run-quick.txt"; fi
+done
+echo "stickslip: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$root" diff --quiet HEAD -- src shaders Cargo.toml 2>/dev/null || echo ' + uncommitted changes in src/shaders'), binary built $(date -r target/release/stickslip '+%F %T')" | tee "$log"
 
 set +e
-"$venv/bin/python" "$here/peers.py" --binary "$snap/stickslip" "$@" 2>&1 | tee -a "$here/last-run.txt"
+"$venv/bin/python" "$here/peers.py" --binary "$snap/stickslip" "$@" 2>&1 | tee -a "$log"
 status=${PIPESTATUS[0]}
 exit "$status"
