@@ -30,7 +30,26 @@ fn non_gaussian(s: f32, g: f32, g2: f32) -> f32 {
     if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_TUKEY_H) {
         return g * exp(0.5 * s * g * g) * pow(1.0 - 2.0 * s, 0.75);
     }
+    if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_MIXTURE) {
+        if (s == 0.0) {
+            return g;
+        }
+        let p = MIXTURE_OUTLIER_SHARE;
+        let shift = 3.0 * s;
+        let width = 1.0 + s;
+        let x = select(g, shift + width * g, g2 < MIXTURE_OUTLIER_QUANTILE);
+        let mean = p * shift;
+        let variance = p * (width * width + shift * shift) + (1.0 - p) - mean * mean;
+        return (x - mean) / sqrt(variance);
+    }
     return (g + s * (g2 * g2 - 1.0) * 0.7071067811865476) / sqrt(1.0 + s * s);
+}
+
+fn dwell_excess(excess: f32, dwell_s: f32, ageing_s: f32) -> f32 {
+    if (ageing_s == 0.0) {
+        return excess;
+    }
+    return excess * (1.0 - exp(-max(dwell_s, 0.0) / ageing_s));
 }
 
 fn hysteresis_factor(slipped_m: f32) -> f32 {
@@ -44,6 +63,9 @@ fn hysteresis_factor(slipped_m: f32) -> f32 {
     }
     if (effects.hysteresis_form == HYSTERESIS_FORM_RATIONAL) {
         return r / (r + 1.0);
+    }
+    if (effects.hysteresis_form == HYSTERESIS_FORM_LAG) {
+        return 1.0;
     }
     return 1.0 - exp(-r);
 }

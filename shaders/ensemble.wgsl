@@ -36,26 +36,30 @@ struct EffectParams {
     harmonic_shape: f32,
     harmonic_shape_mean: f32,
     non_gaussian_form: u32,
-    harmonic_amplitude_1_n: f32,
-    harmonic_amplitude_2_n: f32,
-    harmonic_amplitude_3_n: f32,
-    harmonic_amplitude_4_n: f32,
     harmonic_phase_1_rad: f32,
     harmonic_phase_2_rad: f32,
     harmonic_phase_3_rad: f32,
     harmonic_phase_4_rad: f32,
     hysteresis_form: u32,
     hysteresis_length_m: f32,
+    hysteresis_lag_s: f32,
     colour_form: u32,
     colour_rho: f32,
+    colour_share: f32,
+    colour_rho_1: f32,
+    colour_rho_2: f32,
+    colour_rho_3: f32,
     colour_hold_intervals: u32,
     stiction_form: u32,
     stiction_excess: f32,
+    stiction_release_m: f32,
+    stiction_dwell_s: f32,
     drift_form: u32,
     drift_rate_per_s: f32,
     noise_interval_s: f32,
-    stiction_release_m: f32,
     _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
 }
 
 struct GridPoint {
@@ -78,6 +82,11 @@ struct GridPoint {
     non_gaussian_strength: f32,
     // Phases are reduced as their deviation from this angle, rad.
     phase_ref_rad: f32,
+    // Normal-force harmonic amplitudes at this point's N0, N.
+    harmonic_amplitude_1_n: f32,
+    harmonic_amplitude_2_n: f32,
+    harmonic_amplitude_3_n: f32,
+    harmonic_amplitude_4_n: f32,
 }
 
 struct PathState {
@@ -95,6 +104,10 @@ struct PathState {
     colour_state: f32,
     interval_phase: f32,
     stiction_excess: f32,
+    colour_state_1: f32,
+    colour_state_2: f32,
+    lagged_mu: f32,
+    stick_since_s: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -119,7 +132,8 @@ fn store_path(n: u32) {
     states[n] = PathState(path.x_m, path.v_m_per_s, path.mode, path.period, path.interval,
         path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
         path.normal_force_n, path.stick_time_s, path.slip_start_x_m, path.colour_state,
-        path.interval_phase, path.stiction_excess);
+        path.interval_phase, path.stiction_excess, path.colour_state_1, path.colour_state_2,
+        path.lagged_mu, path.stick_since_s);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -138,14 +152,24 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     path.stick_time_s = 0.0;
     path.slip_start_x_m = path.x_m;
     path.colour_state = 0.0;
+    path.colour_state_1 = 0.0;
+    path.colour_state_2 = 0.0;
     path.interval_phase = 0.0;
+    path.mode = MODE_STICK;
+    path.stick_since_s = 0.0;
+    path.lagged_mu = 0.0;
     draw_noise();
     if (path.v_m_per_s > 0.0) {
         path.mode = 1;
     } else if (path.v_m_per_s < 0.0) {
         path.mode = -1;
     } else {
-        path.mode = stick_or_slip(0.0);
+        path.mode = stick_or_slip(vec2<f32>(1.0, 0.0));
+    }
+    if (path.mode == MODE_STICK) {
+        start_stick(0.0);
+    } else {
+        path.lagged_mu = static_coefficient();
     }
     store_path(n);
 }
@@ -160,7 +184,8 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = states[n];
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
-        s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, 0.0, 0.0, 0.0, 0.0);
+        s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, s.colour_state_1,
+        s.colour_state_2, s.lagged_mu, s.stick_since_s, 0.0, 0.0, 0.0, 0.0);
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u));
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;

@@ -3,9 +3,10 @@
 // order): fixed steps per excitation period, steps split at noise-interval
 // boundaries, RK4 in slip with the slip direction frozen, velocity zeros
 // located by root finding on the RK4 map, breakaway from stick in closed form.
-// Time inside a period comes from the integer step counter, never from
-// accumulating dt; noise boundaries are 32.32 fixed-point positions in periods.
-// The deliberate f32/f64 differences are tabled in that file's docs.
+// The base's cos and sin are exact at each step start and carried through the
+// step by rotation. Time inside a period comes from the integer step counter,
+// never from accumulating dt; noise boundaries are 32.32 fixed-point positions
+// in periods. The deliberate f32/f64 differences are tabled in that file's docs.
 
 const MODE_STICK: i32 = 0;
 const TAU: f32 = 6.283185307179586;
@@ -27,6 +28,10 @@ struct Path {
     colour_state: f32,
     interval_phase: f32,
     stiction_excess: f32,
+    colour_state_1: f32,
+    colour_state_2: f32,
+    lagged_mu: f32,
+    stick_since_s: f32,
     period_max_x_m: f32,
     period_stick_s: f32,
     // ∫ x cos(Ωt) dt and ∫ x sin(Ωt) dt over the period so far (phase_of).
@@ -35,16 +40,18 @@ struct Path {
 }
 
 // One RK4 step of the slip ODE with what the phase quadrature needs: the
-// stage displacements and cos(Ωt) at the step's start, middle and end.
+// stage displacements and the base's (cos, sin) at the step's start, middle
+// and end.
 struct SlipStep {
     x_m: f32,
     v_m_per_s: f32,
+    lagged_mu: f32,
     x2_m: f32,
     x3_m: f32,
     x4_m: f32,
-    cos0: f32,
-    cos1: f32,
-    cos2: f32,
+    trig0: vec2<f32>,
+    trig1: vec2<f32>,
+    trig2: vec2<f32>,
 }
 
 var<private> path: Path;
@@ -52,51 +59,111 @@ var<private> point: GridPoint;
 var<private> realisation: u32;
 var<private> key: vec2<u32>;
 
+// (cos, sin) of a phase, and a rotation of one by another.
+fn trig_at(theta: f32) -> vec2<f32> {
+    return vec2<f32>(cos(theta), sin(theta));
+}
+
+fn rotated(a: vec2<f32>, by: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(a.x * by.x - a.y * by.y, a.y * by.x + a.x * by.y);
+}
+
+fn ar1(state: f32, rho: f32, innovation: f32) -> f32 {
+    if (path.interval == 0u) {
+        return innovation;
+    }
+    return rho * state + sqrt(1.0 - rho * rho) * innovation;
+}
+
 fn draw_noise() {
-    var friction_interval = path.interval;
-    if (effects.colour_form == COLOUR_FORM_HOLD) {
-        friction_interval = path.interval / effects.colour_hold_intervals;
+    let main = noise_block(key, realisation, STREAM_MAIN, path.interval);
+    let a = pair_a(main);
+    let white = a.x;
+    let xi_n = a.y;
+    var friction_block = main;
+    var z = white;
+    if (effects.colour_form == COLOUR_FORM_HOLD && effects.colour_hold_intervals > 1u) {
+        friction_block = noise_block(key, realisation, STREAM_MAIN, path.interval / effects.colour_hold_intervals);
+        z = pair_a(friction_block).x;
     }
-    let z = gaussian_pair(key, realisation, STREAM_FRICTION, friction_interval);
-    let innovation = sqrt(1.0 - effects.colour_rho * effects.colour_rho);
-    var g = z.x;
-    if (effects.colour_form == COLOUR_FORM_TWO_SCALE && effects.colour_rho > 0.0) {
-        let slow = gaussian_pair(key, realisation, STREAM_COLOUR, path.interval).x;
-        path.colour_state = select(effects.colour_rho * path.colour_state + innovation * slow, slow, path.interval == 0u);
-        g = 0.7071067811865476 * (z.x + path.colour_state);
-    } else if (effects.colour_form == COLOUR_FORM_AR1) {
-        path.colour_state = select(effects.colour_rho * path.colour_state + innovation * z.x, z.x, path.interval == 0u);
-        g = path.colour_state;
+    var g = z;
+    if (effects.colour_rho != 0.0) {
+        if (effects.colour_form == COLOUR_FORM_AR1) {
+            if (effects.colour_share >= 1.0) {
+                path.colour_state = ar1(path.colour_state, effects.colour_rho, z);
+                g = path.colour_state;
+            } else {
+                let c = pair_a(noise_block(key, realisation, STREAM_COLOUR, path.interval)).x;
+                path.colour_state = ar1(path.colour_state, effects.colour_rho, c);
+                g = sqrt(1.0 - effects.colour_share) * z + sqrt(effects.colour_share) * path.colour_state;
+            }
+        } else if (effects.colour_form == COLOUR_FORM_TWO_SCALE) {
+            let slow = pair_a(noise_block(key, realisation, STREAM_COLOUR, path.interval)).x;
+            path.colour_state = ar1(path.colour_state, effects.colour_rho, slow);
+            g = 0.7071067811865476 * (z + path.colour_state);
+        } else if (effects.colour_form == COLOUR_FORM_MULTI_SCALE) {
+            let words = noise_block(key, realisation, STREAM_COLOUR, path.interval);
+            let c01 = pair_a(words);
+            let c2 = pair_b(words).x;
+            path.colour_state = ar1(path.colour_state, effects.colour_rho_1, c01.x);
+            path.colour_state_1 = ar1(path.colour_state_1, effects.colour_rho_2, c01.y);
+            path.colour_state_2 = ar1(path.colour_state_2, effects.colour_rho_3, c2);
+            g = (path.colour_state + path.colour_state_1 + path.colour_state_2) * 0.5773502691896258;
+        }
     }
-    let xi_mu = non_gaussian(point.non_gaussian_strength, g, z.y);
+    var xi_mu = g;
+    if (point.non_gaussian_strength != 0.0) {
+        xi_mu = non_gaussian(point.non_gaussian_strength, g, pair_b(friction_block).x);
+    }
     path.friction_noise = params.friction_sigma * xi_mu;
-    let xi_n = gaussian_pair(key, realisation, STREAM_NORMAL_FORCE, path.interval).x;
     let t_s = f32(path.interval) * effects.noise_interval_s;
     let mean_n = point.normal_force_mean_n * drift_factor(t_s);
     let theta = TAU * path.interval_phase;
-    let harmonics_n = harmonic_term(effects.harmonic_amplitude_1_n, effects.harmonic_phase_1_rad, 1.0, theta)
-        + harmonic_term(effects.harmonic_amplitude_2_n, effects.harmonic_phase_2_rad, 2.0, theta)
-        + harmonic_term(effects.harmonic_amplitude_3_n, effects.harmonic_phase_3_rad, 3.0, theta)
-        + harmonic_term(effects.harmonic_amplitude_4_n, effects.harmonic_phase_4_rad, 4.0, theta);
+    let harmonics_n = harmonic_term(point.harmonic_amplitude_1_n, effects.harmonic_phase_1_rad, 1.0, theta)
+        + harmonic_term(point.harmonic_amplitude_2_n, effects.harmonic_phase_2_rad, 2.0, theta)
+        + harmonic_term(point.harmonic_amplitude_3_n, effects.harmonic_phase_3_rad, 3.0, theta)
+        + harmonic_term(point.harmonic_amplitude_4_n, effects.harmonic_phase_4_rad, 4.0, theta);
     path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonics_n, 0.0);
     path.stiction_excess = effects.stiction_excess;
-    if (effects.stiction_form == STICTION_FORM_NOISY) {
-        let zs = gaussian_pair(key, realisation, STREAM_STICTION, path.interval).x;
-        path.stiction_excess = effects.stiction_excess * max(1.0 + 0.5 * zs, 0.0);
+    if (effects.stiction_form == STICTION_FORM_NOISY && effects.stiction_excess != 0.0) {
+        path.stiction_excess = effects.stiction_excess * max(1.0 + 0.5 * pair_b(main).y, 0.0);
+    } else if (effects.stiction_form == STICTION_FORM_DWELL) {
+        path.stiction_excess = 0.0;
+        if (path.mode == MODE_STICK) {
+            path.stiction_excess = dwell_excess(effects.stiction_excess, t_s - path.stick_since_s, effects.stiction_dwell_s);
+        }
     }
 }
 
-fn spring_force(t_local_s: f32, x_m: f32) -> f32 {
-    return params.stiffness_n_per_m * (params.base_amplitude_m * cos(point.omega_rad_per_s * t_local_s) - x_m);
+// A stick starts at t_s (from the run's start): dwell stiction ages anew.
+fn start_stick(t_s: f32) {
+    path.stick_since_s = t_s;
+    if (effects.stiction_form == STICTION_FORM_DWELL) {
+        path.stiction_excess = dwell_excess(effects.stiction_excess, 0.0, effects.stiction_dwell_s);
+    }
 }
 
-fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32) -> f32 {
-    let slipped_m = abs(x_m - path.slip_start_x_m);
-    let law = params.friction_a + point.friction_offset
+fn spring_force(cos_omega_t: f32, x_m: f32) -> f32 {
+    return params.stiffness_n_per_m * (params.base_amplitude_m * cos_omega_t - x_m);
+}
+
+fn steady_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
+    return params.friction_a + point.friction_offset
         + params.friction_b / (1.0 + params.friction_c_s_per_m * speed_m_per_s)
         + params.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
         + path.friction_noise;
-    var mu = law * hysteresis_factor(slipped_m);
+}
+
+fn lag_on() -> bool {
+    return effects.hysteresis_form == HYSTERESIS_FORM_LAG && effects.hysteresis_lag_s > 0.0;
+}
+
+fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, lagged_mu: f32) -> f32 {
+    let slipped_m = abs(x_m - path.slip_start_x_m);
+    var mu = lagged_mu;
+    if (!lag_on()) {
+        mu = steady_law(speed_m_per_s, v_m_per_s) * hysteresis_factor(slipped_m);
+    }
     if (effects.stiction_form == STICTION_FORM_DECAYING) {
         mu += path.stiction_excess * exp(-slipped_m / STICTION_DECAY_M);
     } else if (effects.stiction_form == STICTION_FORM_CONSTANT && effects.stiction_release_m > 0.0) {
@@ -105,69 +172,75 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32) -> f32 {
     return max(mu, 0.0);
 }
 
+fn static_coefficient() -> f32 {
+    return max(params.friction_a + point.friction_offset + params.friction_b + path.friction_noise + path.stiction_excess, 0.0);
+}
+
 fn breakaway_force() -> f32 {
-    let mu_static = params.friction_a + point.friction_offset + params.friction_b + path.friction_noise + path.stiction_excess;
-    return max(mu_static, 0.0) * path.normal_force_n;
+    return static_coefficient() * path.normal_force_n;
 }
 
-fn slip_acceleration(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, sign: f32) -> f32 {
-    let friction = sign * friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * path.normal_force_n;
-    let spring = params.stiffness_n_per_m * (params.base_amplitude_m * cos_omega_t - x_m);
-    return (spring - params.damping_n_s_per_m * v_m_per_s - friction) / params.mass_kg;
+// (acceleration, rate of the lagged friction coefficient).
+fn slip_rates(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, lagged_mu: f32, sign: f32) -> vec2<f32> {
+    let mu = friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
+    let acceleration = (spring_force(cos_omega_t, x_m) - params.damping_n_s_per_m * v_m_per_s
+        - sign * mu * path.normal_force_n) / params.mass_kg;
+    var lag_rate = 0.0;
+    if (lag_on()) {
+        lag_rate = (steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / effects.hysteresis_lag_s;
+    }
+    return vec2<f32>(acceleration, lag_rate);
 }
 
-// Stages 2 and 3 share the excitation's cos at the midpoint.
-fn rk4_slip(t_local_s: f32, x_m: f32, v_m_per_s: f32, h_s: f32, sign: f32) -> SlipStep {
-    let w = point.omega_rad_per_s;
-    let half = 0.5 * h_s;
-    let cos0 = cos(w * t_local_s);
-    let cos1 = cos(w * (t_local_s + half));
-    let cos2 = cos(w * (t_local_s + h_s));
+fn rk4_slip(start: vec2<f32>, x_m: f32, v_m_per_s: f32, h_s: f32, half_turn: vec2<f32>, sign: f32) -> SlipStep {
+    let mid = rotated(start, half_turn);
+    let end = rotated(mid, half_turn);
+    let m0 = path.lagged_mu;
+    let hh = 0.5 * h_s;
     let k1x = v_m_per_s;
-    let k1v = slip_acceleration(cos0, x_m, v_m_per_s, sign);
-    let k2x = v_m_per_s + half * k1v;
-    let x2 = x_m + half * k1x;
-    let k2v = slip_acceleration(cos1, x2, k2x, sign);
-    let k3x = v_m_per_s + half * k2v;
-    let x3 = x_m + half * k2x;
-    let k3v = slip_acceleration(cos1, x3, k3x, sign);
-    let k4x = v_m_per_s + h_s * k3v;
+    let k1 = slip_rates(start.x, x_m, v_m_per_s, m0, sign);
+    let k2x = v_m_per_s + hh * k1.x;
+    let x2 = x_m + hh * k1x;
+    let k2 = slip_rates(mid.x, x2, k2x, m0 + hh * k1.y, sign);
+    let k3x = v_m_per_s + hh * k2.x;
+    let x3 = x_m + hh * k2x;
+    let k3 = slip_rates(mid.x, x3, k3x, m0 + hh * k2.y, sign);
+    let k4x = v_m_per_s + h_s * k3.x;
     let x4 = x_m + h_s * k3x;
-    let k4v = slip_acceleration(cos2, x4, k4x, sign);
+    let k4 = slip_rates(end.x, x4, k4x, m0 + h_s * k3.y, sign);
     return SlipStep(
         x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-        v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
-        x2, x3, x4, cos0, cos1, cos2);
+        v_m_per_s + h_s / 6.0 * (k1.x + 2.0 * k2.x + 2.0 * k3.x + k4.x),
+        m0 + h_s / 6.0 * (k1.y + 2.0 * k2.y + 2.0 * k3.y + k4.y),
+        x2, x3, x4, start, mid, end);
 }
 
 // The RK4 quadrature of x cos(Ωt) and x sin(Ωt) over an accepted slip step.
-fn add_slip_phase(t_local_s: f32, h_s: f32, step: SlipStep) {
-    let w = point.omega_rad_per_s;
-    let sin0 = sin(w * t_local_s);
-    let sin1 = sin(w * (t_local_s + 0.5 * h_s));
-    let sin2 = sin(w * (t_local_s + h_s));
+fn add_slip_phase(h_s: f32, step: SlipStep) {
     let x1 = path.x_m;
-    path.period_cos_integral += h_s / 6.0 * (x1 * step.cos0 + 2.0 * (step.x2_m + step.x3_m) * step.cos1 + step.x4_m * step.cos2);
-    path.period_sin_integral += h_s / 6.0 * (x1 * sin0 + 2.0 * (step.x2_m + step.x3_m) * sin1 + step.x4_m * sin2);
+    let x23 = 2.0 * (step.x2_m + step.x3_m);
+    path.period_cos_integral += h_s / 6.0 * (x1 * step.trig0.x + x23 * step.trig1.x + step.x4_m * step.trig2.x);
+    path.period_sin_integral += h_s / 6.0 * (x1 * step.trig0.y + x23 * step.trig1.y + step.x4_m * step.trig2.y);
 }
 
-// A stuck interval [t_a, t_b] added exactly: x is constant.
-fn add_stick_phase(t_a: f32, t_b: f32) {
+// A stuck interval between base trigs a and b, added exactly: x is constant.
+fn add_stick_phase(a: vec2<f32>, b: vec2<f32>) {
     let w = point.omega_rad_per_s;
-    path.period_cos_integral += path.x_m * (sin(w * t_b) - sin(w * t_a)) / w;
-    path.period_sin_integral += path.x_m * (cos(w * t_a) - cos(w * t_b)) / w;
+    path.period_cos_integral += path.x_m * (b.y - a.y) / w;
+    path.period_sin_integral += path.x_m * (a.x - b.x) / w;
 }
 
-fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
+fn locate_velocity_zero(start: vec2<f32>, h_s: f32, sign: f32) -> f32 {
+    let w = point.omega_rad_per_s;
     var lo = 0.0;
     var g_lo = sign * path.v_m_per_s;
     var hi = h_s;
-    var g_hi = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, h_s, sign).v_m_per_s;
+    var g_hi = sign * rk4_slip(start, path.x_m, path.v_m_per_s, h_s, trig_at(0.5 * w * h_s), sign).v_m_per_s;
     if (g_lo <= 0.0) {
         var probe = 0.5 * h_s;
         var found = false;
         for (var i = 0u; i < PROBE_HALVINGS; i++) {
-            let g_probe = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, probe, sign).v_m_per_s;
+            let g_probe = sign * rk4_slip(start, path.x_m, path.v_m_per_s, probe, trig_at(0.5 * w * probe), sign).v_m_per_s;
             if (g_probe > 0.0) {
                 lo = probe;
                 g_lo = g_probe;
@@ -191,7 +264,7 @@ fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
         if (!(mid > lo && mid < hi)) {
             mid = 0.5 * (lo + hi);
         }
-        let g_mid = sign * rk4_slip(t_local_s, path.x_m, path.v_m_per_s, mid, sign).v_m_per_s;
+        let g_mid = sign * rk4_slip(start, path.x_m, path.v_m_per_s, mid, trig_at(0.5 * w * mid), sign).v_m_per_s;
         if (g_mid > 0.0) {
             lo = mid;
             g_lo = g_mid;
@@ -211,8 +284,8 @@ fn locate_velocity_zero(t_local_s: f32, h_s: f32, sign: f32) -> f32 {
     return hi;
 }
 
-fn stick_or_slip(t_local_s: f32) -> i32 {
-    let force = spring_force(t_local_s, path.x_m);
+fn stick_or_slip(trig: vec2<f32>) -> i32 {
+    let force = spring_force(trig.x, path.x_m);
     if (abs(force) <= breakaway_force()) {
         return MODE_STICK;
     }
@@ -243,8 +316,8 @@ fn phase_of(cos_integral: f32, sin_integral: f32) -> f32 {
 }
 
 // Earliest (time, direction) of breakaway in [t_a, t_b]; direction 0 = none.
-fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
-    let force = spring_force(t_a, path.x_m);
+fn breakaway_time(t_a: f32, start: vec2<f32>, t_b: f32) -> vec2<f32> {
+    let force = spring_force(start.x, path.x_m);
     let threshold = breakaway_force();
     if (force > threshold) {
         return vec2<f32>(t_a, 1.0);
@@ -263,8 +336,15 @@ fn breakaway_time(t_a: f32, t_b: f32) -> vec2<f32> {
     return best;
 }
 
-fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
+// Advances from t_start to t_b (the base's trig at t_start is `start_trig`);
+// `regular` says the segment is a whole grid step, whose half turn is
+// `half_step`. Returns the base's trig at t_b.
+fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool, half_step: vec2<f32>, measuring: bool) -> vec2<f32> {
+    let w = point.omega_rad_per_s;
+    let period_start_s = f32(path.period) * point.period_s;
     var t_a = t_start;
+    var start = start_trig;
+    var whole = regular;
     var events = 0u;
     loop {
         if (!(t_a < t_b)) {
@@ -273,73 +353,117 @@ fn advance_segment(t_start: f32, t_b: f32, measuring: bool) {
         if (path.mode == MODE_STICK) {
             var until = vec2<f32>(t_b, 0.0);
             if (events < MAX_EVENTS_PER_SEGMENT) {
-                until = breakaway_time(t_a, t_b);
+                until = breakaway_time(t_a, start, t_b);
             }
             let t_end = select(until.x, t_b, until.y == 0.0);
+            let end = trig_at(w * t_end);
             if (measuring) {
                 path.period_stick_s += t_end - t_a;
-                add_stick_phase(t_a, t_end);
+                add_stick_phase(start, end);
             }
             path.mode = i32(until.y);
             path.slip_start_x_m = path.x_m;
+            if (path.mode != MODE_STICK) {
+                path.lagged_mu = static_coefficient();
+            }
             t_a = t_end;
+            start = end;
+            whole = false;
             events += 1u;
         } else {
             let sign = f32(path.mode);
             let h = t_b - t_a;
-            let step = rk4_slip(t_a, path.x_m, path.v_m_per_s, h, sign);
+            var half_turn = half_step;
+            if (!whole) {
+                half_turn = trig_at(0.5 * w * h);
+            }
+            let step = rk4_slip(start, path.x_m, path.v_m_per_s, h, half_turn, sign);
             if (sign * step.v_m_per_s > 0.0) {
                 if (measuring) {
-                    add_slip_phase(t_a, h, step);
+                    add_slip_phase(h, step);
                 }
                 path.x_m = step.x_m;
                 path.v_m_per_s = step.v_m_per_s;
+                path.lagged_mu = step.lagged_mu;
                 path.period_max_x_m = max(path.period_max_x_m, step.x_m);
-                t_a = t_b;
-            } else {
-                let h_zero = locate_velocity_zero(t_a, h, sign);
-                let to_zero = rk4_slip(t_a, path.x_m, path.v_m_per_s, h_zero, sign);
-                if (measuring) {
-                    add_slip_phase(t_a, h_zero, to_zero);
-                }
-                let x_zero = to_zero.x_m;
-                path.x_m = x_zero;
-                path.v_m_per_s = 0.0;
-                path.period_max_x_m = max(path.period_max_x_m, x_zero);
-                t_a = t_a + h_zero;
-                if (events < MAX_EVENTS_PER_SEGMENT) {
-                    path.mode = stick_or_slip(t_a);
-                } else {
-                    path.mode = MODE_STICK;
-                }
-                path.slip_start_x_m = path.x_m;
-                events += 1u;
+                return step.trig2;
             }
+            let h_zero = locate_velocity_zero(start, h, sign);
+            let to_zero = rk4_slip(start, path.x_m, path.v_m_per_s, h_zero, trig_at(0.5 * w * h_zero), sign);
+            if (measuring) {
+                add_slip_phase(h_zero, to_zero);
+            }
+            path.x_m = to_zero.x_m;
+            path.v_m_per_s = 0.0;
+            path.lagged_mu = to_zero.lagged_mu;
+            path.period_max_x_m = max(path.period_max_x_m, to_zero.x_m);
+            t_a = t_a + h_zero;
+            start = trig_at(w * t_a);
+            whole = false;
+            if (events < MAX_EVENTS_PER_SEGMENT) {
+                path.mode = stick_or_slip(start);
+            } else {
+                path.mode = MODE_STICK;
+            }
+            if (path.mode == MODE_STICK) {
+                start_stick(period_start_s + t_a);
+            }
+            path.slip_start_x_m = path.x_m;
+            events += 1u;
         }
     }
+    return start;
 }
 
+// The fewest equal steps no longer than max_step that cover span (the CPU's
+// span_steps).
+fn span_steps(span: f32, max_step: f32) -> u32 {
+    return u32(max(ceil((span / max_step) * (1.0 - 1e-6)), 1.0));
+}
+
+// Noise boundaries and the period's end are step boundaries: each span
+// between them is divided into equal steps no longer than T / S.
 fn run_period(measuring: bool) {
-    let steps = params.steps_per_period;
-    let dt = point.period_s / f32(steps);
+    let steps_per_period = params.steps_per_period;
+    let max_step = point.period_s / f32(steps_per_period);
+    let w = point.omega_rad_per_s;
     path.period_max_x_m = path.x_m;
     path.period_stick_s = 0.0;
     path.period_cos_integral = 0.0;
     path.period_sin_integral = 0.0;
     var t = 0.0;
-    var step = 0u;
+    var trig = vec2<f32>(1.0, 0.0);
+    var finished = false;
     loop {
-        let step_end = select(f32(step + 1u) * dt, point.period_s, step + 1u == steps);
-        var noise_t = 3.0e38;
+        var noise_t = point.period_s;
+        var at_noise = false;
         if (path.next_boundary_whole == path.period) {
-            // Position of the boundary in steps: frac * steps / 2^32, exactly.
-            let position = mulhilo(path.next_boundary_frac, steps);
-            noise_t = (f32(position.x) + f32(position.y) * FIXED_ONE_INV) * dt;
+            // Position of the boundary in steps: frac * S / 2^32, exactly.
+            let position = mulhilo(path.next_boundary_frac, steps_per_period);
+            noise_t = min((f32(position.x) + f32(position.y) * FIXED_ONE_INV) * max_step, point.period_s);
+            at_noise = true;
         }
-        let target_t = max(min(step_end, noise_t), t);
-        advance_segment(t, target_t, measuring);
+        let target_t = max(noise_t, t);
+        let span = target_t - t;
+        if (span > 0.0) {
+            let steps = span_steps(span, max_step);
+            let h = span / f32(steps);
+            let turn = trig_at(0.5 * w * h);
+            var step_start = t;
+            for (var k = 1u; k <= steps; k++) {
+                var step_end = t + f32(k) * h;
+                if (k == steps) {
+                    step_end = target_t;
+                }
+                if (k % TRIG_REFRESH_STEPS == 0u) {
+                    trig = trig_at(w * step_start);
+                }
+                trig = advance_segment(step_start, step_end, trig, true, turn, measuring);
+                step_start = step_end;
+            }
+        }
         t = target_t;
-        if (noise_t <= target_t) {
+        if (at_noise) {
             path.interval_phase = f32(path.next_boundary_frac) * FIXED_ONE_INV;
             path.interval += 1u;
             let frac = path.next_boundary_frac + point.noise_interval_frac;
@@ -348,16 +472,15 @@ fn run_period(measuring: bool) {
             path.next_boundary_whole += point.noise_interval_whole + carry;
             draw_noise();
         }
-        if (step_end <= target_t) {
-            step += 1u;
-            if (step == steps) {
-                break;
-            }
+        if (!(t < point.period_s)) {
+            finished = true;
+            break;
         }
+        trig = trig_at(w * t);
     }
-    // Counted only when the step loop really finished: a loop ended early by
-    // the driver leaves the count short, and the host refuses the result.
-    if (step == steps) {
+    // Counted only when the loop really finished: a loop ended early by the
+    // driver leaves the count short, and the host refuses the result.
+    if (finished) {
         path.period += 1u;
     }
 }

@@ -6,7 +6,9 @@
 // Accumulator words (ACCUMULATOR_WORDS per point): 0-1 peaks (u64),
 // 2-3 Σ(q + 2^31) (u64), 4-6 Σq² (u96), 7-8 stuck time in T/2^20 (u64),
 // 9 clamped peaks, 10-11 Σ(s + 2^31) of the phases' quantised sines (u64),
-// 12-13 Σ of their quantised versines (u64), 14-15 unused.
+// 12-13 Σ of their quantised versines (u64), 14 periods whose peak or phase
+// was not finite (never quantised or binned; the host refuses the result),
+// 15 unused.
 
 // This invocation's sums over the dispatch, flushed once at its end.
 struct Tally {
@@ -21,6 +23,15 @@ struct Tally {
 
 var<private> tally: Tally;
 var<private> point_index: u32;
+// Periods of this invocation whose peak or phase was not finite (private
+// variables start at zero in every invocation).
+var<private> non_finite_periods: u32;
+
+// Whether an f32 is ±inf or NaN, from its bits (the exponent all ones):
+// implementations may assume floats finite, so `x != x` is not reliable.
+fn is_non_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) == 0x7f800000u;
+}
 
 fn add_u64(a: vec2<u32>, b: u32) -> vec2<u32> {
     let lo = a.x + b;
@@ -53,6 +64,10 @@ fn histogram_bin(peak_m: f32) -> u32 {
 
 // Quantises and tallies one measured period; mirrors PointAccumulator::add_period.
 fn tally_period(peak_m: f32, phase_rad: f32, stuck_share: f32) {
+    if (is_non_finite(peak_m) || is_non_finite(phase_rad)) {
+        non_finite_periods += 1u;
+        return;
+    }
     let q_real = round((peak_m - point.peak_centre_m) * point.inv_quantum_per_m);
     let q = i32(clamp(q_real, -QUANTISE_LIMIT, QUANTISE_LIMIT));
     tally.peaks += 1u;
@@ -90,10 +105,13 @@ fn atomic_add_u96(word: u32, value: vec3<u32>) {
 }
 
 fn flush_tally() {
+    let base = point_index * ACCUMULATOR_WORDS;
+    if (non_finite_periods != 0u) {
+        atomicAdd(&accumulators[base + 14u], non_finite_periods);
+    }
     if (tally.peaks == 0u) {
         return;
     }
-    let base = point_index * ACCUMULATOR_WORDS;
     atomic_add_u64(base, vec2<u32>(tally.peaks, 0u));
     atomic_add_u64(base + 2u, tally.sum_biased);
     atomic_add_u96(base + 4u, tally.sum_squares);

@@ -65,8 +65,25 @@ fn gaussian(key: vec2<u32>, realisation: u32, stream: u32, interval: u32) -> f32
     return box_muller(uniform_open(w.x), uniform_open(w.y));
 }
 
-// Both standard Gaussians of a key: words 0–1 and words 2–3 of its block.
-fn gaussian_pair(key: vec2<u32>, realisation: u32, stream: u32, interval: u32) -> vec2<f32> {
-    let w = philox4x32_10(vec4<u32>(interval, 0u, realisation, stream), key);
-    return vec2<f32>(box_muller(uniform_open(w.x), uniform_open(w.y)), box_muller(uniform_open(w.z), uniform_open(w.w)));
+// Two independent standard Gaussians from two uniforms: Box–Muller's cosine
+// and sine branches.
+fn box_muller_pair(u1: f32, u2: f32) -> vec2<f32> {
+    let r = sqrt(-2.0 * log(u1));
+    let theta = 6.283185307179586 * u2;
+    return vec2<f32>(r * cos(theta), r * sin(theta));
+}
+
+// The Philox block of key (seed, realisation, stream, interval).
+fn noise_block(key: vec2<u32>, realisation: u32, stream: u32, interval: u32) -> vec4<u32> {
+    return philox4x32_10(vec4<u32>(interval, 0u, realisation, stream), key);
+}
+
+// Pair A of a block: the Gaussians of words 0 and 1.
+fn pair_a(words: vec4<u32>) -> vec2<f32> {
+    return box_muller_pair(uniform_open(words.x), uniform_open(words.y));
+}
+
+// Pair B of a block: the Gaussians of words 2 and 3.
+fn pair_b(words: vec4<u32>) -> vec2<f32> {
+    return box_muller_pair(uniform_open(words.z), uniform_open(words.w));
 }

@@ -7,28 +7,29 @@ use anyhow::Result;
 use clap::Args;
 
 use super::ModelArgs;
-use crate::diagnose::measure::{RunEntry, write_manifest, write_run_file};
+use crate::diagnose::measure::{MIN_PERIODS, RunEntry, write_manifest, write_run_file};
+use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::engine::{Condition, Engine, Job, Oscillator, Point, Record, RunPlan};
-use crate::io;
+use crate::io::{self, OutputSet, owned};
 
 #[derive(Args, Debug)]
 pub(crate) struct SimulateArgs {
     #[command(flatten)]
     pub(crate) model: ModelArgs,
     /// Excitation frequency, Hz.
-    #[arg(long, default_value_t = 7.0)]
+    #[arg(long, default_value_t = 7.0, allow_negative_numbers = true)]
     pub(crate) frequency: f64,
     /// Nominal normal force, N.
-    #[arg(long, default_value_t = 16.39)]
+    #[arg(long, default_value_t = 16.39, allow_negative_numbers = true)]
     pub(crate) normal_force: f64,
     /// Number of realisations (one run file each).
     #[arg(long, default_value_t = 3)]
     pub(crate) realisations: u32,
     /// Record length after warm-up, s.
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value_t = 50.0, allow_negative_numbers = true)]
     pub(crate) duration: f64,
     /// Sampling rate of the records, Hz.
-    #[arg(long, default_value_t = 600.0)]
+    #[arg(long, default_value_t = 600.0, allow_negative_numbers = true)]
     pub(crate) sample_rate: f64,
     /// Excitation periods discarded before recording.
     #[arg(long, default_value_t = 100)]
@@ -40,20 +41,70 @@ pub(crate) struct SimulateArgs {
     pub(crate) out: PathBuf,
 }
 
+/// Most samples one simulated record may hold (the run-file limit allows
+/// about this many rows of five channels).
+const MAX_SAMPLES_PER_RECORD: f64 = 2_500_000.0;
+
 pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
+    // Everything is checked before any computation and before anything is
+    // written: what `simulate` writes, `diagnose` must be able to read.
     let model = args.model.load()?;
     let condition = Condition { excitation_frequency_hz: args.frequency, normal_force_n: args.normal_force };
+    condition.validate_flags("--frequency", "--normal-force")?;
     Oscillator::new(&model, condition)?;
-    if args.realisations == 0 {
-        anyhow::bail!("invalid --realisations: must be at least 1");
-    }
-    if !(args.duration.is_finite() && args.duration > 0.0) {
-        anyhow::bail!("invalid --duration {}: must be > 0 s", args.duration);
+    if args.realisations == 0 || args.realisations > Job::MAX_REALISATIONS {
+        anyhow::bail!(
+            "invalid --realisations: {} (one run file each) must be between 1 and {}",
+            args.realisations,
+            Job::MAX_REALISATIONS
+        );
     }
     if !(args.sample_rate.is_finite() && args.sample_rate > 0.0) {
-        anyhow::bail!("invalid --sample-rate {}: must be > 0 Hz", args.sample_rate);
+        anyhow::bail!("invalid --sample-rate {}: must be a finite number > 0 Hz", fmt_value(args.sample_rate));
     }
-    let engine = Engine::cpu("simulate runs on the reference");
+    if args.sample_rate <= 2.0 * args.frequency {
+        anyhow::bail!(
+            "invalid --sample-rate {}: a record must be sampled above twice its excitation frequency ({} Hz, the \
+             Nyquist rate)",
+            fmt_value(args.sample_rate),
+            fmt_value(2.0 * args.frequency)
+        );
+    }
+    let (dt_lo, dt_hi) = limits::NOISE_INTERVAL_S;
+    if !(dt_lo..=dt_hi).contains(&(1.0 / args.sample_rate)) {
+        anyhow::bail!(
+            "invalid --sample-rate {}: the sample interval must lie between {} and {} s",
+            fmt_value(args.sample_rate),
+            fmt_bound(dt_lo),
+            fmt_bound(dt_hi)
+        );
+    }
+    if !(args.duration.is_finite() && args.duration > 0.0) {
+        anyhow::bail!("invalid --duration {}: must be a finite number > 0 s", fmt_value(args.duration));
+    }
+    let periods = args.duration * args.frequency;
+    if periods < MIN_PERIODS {
+        anyhow::bail!(
+            "invalid --duration {}: a record must cover at least {MIN_PERIODS} excitation periods ({} s at {} Hz)",
+            fmt_value(args.duration),
+            fmt_value(MIN_PERIODS / args.frequency),
+            fmt_value(args.frequency)
+        );
+    }
+    let samples = args.duration * args.sample_rate;
+    if samples > MAX_SAMPLES_PER_RECORD {
+        anyhow::bail!(
+            "invalid --duration × --sample-rate: {} samples per record, over the limit of {MAX_SAMPLES_PER_RECORD}",
+            fmt_value(samples.round())
+        );
+    }
+    if periods.ceil() + 1.0 + f64::from(args.warmup_cycles) > Job::MAX_CYCLES as f64 {
+        anyhow::bail!(
+            "invalid --duration/--warmup-cycles: {} excitation periods per record, over the limit of {}",
+            fmt_value(periods.ceil() + 1.0 + f64::from(args.warmup_cycles)),
+            Job::MAX_CYCLES
+        );
+    }
     let points = [Point::steady(&model, condition)];
     let job = Job {
         model: &model,
@@ -62,14 +113,20 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
         first_realisation: 0,
         seed: args.seed,
         plan: RunPlan { warmup_cycles: args.warmup_cycles, measured_cycles: 0 },
-        record: Record::Sums,
+        record: Record::Samples {
+            interval_s: 1.0 / args.sample_rate,
+            duration_s: args.duration,
+            at_noise_boundaries: false,
+        },
     };
-    let records = engine.records(&job, 1.0 / args.sample_rate, args.duration)?;
-    io::create_dir(&args.out)?;
+    job.validate()?;
+    let out = OutputSet::prepare(&args.out, "--out", owned::SIMULATION, &[])?;
+    let engine = Engine::cpu("simulate runs on the reference");
+    let records = engine.records(&Job { record: Record::Sums, ..job }, 1.0 / args.sample_rate, args.duration)?;
     let mut runs = Vec::new();
     for (r, samples) in records.iter().enumerate() {
         let file = format!("run-{:.3}hz-{:.3}n-r{r:03}.csv", args.frequency, args.normal_force);
-        write_run_file(&args.out.join(&file), samples)?;
+        write_run_file(&out.dir().join(&file), samples)?;
         runs.push(RunEntry {
             file,
             excitation_frequency_hz: args.frequency,
@@ -79,8 +136,9 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     }
     let description =
         format!("simulated by stickslip {} (CPU f64 reference), seed {}", env!("CARGO_PKG_VERSION"), args.seed);
-    write_manifest(&args.out, &description, &model, &runs)?;
-    io::write_atomically(&args.out.join("model.toml"), |w| w.write_all(model.to_toml_string().as_bytes()))?;
+    write_manifest(out.dir(), &description, &model, &runs)?;
+    io::write_atomically(&out.dir().join("model.toml"), |w| w.write_all(model.to_toml_string().as_bytes()))?;
+    out.commit()?;
     let samples_per_run = records.first().map_or(0, Vec::len);
     println!("wrote {} run files of {samples_per_run} samples to {}", runs.len(), args.out.display());
     Ok(())

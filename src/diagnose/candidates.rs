@@ -116,6 +116,7 @@ pub(crate) fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores
                             form: HarmonicForm::Fourier,
                             amplitudes_n: amps,
                             phases_rad: [0.0; 4],
+                            amplitudes_per_n0: [0.0; 4],
                             shape: 2.0,
                         });
                         m
@@ -154,8 +155,11 @@ pub(crate) fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores
                 second: vec![0.0],
                 apply: Box::new(|m, s, _| {
                     let mut m = m.clone();
-                    m.effects.friction_hysteresis =
-                        Some(FrictionHysteresis { form: HysteresisForm::Exponential, length_m: s });
+                    m.effects.friction_hysteresis = Some(FrictionHysteresis {
+                        form: HysteresisForm::Exponential,
+                        length_m: s,
+                        time_constant_s: 0.0,
+                    });
                     m
                 }),
                 describe: Box::new(|m| {
@@ -169,8 +173,11 @@ pub(crate) fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores
                 second: vec![0.0],
                 apply: Box::new(|m, s, _| {
                     let mut m = m.clone();
-                    m.effects.coloured_friction_noise =
-                        Some(ColouredFrictionNoise { form: ColourForm::Ar1, correlation_time_s: s });
+                    m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
+                        form: ColourForm::Ar1,
+                        correlation_time_s: s,
+                        coloured_share: 1.0,
+                    });
                     m
                 }),
                 describe: Box::new(|m| {
@@ -186,8 +193,12 @@ pub(crate) fn candidate_specs(data: &Data<'_>, baseline: &Model, baseline_scores
                 second: vec![0.0, 1e-4, 3e-4],
                 apply: Box::new(|m, s, release| {
                     let mut m = m.clone();
-                    m.effects.stiction =
-                        Some(Stiction { form: StictionForm::Constant, excess: s, release_length_m: release });
+                    m.effects.stiction = Some(Stiction {
+                        form: StictionForm::Constant,
+                        excess: s,
+                        release_length_m: release,
+                        dwell_time_s: 0.0,
+                    });
                     m
                 }),
                 describe: Box::new(|m| {

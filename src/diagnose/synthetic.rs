@@ -97,6 +97,7 @@ pub fn random_truth(
                 form: if form == 1 { HarmonicForm::Bumps } else { HarmonicForm::Square },
                 amplitudes_n: [a, 0.6 * a, 0.0, 0.0],
                 phases_rad: [uniform(&mut rng, 0.0, TAU), uniform(&mut rng, 0.0, TAU), 0.0, 0.0],
+                amplitudes_per_n0: [0.0; 4],
                 shape: if form == 1 { 4.0 } else { 2.5 },
             });
         }
@@ -121,12 +122,14 @@ pub fn random_truth(
             m.effects.friction_hysteresis = Some(FrictionHysteresis {
                 form: if form == 1 { HysteresisForm::Tanh } else { HysteresisForm::Rational },
                 length_m: pick(1e-4, 3e-4),
+                time_constant_s: 0.0,
             });
         }
         Some(Effect::ColouredFrictionNoise) => {
             m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
                 form: if form == 1 { ColourForm::Hold } else { ColourForm::TwoScale },
                 correlation_time_s: pick(8.0, 20.0) * m.noise.interval_s,
+                coloured_share: 1.0,
             });
         }
         Some(Effect::Stiction) => {
@@ -134,6 +137,7 @@ pub fn random_truth(
                 form: if form == 1 { StictionForm::Noisy } else { StictionForm::Decaying },
                 excess: pick(0.12, 0.25),
                 release_length_m: 0.0,
+                dwell_time_s: 0.0,
             });
         }
         Some(Effect::LoadDependentFriction) => {

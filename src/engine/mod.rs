@@ -42,6 +42,12 @@ pub enum Record {
         interval_s: f64,
         /// Record length, s.
         duration_s: f64,
+        /// Sample at the noise-interval boundaries when `interval_s` is the
+        /// model's noise interval (to 1e-9): samples then split no steps, and
+        /// the interval is the noise's 32.32 fixed-point one (within 1e-8 of
+        /// `interval_s`). Otherwise, and when false, samples fall exactly
+        /// every `interval_s`.
+        at_noise_boundaries: bool,
     },
 }
 
@@ -73,22 +79,144 @@ impl Job<'_> {
         self.points.iter().map(|p| Oscillator::new(self.model, p.condition)).collect()
     }
 
-    /// Checks what every backend needs.
+    /// Most grid points in one job: the host keeps each point's sums and
+    /// 2048-bin histogram (16 KiB), so 2^16 points take 1 GiB.
+    pub const MAX_POINTS: usize = 1 << 16;
+    /// Most realisations per grid point (one GPU dispatch's invocations,
+    /// 2^20; the CPU runs them in chunks of [`cpu::PATHS_PER_CHUNK`]).
+    pub const MAX_REALISATIONS: u32 = 1 << 20;
+    /// Most excitation periods one realisation integrates: warm-up plus
+    /// measured periods, or warm-up plus a record's periods (2^24).
+    pub const MAX_CYCLES: u64 = 1 << 24;
+    /// Most peaks per grid point, realisations × measured periods: the exact
+    /// sums and histogram bins count them in 32 bits on the GPU.
+    pub const MAX_PEAKS_PER_POINT: u64 = (1 << 32) - 1;
+    /// Most noise intervals one realisation spans (counted in 32 bits on the GPU).
+    pub const MAX_NOISE_INTERVALS: u128 = 1 << 32;
+    /// Most bytes of per-realisation output a job keeps in memory: 16 B per
+    /// measured period for [`Record::Peaks`], 40 B per sample for
+    /// [`Record::Samples`] (2 GiB).
+    pub const MAX_KEPT_BYTES: u64 = 2 << 30;
+
+    /// Checks what every backend needs, against the same limits for both
+    /// (so both refuse a request with the same message), before anything is
+    /// allocated: the grid, the realisations, the periods each realisation
+    /// runs, the output it keeps, and that every point's model and starting
+    /// state are finite.
     pub fn validate(&self) -> Result<()> {
         if self.points.is_empty() {
             return Err(Error::setting("grid", "no grid points"));
         }
+        if self.points.len() > Self::MAX_POINTS {
+            return Err(Error::setting(
+                "grid",
+                format!(
+                    "{} grid points exceed the limit of {} per run (each keeps a 16 KiB histogram); split the grid",
+                    self.points.len(),
+                    Self::MAX_POINTS
+                ),
+            ));
+        }
         if self.realisations == 0 {
             return Err(Error::setting("realisations", "must be at least 1"));
         }
-        if let Record::Samples { interval_s, duration_s } = self.record {
-            if !(interval_s.is_finite() && interval_s > 0.0) {
-                return Err(Error::setting("sample interval", format!("{interval_s} s must be > 0")));
+        if self.realisations > Self::MAX_REALISATIONS {
+            return Err(Error::setting(
+                "realisations",
+                format!(
+                    "{} per grid point exceed the limit of {} (2^20) on either backend",
+                    self.realisations,
+                    Self::MAX_REALISATIONS
+                ),
+            ));
+        }
+        if self.first_realisation.checked_add(self.realisations).is_none() {
+            return Err(Error::setting("realisations", "the realisation indices must stay below 2^32"));
+        }
+        let paths = self.points.len() as u64 * u64::from(self.realisations);
+        let highest_hz = self.points.iter().map(|p| p.condition.excitation_frequency_hz).fold(0.0, f64::max);
+        let (cycles, kept_bytes) = match self.record {
+            Record::Samples { interval_s, duration_s, .. } => {
+                if !(interval_s.is_finite() && interval_s > 0.0) {
+                    return Err(Error::setting("sample interval", format!("{interval_s} s must be > 0")));
+                }
+                if !(duration_s.is_finite() && duration_s >= interval_s) {
+                    return Err(Error::setting(
+                        "record length",
+                        format!("{duration_s} s must be at least one sample interval"),
+                    ));
+                }
+                let periods = (duration_s * highest_hz).ceil() + 1.0 + f64::from(self.plan.warmup_cycles);
+                let samples = (duration_s / interval_s).round();
+                (periods.min(1e30) as u64, (samples * paths as f64 * 40.0).min(1e30) as u64)
             }
-            if !(duration_s.is_finite() && duration_s >= interval_s) {
+            Record::Peaks => {
+                (self.plan.total_cycles(), paths.saturating_mul(u64::from(self.plan.measured_cycles)) * 16)
+            }
+            Record::Sums => (self.plan.total_cycles(), 0),
+        };
+        if cycles > Self::MAX_CYCLES {
+            return Err(Error::setting(
+                "cycles",
+                format!(
+                    "{cycles} excitation periods per realisation (warm-up included) exceed the limit of {} (2^24) \
+                     on either backend",
+                    Self::MAX_CYCLES
+                ),
+            ));
+        }
+        let peaks = u64::from(self.realisations) * u64::from(self.plan.measured_cycles);
+        if !matches!(self.record, Record::Samples { .. }) && peaks > Self::MAX_PEAKS_PER_POINT {
+            return Err(Error::setting(
+                "run size",
+                format!(
+                    "realisations × measured cycles = {peaks} peaks per grid point exceed the limit of 2^32 − 1 on \
+                     either backend"
+                ),
+            ));
+        }
+        if kept_bytes > Self::MAX_KEPT_BYTES {
+            return Err(Error::setting(
+                "run size",
+                format!(
+                    "the per-realisation output kept in memory would take {} MiB, over the limit of {} MiB",
+                    kept_bytes >> 20,
+                    Self::MAX_KEPT_BYTES >> 20
+                ),
+            ));
+        }
+        self.model.validate()?;
+        for p in self.points {
+            let o = Oscillator::new(self.model, p.condition)?;
+            let at = p.condition.describe();
+            if !(p.initial.x_m.is_finite() && p.initial.v_m_per_s.is_finite()) {
+                return Err(Error::Diverged {
+                    point: at,
+                    message: "the starting state is not finite (an undamped model driven exactly at resonance has \
+                              no steady state); move the frequency or add damping"
+                        .into(),
+                });
+            }
+            let r = &p.range;
+            if !(r.lo_m.is_finite() && r.hi_m.is_finite() && r.lo_m < r.hi_m && r.phase_ref_rad.is_finite()) {
+                return Err(Error::setting("peak range", format!("the range at {at} must be finite and non-empty")));
+            }
+            let point_cycles = match self.record {
+                Record::Samples { duration_s, .. } => {
+                    ((duration_s * p.condition.excitation_frequency_hz).ceil() + 1.0) as u64
+                        + u64::from(self.plan.warmup_cycles)
+                }
+                _ => cycles,
+            };
+            if o.noise_intervals_in(point_cycles) >= Self::MAX_NOISE_INTERVALS {
                 return Err(Error::setting(
-                    "record length",
-                    format!("{duration_s} s must be at least one sample interval"),
+                    "run length",
+                    format!(
+                        "{point_cycles} cycles at {at} span {} noise intervals of {} s, which must stay below 2^32 on \
+                         either backend",
+                        o.noise_intervals_in(point_cycles),
+                        self.model.noise.interval_s
+                    ),
                 ));
             }
         }
@@ -242,6 +370,7 @@ impl Engine {
     /// Records of `duration_s` s sampled every `interval_s` s after the
     /// plan's warm-up, point-major.
     pub fn records(&self, job: &Job<'_>, interval_s: f64, duration_s: f64) -> Result<Vec<Vec<Sample>>> {
-        Ok(self.run(&Job { record: Record::Samples { interval_s, duration_s }, ..*job }, &mut |_, _| {})?.records)
+        let record = Record::Samples { interval_s, duration_s, at_noise_boundaries: false };
+        Ok(self.run(&Job { record, ..*job }, &mut |_, _| {})?.records)
     }
 }

@@ -9,6 +9,86 @@ use serde::{Deserialize, Serialize};
 use crate::engine::effects::{Effect, Effects};
 use crate::error::{Error, Result};
 
+/// The physically sensible ranges that every parameter and grid coordinate
+/// must lie in, wherever it comes from (model file, `--set`, grid flags,
+/// manifests). They are wide enough for any friction rig and keep every
+/// derived quantity (stiffness, damping coefficient, forces) finite in f64
+/// and in the GPU's f32.
+pub mod limits {
+    /// Block mass, kg.
+    pub const MASS_KG: (f64, f64) = (1e-9, 1e6);
+    /// Natural and excitation frequencies, Hz.
+    pub const FREQUENCY_HZ: (f64, f64) = (1e-3, 1e6);
+    /// Damping ratio, – (below, not up to).
+    pub const DAMPING_RATIO_BELOW: f64 = 10.0;
+    /// Base excitation amplitude, m.
+    pub const AMPLITUDE_MAX_M: f64 = 1.0;
+    /// Normal force, its standard deviation and its harmonics, N.
+    pub const FORCE_MAX_N: f64 = 1e6;
+    /// |a|, |b|, σ_μ and the stiction excess, –.
+    pub const FRICTION_COEFFICIENT_MAX: f64 = 100.0;
+    /// Stribeck rate c, s/m.
+    pub const STRIBECK_RATE_MAX_S_PER_M: f64 = 1e6;
+    /// |d|, s²/m².
+    pub const QUADRATIC_MAX_S2_PER_M2: f64 = 1e6;
+    /// Noise hold interval, s.
+    pub const NOISE_INTERVAL_S: (f64, f64) = (1e-9, 1e6);
+    /// Effect lengths (hysteresis, stiction release), m.
+    pub const LENGTH_MAX_M: f64 = 1.0;
+    /// Effect times (noise correlation), s.
+    pub const TIME_MAX_S: f64 = 1e6;
+    /// Effect rates (normal-force drift), 1/s; effect strengths and exponents, –.
+    pub const RATE_MAX: f64 = 100.0;
+    /// Stiffness `k = m (2π f0)²` the ranges above allow, N/m.
+    pub const STIFFNESS_N_PER_M: (f64, f64) = (1e-15, 1e20);
+}
+
+/// A number for a message: plain when of ordinary size, else in exponent
+/// form (never 309 digits).
+pub fn fmt_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") }
+}
+
+/// What is wrong with `value` for the range `[lo, hi]` (`lo` excluded when
+/// `lo_open`), in words with `unit`; `None` when it is fine.
+pub fn range_problem(value: f64, lo: f64, hi: f64, lo_open: bool, unit: &str) -> Option<String> {
+    let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+    let (lo_s, hi_s) = (fmt_bound(lo), fmt_bound(hi));
+    let lower = if lo_open { format!("> {lo_s}{unit}") } else { format!(">= {lo_s}{unit}") };
+    if !value.is_finite() {
+        Some(format!("must be a finite number ({lower} and <= {hi_s}{unit})"))
+    } else if value < lo || (lo_open && value == lo) {
+        Some(format!("must be {lower} (and <= {hi_s}{unit})"))
+    } else if value > hi {
+        Some(format!("must be <= {hi_s}{unit} (a physically sensible range)"))
+    } else {
+        None
+    }
+}
+
+/// A range's bound for a message: `0`, `0.001`, `100`, `1e6`, `1e-9`.
+pub fn fmt_bound(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e4).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") }
+}
+
+/// What is wrong with an excitation frequency (Hz), if anything.
+pub fn excitation_frequency_problem(hz: f64) -> Option<String> {
+    let (lo, hi) = limits::FREQUENCY_HZ;
+    if hz.is_finite() && hz <= 0.0 {
+        return Some(format!(
+            "the excitation frequency must be > 0 Hz (between {} and {} Hz)",
+            fmt_bound(lo),
+            fmt_bound(hi)
+        ));
+    }
+    range_problem(hz, lo, hi, false, "Hz").map(|p| format!("the excitation frequency {p}"))
+}
+
+/// What is wrong with a nominal normal force (N), if anything.
+pub fn normal_force_problem(n: f64) -> Option<String> {
+    range_problem(n, 0.0, limits::FORCE_MAX_N, false, "N").map(|p| format!("the normal force {p}"))
+}
+
 /// The embedded default: the seed paper's rig (see the README for how the
 /// friction law was chosen).
 pub const PAPER_RIG_TOML: &str = include_str!("../../models/paper-rig.toml");
@@ -120,23 +200,42 @@ pub struct Condition {
 }
 
 impl Condition {
-    /// Checks that the condition is physical.
+    /// Checks that the condition is physical ([`limits`]).
     pub fn validate(&self) -> Result<()> {
-        if !(self.excitation_frequency_hz.is_finite() && self.excitation_frequency_hz > 0.0) {
+        if let Some(message) = excitation_frequency_problem(self.excitation_frequency_hz) {
             return Err(Error::InvalidParameter {
                 key: "excitation_frequency_hz".into(),
-                value: self.excitation_frequency_hz.to_string(),
-                message: "the excitation frequency must be a finite number > 0 Hz".into(),
+                value: fmt_value(self.excitation_frequency_hz),
+                message,
             });
         }
-        if !(self.normal_force_n.is_finite() && self.normal_force_n >= 0.0) {
+        if let Some(message) = normal_force_problem(self.normal_force_n) {
             return Err(Error::InvalidParameter {
                 key: "normal_force_n".into(),
-                value: self.normal_force_n.to_string(),
-                message: "the normal force must be a finite number >= 0 N".into(),
+                value: fmt_value(self.normal_force_n),
+                message,
             });
         }
         Ok(())
+    }
+
+    /// The same checks, blaming the flags the values came from.
+    pub fn validate_flags(&self, frequency_flag: &str, force_flag: &str) -> Result<()> {
+        if let Some(message) = excitation_frequency_problem(self.excitation_frequency_hz) {
+            return Err(Error::setting(
+                frequency_flag,
+                format!("`{}`: {message}", fmt_value(self.excitation_frequency_hz)),
+            ));
+        }
+        if let Some(message) = normal_force_problem(self.normal_force_n) {
+            return Err(Error::setting(force_flag, format!("`{}`: {message}", fmt_value(self.normal_force_n))));
+        }
+        Ok(())
+    }
+
+    /// Short description for messages, e.g. `7 Hz, 16.39 N`.
+    pub fn describe(&self) -> String {
+        format!("{} Hz, {} N", self.excitation_frequency_hz, self.normal_force_n)
     }
 }
 
@@ -148,10 +247,18 @@ impl Default for Model {
 }
 
 impl Model {
-    /// Reads a model file, applies `--set KEY=VALUE` overrides, and validates.
+    /// Reads a model file (a regular file of at most
+    /// [`MAX_MODEL_FILE_BYTES`](crate::io::MAX_MODEL_FILE_BYTES), UTF-8, an
+    /// optional byte-order mark), applies `--set KEY=VALUE` overrides, and
+    /// validates.
     pub fn from_file(path: &std::path::Path, overrides: &[String]) -> Result<Model> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Model::from_toml_str(&text, &path.display().to_string(), overrides)
+        let source_name = crate::io::shown(path);
+        let refuse = |message: String| Error::ModelSyntax { source_name: source_name.clone(), message };
+        let bytes = crate::io::read_bounded(path, crate::io::MAX_MODEL_FILE_BYTES)
+            .map_err(|e| refuse(format!("cannot read it: {e}")))?;
+        let text = std::str::from_utf8(crate::io::strip_bom(&bytes))
+            .map_err(|e| refuse(format!("not UTF-8 text (at byte {})", e.valid_up_to())))?;
+        Model::from_toml_str(text, &source_name, overrides)
     }
 
     /// The embedded default with overrides applied.
@@ -162,7 +269,8 @@ impl Model {
     /// Parses TOML text, applies overrides, and validates.
     pub fn from_toml_str(text: &str, source_name: &str, overrides: &[String]) -> Result<Model> {
         let syntax = |message: String| Error::ModelSyntax { source_name: source_name.to_string(), message };
-        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| syntax(e.to_string()))?;
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| syntax(toml_problem(text, &e)))?;
         for assignment in overrides {
             apply_override(&mut table, assignment)?;
         }
@@ -176,8 +284,10 @@ impl Model {
                 effects.join(", ")
             )));
         }
-        let model: Model =
-            Model::deserialize(toml::Value::Table(table)).map_err(|e: toml::de::Error| syntax(e.to_string()))?;
+        let model: Model = match Model::deserialize(toml::Value::Table(table.clone())) {
+            Ok(model) => model,
+            Err(e) => return Err(syntax(schema_problem(&table, &e))),
+        };
         model.validate()?;
         Ok(model)
     }
@@ -193,40 +303,88 @@ impl Model {
             if value.is_finite() && ok {
                 Ok(())
             } else {
-                Err(Error::InvalidParameter { key: key.into(), value: value.to_string(), message: message.into() })
+                Err(Error::InvalidParameter { key: key.into(), value: fmt_value(value), message: message.into() })
             }
         };
+        // A value within [lo, hi] (lo excluded when `open`); the message names the rule.
+        let within = |key: &str, value: f64, lo: f64, hi: f64, open: bool, unit: &str, what: &str| -> Result<()> {
+            match range_problem(value, lo, hi, open, unit) {
+                None => Ok(()),
+                Some(problem) => Err(Error::InvalidParameter {
+                    key: key.into(),
+                    value: fmt_value(value),
+                    message: format!("{what} {problem}"),
+                }),
+            }
+        };
+        use limits::*;
         let r = &self.rig;
-        check("rig.mass_kg", r.mass_kg, r.mass_kg > 0.0, "the mass must be > 0 kg")?;
-        check(
-            "rig.natural_frequency_hz",
-            r.natural_frequency_hz,
-            r.natural_frequency_hz > 0.0,
-            "the natural frequency must be > 0 Hz",
-        )?;
+        if r.mass_kg <= 0.0 {
+            check("rig.mass_kg", r.mass_kg, false, "the mass must be > 0 kg")?;
+        }
+        within("rig.mass_kg", r.mass_kg, MASS_KG.0, MASS_KG.1, false, "kg", "the mass")?;
+        if r.natural_frequency_hz <= 0.0 {
+            check("rig.natural_frequency_hz", r.natural_frequency_hz, false, "the natural frequency must be > 0 Hz")?;
+        }
+        let (f_lo, f_hi) = FREQUENCY_HZ;
+        within("rig.natural_frequency_hz", r.natural_frequency_hz, f_lo, f_hi, false, "Hz", "the natural frequency")?;
         check(
             "rig.damping_ratio",
             r.damping_ratio,
-            (0.0..10.0).contains(&r.damping_ratio),
+            (0.0..DAMPING_RATIO_BELOW).contains(&r.damping_ratio),
             "the damping ratio must be >= 0 (and < 10)",
         )?;
         let e = &self.excitation;
-        check("excitation.amplitude_m", e.amplitude_m, e.amplitude_m >= 0.0, "the base amplitude must be >= 0 m")?;
+        within("excitation.amplitude_m", e.amplitude_m, 0.0, AMPLITUDE_MAX_M, false, "m", "the base amplitude")?;
         let f = &self.friction;
-        check("friction.a", f.a, true, "must be a finite number")?;
+        let mu = FRICTION_COEFFICIENT_MAX;
+        within("friction.a", f.a, -mu, mu, false, "", "the friction level a")?;
+        within("friction.b", f.b, -mu, mu, false, "", "the Stribeck drop b")?;
         check("friction.b", f.b, f.a + f.b >= 0.0, "the friction coefficient at rest, a + b, must be >= 0")?;
-        check("friction.c", f.c, f.c >= 0.0, "the Stribeck rate must be >= 0 s/m")?;
-        check("friction.d", f.d, true, "must be a finite number")?;
-        check("friction.sigma", f.sigma, f.sigma >= 0.0, "a standard deviation must be >= 0")?;
+        within("friction.c", f.c, 0.0, STRIBECK_RATE_MAX_S_PER_M, false, "s/m", "the Stribeck rate")?;
+        let d_max = QUADRATIC_MAX_S2_PER_M2;
+        within("friction.d", f.d, -d_max, d_max, false, "s²/m²", "the quadratic term")?;
+        within("friction.sigma", f.sigma, 0.0, mu, false, "", "a standard deviation")?;
         let n = &self.normal_force;
-        check("normal_force.sigma", n.sigma, n.sigma >= 0.0, "a standard deviation must be >= 0 N")?;
-        check(
-            "noise.interval_s",
-            self.noise.interval_s,
-            self.noise.interval_s > 0.0,
-            "the noise hold interval must be > 0 s",
-        )?;
-        self.effects.validate()?;
+        within("normal_force.sigma", n.sigma, 0.0, FORCE_MAX_N, false, "N", "a standard deviation")?;
+        if self.noise.interval_s <= 0.0 {
+            check("noise.interval_s", self.noise.interval_s, false, "the noise hold interval must be > 0 s")?;
+        }
+        let (t_lo, t_hi) = NOISE_INTERVAL_S;
+        within("noise.interval_s", self.noise.interval_s, t_lo, t_hi, false, "s", "the noise hold interval")?;
+        // The effects' own checks; their values are shown compactly (no 309-digit numbers).
+        self.effects.validate().map_err(|e| match e {
+            Error::InvalidParameter { key, value, message } => {
+                let value = value.parse::<f64>().map(fmt_value).unwrap_or(value);
+                Error::InvalidParameter { key, value, message }
+            }
+            e => e,
+        })?;
+        self.validate_effect_ranges()?;
+        // Derived quantities: within the ranges above they are finite; checked all the same.
+        let k = self.stiffness_n_per_m();
+        let (k_lo, k_hi) = STIFFNESS_N_PER_M;
+        if !(k.is_finite() && (k_lo..=k_hi).contains(&k)) {
+            return Err(Error::InvalidParameter {
+                key: "rig".into(),
+                value: format!("k = {k:e} N/m"),
+                message: format!(
+                    "the stiffness m (2π f0)² must lie between {} and {} N/m; change rig.mass_kg or \
+                     rig.natural_frequency_hz",
+                    fmt_bound(k_lo),
+                    fmt_bound(k_hi)
+                ),
+            });
+        }
+        let c = self.damping_n_s_per_m();
+        let base_force = k * self.excitation.amplitude_m;
+        if !(c.is_finite() && base_force.is_finite()) {
+            return Err(Error::InvalidParameter {
+                key: "rig".into(),
+                value: format!("c = {c:e} N·s/m, k U0 = {base_force:e} N"),
+                message: "the damping coefficient and the base force must be finite".into(),
+            });
+        }
         let s = self.solver.steps_per_period;
         if !(Solver::MIN_STEPS_PER_PERIOD..=Solver::MAX_STEPS_PER_PERIOD).contains(&s) {
             return Err(Error::InvalidParameter {
@@ -238,6 +396,57 @@ impl Model {
                     Solver::MIN_STEPS_PER_PERIOD
                 ),
             });
+        }
+        Ok(())
+    }
+
+    /// Magnitude limits of the effect tables (their forms and signs are
+    /// checked by [`Effects::validate`]).
+    fn validate_effect_ranges(&self) -> Result<()> {
+        use limits::*;
+        let bound = |key: &str, value: f64, max: f64, unit: &str| -> Result<()> {
+            if value.abs() <= max {
+                Ok(())
+            } else {
+                let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+                Err(Error::InvalidParameter {
+                    key: key.into(),
+                    value: fmt_value(value),
+                    message: format!("its magnitude must be <= {}{unit} (a physically sensible range)", fmt_bound(max)),
+                })
+            }
+        };
+        let e = &self.effects;
+        if let Some(h) = &e.normal_force_harmonics {
+            for (k, a) in h.amplitudes_n.iter().enumerate() {
+                bound(&format!("normal_force_harmonics.amplitudes_n[{k}]"), *a, FORCE_MAX_N, "N")?;
+            }
+            for (k, p) in h.phases_rad.iter().enumerate() {
+                bound(&format!("normal_force_harmonics.phases_rad[{k}]"), *p, 1e3, "rad")?;
+            }
+            bound("normal_force_harmonics.shape", h.shape, RATE_MAX, "")?;
+        }
+        if let Some(g) = &e.non_gaussian_friction {
+            bound("non_gaussian_friction.strength", g.strength, RATE_MAX, "")?;
+            bound("non_gaussian_friction.load_exponent", g.load_exponent, RATE_MAX, "")?;
+            bound("non_gaussian_friction.reference_force_n", g.reference_force_n, FORCE_MAX_N, "N")?;
+        }
+        if let Some(h) = &e.friction_hysteresis {
+            bound("friction_hysteresis.length_m", h.length_m, LENGTH_MAX_M, "m")?;
+        }
+        if let Some(c) = &e.coloured_friction_noise {
+            bound("coloured_friction_noise.correlation_time_s", c.correlation_time_s, TIME_MAX_S, "s")?;
+        }
+        if let Some(s) = &e.stiction {
+            bound("stiction.excess", s.excess, FRICTION_COEFFICIENT_MAX, "")?;
+            bound("stiction.release_length_m", s.release_length_m, LENGTH_MAX_M, "m")?;
+        }
+        if let Some(l) = &e.load_dependent_friction {
+            bound("load_dependent_friction.strength", l.strength, RATE_MAX, "")?;
+            bound("load_dependent_friction.reference_force_n", l.reference_force_n, FORCE_MAX_N, "N")?;
+        }
+        if let Some(d) = &e.normal_force_drift {
+            bound("normal_force_drift.rate_per_s", d.rate_per_s, RATE_MAX, "1/s")?;
         }
         Ok(())
     }
@@ -279,6 +488,80 @@ impl Model {
         let (x_re, x_im) = (scale * re, -scale * im);
         (x_re, -omega * x_im)
     }
+}
+
+/// A TOML syntax error as `line L, column C: message`, without quoting the
+/// file (it may not be a model file at all).
+fn toml_problem(text: &str, e: &toml::de::Error) -> String {
+    let message = crate::io::excerpt(e.message().trim(), 200);
+    match e.span() {
+        Some(span) => {
+            let before = &text.as_bytes()[..span.start.min(text.len())];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
+    }
+}
+
+/// A schema error (wrong type, length, unknown or missing key) with the
+/// dotted key it concerns: each table is deserialised alone, from TOML text
+/// written for it, so that the error's span points at the key.
+fn schema_problem(table: &toml::Table, whole: &toml::de::Error) -> String {
+    fn first_error<T: serde::de::DeserializeOwned>(text: &str) -> Option<toml::de::Error> {
+        toml::from_str::<T>(text).err()
+    }
+    for (name, value) in table {
+        let shown_name = crate::io::excerpt(name, 60);
+        let Some(inner) = value.as_table() else {
+            return format!("`{shown_name}` must be a table");
+        };
+        let core = MODEL_TABLES.contains(&name.as_str());
+        let text = if core {
+            toml::to_string(inner).unwrap_or_default()
+        } else {
+            let mut single = toml::Table::new();
+            single.insert(name.clone(), value.clone());
+            toml::to_string(&single).unwrap_or_default()
+        };
+        let error = match name.as_str() {
+            "rig" => first_error::<Rig>(&text),
+            "excitation" => first_error::<Excitation>(&text),
+            "friction" => first_error::<Friction>(&text),
+            "normal_force" => first_error::<NormalForce>(&text),
+            "noise" => first_error::<Noise>(&text),
+            "solver" => first_error::<Solver>(&text),
+            _ => first_error::<Effects>(&text),
+        };
+        if let Some(e) = error {
+            let message = crate::io::excerpt(e.message().trim(), 200);
+            return match key_at(&text, e.span()) {
+                Some(key) if core => format!("`{shown_name}.{key}`: {message}"),
+                Some(key) => format!("`{key}`: {message}"),
+                None => format!("in table `{shown_name}`: {message}"),
+            };
+        }
+    }
+    crate::io::excerpt(whole.message().trim(), 200)
+}
+
+/// The dotted key of the `key = value` line that `span` starts on in TOML
+/// text written by `toml::to_string` (with its table header, if any).
+fn key_at(text: &str, span: Option<std::ops::Range<usize>>) -> Option<String> {
+    let start = span?.start.min(text.len());
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[line_start..].lines().next()?;
+    let (key, _) = line.split_once('=')?;
+    let key = crate::io::excerpt(key.trim().trim_matches('"'), 60);
+    let header = text[..line_start]
+        .lines()
+        .rev()
+        .find_map(|l| l.trim().strip_prefix('[').and_then(|h| h.strip_suffix(']')).map(|h| h.trim().to_string()));
+    Some(match header {
+        Some(h) => format!("{}.{key}", crate::io::excerpt(&h, 60)),
+        None => key,
+    })
 }
 
 /// Applies one `KEY=VALUE` override to a TOML table, creating tables on the

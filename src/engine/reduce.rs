@@ -192,6 +192,11 @@ pub struct PointAccumulator {
     pub sum_phase_sin: i128,
     /// Σ of their quantised versines.
     pub sum_phase_versine: u128,
+    /// Periods whose peak (as f32) or phase was not finite: they are counted
+    /// here and nowhere else (never quantised or binned), and a backend
+    /// refuses a result where this is not zero.
+    #[serde(default)]
+    pub non_finite: u64,
 }
 
 impl PointAccumulator {
@@ -207,13 +212,20 @@ impl PointAccumulator {
             histogram: vec![0; HISTOGRAM_BINS as usize],
             sum_phase_sin: 0,
             sum_phase_versine: 0,
+            non_finite: 0,
         }
     }
 
     /// Adds one measured period: its peak (m), phase (rad) and stuck share
-    /// of the period.
+    /// of the period. A period whose peak (as f32) or phase is not finite is
+    /// only counted in [`PointAccumulator::non_finite`]. Mirrors
+    /// `tally_period` in `reduce.wgsl`.
     pub fn add_period(&mut self, peak_m: f64, phase_rad: f64, stuck_share: f64) {
         let peak = peak_m as f32;
+        if !(peak.is_finite() && phase_rad.is_finite()) {
+            self.non_finite += 1;
+            return;
+        }
         let (q, clamped) = self.range.quantise(peak);
         let (sine, versine) = self.range.quantise_phase(phase_rad);
         self.sum_phase_sin += i128::from(sine);
@@ -237,6 +249,7 @@ impl PointAccumulator {
         self.clamped += other.clamped;
         self.sum_phase_sin += other.sum_phase_sin;
         self.sum_phase_versine += other.sum_phase_versine;
+        self.non_finite += other.non_finite;
         for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
             *a += b;
         }

@@ -6,14 +6,18 @@
 //! thread, the step size or the dispatch layout. `shaders/rng.wgsl` is the
 //! same generator in WGSL, word for word.
 
-/// Noise stream of the friction coefficient's random part `ξ_μ`.
-pub const STREAM_FRICTION: u32 = 0;
-/// Noise stream of the normal force's random part `ξ_N`.
-pub const STREAM_NORMAL_FORCE: u32 = 1;
-/// Noise stream driving the slow part of `two_scale` coloured friction noise.
-pub const STREAM_COLOUR: u32 = 2;
-/// Noise stream of `noisy` stiction.
-pub const STREAM_STICTION: u32 = 3;
+/// The main noise stream. Its block for an interval gives two Box–Muller
+/// pairs: pair A is the friction coefficient's random part `ξ_μ` (cosine
+/// branch) and the normal force's `ξ_N` (sine branch), so the baseline draws
+/// one Philox block and one pair per interval; pair B, drawn only by effects
+/// that need it, is a second friction value (non-Gaussian forms) and the
+/// stiction noise.
+pub const STREAM_MAIN: u32 = 0;
+/// Noise stream of coloured friction noise's slow parts.
+pub const STREAM_COLOUR: u32 = 1;
+/// Noise stream of the measurement noise a diagnosis adds to simulated
+/// records (keyed by sample index, not interval).
+pub const STREAM_SENSOR: u32 = 2;
 
 /// Philox4x32's round multipliers.
 pub const PHILOX_M0: u32 = 0xD251_1F53;
@@ -71,16 +75,36 @@ pub fn box_muller(u1: f64, u2: f64) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
-/// Both standard Gaussians of a key: words 0–1 and words 2–3 of its block.
+/// Two independent standard Gaussians from two uniforms: Box–Muller's
+/// cosine and sine branches, `r cos θ` and `r sin θ`.
 #[inline]
-pub fn gaussian_pair(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> (f64, f64) {
-    let w = philox4x32_10(noise_counter(realisation, stream, interval), key);
-    (box_muller(uniform_open(w[0]), uniform_open(w[1])), box_muller(uniform_open(w[2]), uniform_open(w[3])))
+pub fn box_muller_pair(u1: f64, u2: f64) -> (f64, f64) {
+    let r = (-2.0 * u1.ln()).sqrt();
+    let (sin, cos) = (std::f64::consts::TAU * u2).sin_cos();
+    (r * cos, r * sin)
 }
 
-/// The standard Gaussian value of key `(seed, realisation, stream, interval)`.
-/// Words 0 and 1 of the Philox block feed Box–Muller; words 2 and 3 are
-/// left for effects that need a second value from the same key.
+/// The Philox block of key `(seed, realisation, stream, interval)`.
+#[inline]
+pub fn block(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> [u32; 4] {
+    philox4x32_10(noise_counter(realisation, stream, interval), key)
+}
+
+/// Pair A of a block: the Gaussians of words 0 and 1.
+#[inline]
+pub fn pair_a(words: [u32; 4]) -> (f64, f64) {
+    box_muller_pair(uniform_open(words[0]), uniform_open(words[1]))
+}
+
+/// Pair B of a block: the Gaussians of words 2 and 3.
+#[inline]
+pub fn pair_b(words: [u32; 4]) -> (f64, f64) {
+    box_muller_pair(uniform_open(words[2]), uniform_open(words[3]))
+}
+
+/// The first standard Gaussian of key `(seed, realisation, stream,
+/// interval)`: the cosine branch of pair A (the same value as `pair_a(..).0`
+/// up to rounding of `sin_cos` against `cos`).
 #[inline]
 pub fn gaussian(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> f64 {
     let w = philox4x32_10(noise_counter(realisation, stream, interval), key);

@@ -10,29 +10,39 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 22] = [
+const ZERO: [&[&str]; 29] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
     ],
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]", "normal_force_harmonics.form=\"bumps\""],
     &["normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]", "normal_force_harmonics.form=\"square\""],
+    &[
+        "normal_force_harmonics.amplitudes_per_n0=[0.0, 0.0, 0.0, 0.0]",
+        "normal_force_harmonics.phases_rad=[1.0, 2.0, 0.0, 0.0]",
+    ],
     &["non_gaussian_friction.strength=0.0"],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"tukey_h\""],
+    &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"mixture\""],
     &["friction_hysteresis.length_m=0.0"],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"rational\""],
+    &["friction_hysteresis.time_constant_s=0.0", "friction_hysteresis.form=\"lag\""],
     &["coloured_friction_noise.correlation_time_s=0.0"],
+    &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"hold\""],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"two_scale\""],
+    &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"multi_scale\""],
     &["stiction.excess=0.0"],
     &["stiction.excess=0.0", "stiction.form=\"noisy\""],
     &["stiction.excess=0.0", "stiction.form=\"decaying\""],
     &["stiction.excess=0.0", "stiction.release_length_m=3e-4"],
+    &["stiction.excess=0.0", "stiction.form=\"dwell\"", "stiction.dwell_time_s=0.05"],
     &["load_dependent_friction.strength=0.0"],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"saturating\""],
+    &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"exponential\""],
     &["normal_force_drift.rate_per_s=0.0"],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"wander\""],
@@ -40,7 +50,7 @@ const ZERO: [&[&str]; 22] = [
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time).
-const ON: [&[&str]; 22] = [
+const ON: [&[&str]; 29] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -55,22 +65,32 @@ const ON: [&[&str]; 22] = [
         "normal_force_harmonics.form=\"square\"",
         "normal_force_harmonics.shape=3.0",
     ],
+    &[
+        "normal_force_harmonics.amplitudes_per_n0=[0.02, 0.01, 0.0, 0.0]",
+        "normal_force_harmonics.phases_rad=[1.0, 2.0, 0.0, 0.0]",
+    ],
     &["non_gaussian_friction.strength=0.8"],
     &["non_gaussian_friction.strength=0.7", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.2", "non_gaussian_friction.form=\"tukey_h\""],
+    &["non_gaussian_friction.strength=0.8", "non_gaussian_friction.form=\"mixture\""],
     &["friction_hysteresis.length_m=2e-4"],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"rational\""],
+    &["friction_hysteresis.time_constant_s=0.01", "friction_hysteresis.form=\"lag\""],
     &["coloured_friction_noise.correlation_time_s=0.05"],
+    &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"hold\""],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"two_scale\""],
+    &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"multi_scale\""],
     &["stiction.excess=0.15"],
     &["stiction.excess=0.15", "stiction.form=\"noisy\""],
     &["stiction.excess=0.15", "stiction.form=\"decaying\""],
     &["stiction.excess=0.15", "stiction.release_length_m=3e-4"],
+    &["stiction.excess=0.15", "stiction.form=\"dwell\"", "stiction.dwell_time_s=0.02"],
     &["load_dependent_friction.strength=0.01"],
     &["load_dependent_friction.strength=0.3", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"saturating\""],
+    &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"exponential\""],
     &["normal_force_drift.rate_per_s=0.01"],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"wander\""],
@@ -193,4 +213,18 @@ fn each_effect_does_what_it_says() {
     let (gap, gap_base) = (branch_gap(&model(&["friction_hysteresis.length_m=3e-4"])), branch_gap(&Model::default()));
     println!("decelerating minus accelerating friction coefficient: hysteresis {gap:.4}, baseline {gap_base:.4}");
     assert!(gap > 0.03 && gap_base.abs() < 0.01, "hysteresis branch gap {gap} (baseline {gap_base})");
+    // A friction coefficient that lags the falling Stribeck law in time
+    // (Hess & Soom) separates the branches the other way: it stays high
+    // while the block speeds up and low while it slows down.
+    let lag_gap = branch_gap(&model(&["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"]));
+    println!("decelerating minus accelerating friction coefficient: lag 10 ms {lag_gap:.4}");
+    assert!(lag_gap < -0.015, "lag branch gap {lag_gap}");
+    // Static friction that ages while stuck holds the block longer, but less
+    // than the full excess at once.
+    let dwell = stick_time(&model(&["stiction.form=\"dwell\"", "stiction.excess=0.2", "stiction.dwell_time_s=0.02"]));
+    println!("stick time: baseline {stuck_base:.4}, dwell {dwell:.4}, constant {stuck:.4}");
+    assert!(
+        dwell > 1.05 * stuck_base && dwell < stuck,
+        "dwell stiction: stick time {dwell} vs {stuck_base} and {stuck}"
+    );
 }

@@ -31,11 +31,37 @@ pub fn non_gaussian(form: NonGaussianForm, s: f64, g: f64, g2: f64) -> f64 {
         }
         NonGaussianForm::TukeyH => g * (0.5 * s * g * g).exp() * (1.0 - 2.0 * s).powf(0.75),
         NonGaussianForm::Skew => (g + s * (g2 * g2 - 1.0) * std::f64::consts::FRAC_1_SQRT_2) / (1.0 + s * s).sqrt(),
+        NonGaussianForm::Mixture => {
+            if s == 0.0 {
+                return g;
+            }
+            // With probability p (g2 below its p-quantile) the outlier
+            // component N(3s, (1 + s)²), else N(0, 1); standardised.
+            let p = MIXTURE_OUTLIER_SHARE;
+            let (shift, width) = (3.0 * s, 1.0 + s);
+            let x = if g2 < MIXTURE_OUTLIER_QUANTILE { shift + width * g } else { g };
+            let mean = p * shift;
+            let variance = p * (width * width + shift * shift) + (1.0 - p) - mean * mean;
+            (x - mean) / variance.sqrt()
+        }
     }
 }
 
+/// Share of `mixture` non-Gaussian noise drawn from its outlier component.
+pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
+/// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].
+pub const MIXTURE_OUTLIER_QUANTILE: f64 = -1.281_551_565_544_600_4;
+
+/// Excess of the static coefficient after `dwell_s` seconds stuck, with
+/// ageing time `ageing_s` (stiction `dwell`): `Δ (1 − e^(−t_d/τ_d))`, the
+/// full `Δ` at once when `τ_d` is 0.
+pub fn dwell_excess(excess: f64, dwell_s: f64, ageing_s: f64) -> f64 {
+    if ageing_s == 0.0 { excess } else { excess * (1.0 - (-dwell_s.max(0.0) / ageing_s).exp()) }
+}
+
 /// Build-up of sliding friction with displacement `d` (m) since slip start,
-/// over the characteristic displacement `length` (m); 1 when `length` is 0.
+/// over the characteristic displacement `length` (m); 1 when `length` is 0
+/// and for the `lag` form (which acts through its own state).
 pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
     if length == 0.0 {
         return 1.0;
@@ -45,6 +71,7 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
         HysteresisForm::Tanh => r.tanh(),
         HysteresisForm::Rational => r / (r + 1.0),
         HysteresisForm::Exponential => 1.0 - (-r).exp(),
+        HysteresisForm::Lag => 1.0,
     }
 }
 

@@ -12,10 +12,11 @@ pub mod oscillator;
 
 use rayon::prelude::*;
 
-use crate::engine::oscillator::{PathResult, Sample};
+use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, Sample};
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use oscillator::{Path, Sampler, phase_of};
 
 /// Most realisations integrated between two progress reports (and held in
 /// memory at once when only sums are kept).
@@ -32,53 +33,162 @@ impl Backend for CpuBackend {
     fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
         let oscillators = job.oscillators()?;
         let n = job.realisations as usize;
-        let tasks: Vec<(usize, u32)> = (0..job.points.len())
-            .flat_map(|p| (0..job.realisations).map(move |r| (p, job.first_realisation + r)))
-            .collect();
+        // Tasks (point, realisation) are numbered point-major and made one
+        // chunk at a time, so nothing grows with the ensemble but the output.
+        let total_paths = job.points.len() * n;
+        let task = |i: usize| (i / n, job.first_realisation + (i % n) as u32);
         let total = job.work();
         let per_path = job.plan.total_cycles();
         let mut output = Output::default();
-        if let Record::Samples { interval_s, duration_s } = job.record {
-            for (done, chunk) in tasks.chunks(PATHS_PER_CHUNK).enumerate() {
-                let records: Vec<Vec<Sample>> = chunk
-                    .par_iter()
-                    .map(|&(p, r)| {
-                        let point = &job.points[p];
-                        oscillator::sample_record(
+        if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
+            for start in (0..total_paths).step_by(PATHS_PER_CHUNK) {
+                let end = (start + PATHS_PER_CHUNK).min(total_paths);
+                let records: Vec<Vec<Sample>> = (start..end)
+                    .into_par_iter()
+                    .map(|i| {
+                        let (p, r) = task(i);
+                        sample_record(
                             &oscillators[p],
                             job.seed,
                             r,
                             job.plan.warmup_cycles,
                             duration_s,
                             interval_s,
-                            point.initial,
+                            at_noise_boundaries,
+                            job.points[p].initial,
                         )
                     })
                     .collect();
+                for (i, record) in (start..end).zip(&records) {
+                    if let Some(s) = record.iter().find(|s| !sample_is_finite(s)) {
+                        let (p, r) = task(i);
+                        return Err(diverged(job, p, r, &format!("a non-finite sample at t = {} s", s.t_s)));
+                    }
+                }
                 output.records.extend(records);
-                progress(((done * PATHS_PER_CHUNK + chunk.len()) as u64 * per_path).min(total), total);
+                progress((end as u64 * per_path).min(total), total);
             }
             return Ok(output);
         }
         output.sums = job.points.iter().map(|p| PointAccumulator::new(p.range)).collect();
         let mut done = 0u64;
-        for chunk in tasks.chunks(PATHS_PER_CHUNK) {
-            let paths: Vec<PathResult> = chunk
-                .par_iter()
-                .map(|&(p, r)| {
-                    oscillator::simulate_path(&oscillators[p], job.seed, r, job.plan, job.points[p].initial, None)
+        for start in (0..total_paths).step_by(PATHS_PER_CHUNK) {
+            let end = (start + PATHS_PER_CHUNK).min(total_paths);
+            let paths: Vec<PathResult> = (start..end)
+                .into_par_iter()
+                .map(|i| {
+                    let (p, r) = task(i);
+                    simulate_path(&oscillators[p], job.seed, r, job.plan, job.points[p].initial, None)
                 })
                 .collect();
-            for (&(p, _), path) in chunk.iter().zip(&paths) {
+            for (i, path) in (start..end).zip(&paths) {
+                let (p, r) = task(i);
+                if let Some(what) = non_finite_part(path) {
+                    return Err(diverged(job, p, r, what));
+                }
                 output.sums[p].add_path(path, oscillators[p].period_s);
+                if output.sums[p].non_finite > 0 {
+                    return Err(diverged(job, p, r, "a peak beyond the range of f32"));
+                }
             }
             if job.record == Record::Peaks {
                 output.paths.extend(paths);
             }
-            done += chunk.len() as u64 * per_path;
+            done += (end - start) as u64 * per_path;
             progress(done, total);
         }
         debug_assert!(job.record != Record::Peaks || output.paths.len() == n * job.points.len());
         Ok(output)
     }
+}
+
+fn sample_is_finite(s: &Sample) -> bool {
+    [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n].iter().all(|v| v.is_finite())
+}
+
+/// What of a finished path is not finite, if anything.
+fn non_finite_part(path: &PathResult) -> Option<&'static str> {
+    if path.peaks_m.iter().any(|v| !v.is_finite()) {
+        Some("a non-finite peak")
+    } else if path.phases_rad.iter().any(|v| !v.is_finite()) {
+        Some("a non-finite phase")
+    } else if !path.stick_time_s.is_finite() {
+        Some("a non-finite stuck time")
+    } else {
+        None
+    }
+}
+
+/// The error for a path that left the finite numbers: nothing of it is reduced.
+fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error {
+    Error::Diverged {
+        point: job.points[point].condition.describe(),
+        message: format!(
+            "realisation {realisation} produced {what} (the f64 reference integrator); the model drives the \
+             oscillator out of range there, so check its parameters"
+        ),
+    }
+}
+
+/// One realisation sampled like a measured record: `seconds` of samples
+/// every `sample_interval_s`, starting after `warmup_cycles` periods, with
+/// times measured from the end of the warm-up. With `at_noise_boundaries`
+/// and samples as far apart as the noise intervals (as a diagnosis's
+/// replicates are), they are taken at the noise boundaries themselves, from the first one at or after
+/// the warm-up's end (so the first sample's time is within one interval of
+/// 0): samples then split no steps.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sample_record(
+    osc: &Oscillator,
+    seed: u64,
+    realisation: u32,
+    warmup_cycles: u32,
+    seconds: f64,
+    sample_interval_s: f64,
+    at_noise_boundaries: bool,
+    initial: InitialState,
+) -> Vec<Sample> {
+    let start_s = f64::from(warmup_cycles) * osc.period_s;
+    let cycles = (seconds / osc.period_s).ceil() as u32 + 1;
+    let noisy = osc.noise_interval_fixed != Oscillator::NOISELESS_INTERVAL;
+    let aligned = at_noise_boundaries && noisy && (sample_interval_s / osc.noise_interval_s - 1.0).abs() < 1e-9;
+    let mut sampler = if aligned {
+        let first = (u128::from(warmup_cycles) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64;
+        Sampler::at_noise_boundaries(first)
+    } else {
+        Sampler::new(sample_interval_s, start_s)
+    };
+    let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
+    simulate_path(osc, seed, realisation, plan, initial, Some(&mut sampler));
+    let mut samples = sampler.samples;
+    samples.truncate((seconds / sample_interval_s).round() as usize);
+    for s in &mut samples {
+        s.t_s -= start_s;
+    }
+    samples
+}
+
+/// Runs one realisation and returns its per-period peaks and phases.
+pub(crate) fn simulate_path(
+    osc: &Oscillator,
+    seed: u64,
+    realisation: u32,
+    plan: RunPlan,
+    initial: InitialState,
+    mut sampler: Option<&mut Sampler>,
+) -> PathResult {
+    let mut path = Path::new(osc, seed, realisation, initial);
+    let mut peaks_m = Vec::with_capacity(plan.measured_cycles as usize);
+    let mut phases_rad = Vec::with_capacity(plan.measured_cycles as usize);
+    let mut stick_time_s = 0.0;
+    for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
+        let measuring = cycle >= plan.warmup_cycles;
+        path.run_period(measuring, sampler.as_deref_mut());
+        if measuring {
+            peaks_m.push(path.period_max_x_m);
+            phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
+            stick_time_s += path.period_stick_s;
+        }
+    }
+    PathResult { peaks_m, phases_rad, stick_time_s }
 }

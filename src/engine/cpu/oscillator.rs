@@ -1,14 +1,18 @@
 //! The f64 reference integrator of one realisation.
 //!
-//! Each realisation is integrated on a fixed grid of `steps_per_period` steps
-//! per excitation period. Noise-interval boundaries and output samples split
-//! steps, so every random value holds exactly over its interval. Slip phases
+//! Each realisation is integrated in steps of at most `T / steps_per_period`.
+//! Noise-interval boundaries, output samples and period ends are step
+//! boundaries (each span between them is divided into equal steps), so
+//! every random value holds exactly over its interval. Slip phases
 //! use classical RK4 with the slip direction frozen (the ODE is smooth there);
 //! a velocity zero inside a step is located by root finding on the RK4 map
 //! itself (Illinois method), and the stick→slip breakaway is solved in closed
 //! form because the block is at rest and only the base moves. No `sgn` is
-//! smoothed.
+//! smoothed. The base's `cos Ωt` and `sin Ωt` are exact at the start of each
+//! span and carried through its steps by rotation (by `Ωh/2` for each half
+//! step), so a step evaluates no trigonometric function.
 //!
+//! This file holds one type, the realisation being integrated ([`Path`]).
 //! `shaders/oscillator.wgsl` is the same algorithm in f32; the functions
 //! below carry the kernel's names and come in its order. The two differ on
 //! purpose in these places, and nowhere else:
@@ -19,14 +23,15 @@
 //! | events per segment before forcing progress | 64 | 16 | a chattering guard only; the GPU's loops must stay short (lavapipe's loop limiter, SIMD divergence) |
 //! | Illinois iterations / tolerance on the step | 100 / 1e-15 · max(h, 10⁻⁶ T) | 40 / 2e-7 · h | each converges to its own precision: 1e-15 is f64's, 2e-7 is f32's (2⁻²³ ≈ 1.2e-7) |
 //! | halvings probing for motion after a start from rest | 60 | 30 | 2⁻⁶⁰ and 2⁻³⁰ of the step are below each type's resolution |
-//! | time inside a period | `step · dt` in f64 | integer step counter, boundary position `frac · steps / 2³²` by `mulhilo` | f32 cannot hold 32.32 fixed point; both switch noise at the same instants |
+//! | time inside a period | span start + `k · h` in f64 | the same in f32, boundary position `frac · S / 2³²` by `mulhilo` | f32 cannot hold 32.32 fixed point; both switch noise at the same instants |
+//! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //!
 //! Output samples (records) split steps on the CPU only.
 
 use crate::engine::cpu::effects;
-use crate::engine::effects::{ColourForm, STICTION_DECAY_M, StictionForm};
-use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, Sample};
+use crate::engine::effects::{ColourForm, HysteresisForm, STICTION_DECAY_M, StictionForm};
+use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
 
 /// Whether the block sticks or slips, and in which direction.
@@ -43,16 +48,69 @@ const FIXED_ONE: f64 = 4_294_967_296.0;
 /// (guards against chattering at exactly balanced forces).
 const MAX_EVENTS_PER_SEGMENT: u32 = 64;
 
+/// `cos Ωt` and `sin Ωt` of the base at one time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Trig {
+    pub(crate) cos: f64,
+    pub(crate) sin: f64,
+}
+
+impl Trig {
+    /// At phase `theta` (rad).
+    fn at(theta: f64) -> Trig {
+        let (sin, cos) = theta.sin_cos();
+        Trig { cos, sin }
+    }
+
+    /// A rotation by a half step's angle `theta` (rad): Taylor series below
+    /// 0.05 rad (terms through θ⁹: under 1e-19 off, below f64's resolution),
+    /// `sin_cos` above.
+    fn turn(theta: f64) -> Trig {
+        if theta.abs() > 0.05 {
+            return Trig::at(theta);
+        }
+        let t2 = theta * theta;
+        let sin = theta * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))));
+        let cos = 1.0 - t2 / 2.0 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))));
+        Trig { cos, sin }
+    }
+
+    /// Advanced by the rotation `by` (the cos and sin of an angle).
+    fn rotated(self, by: Trig) -> Trig {
+        Trig { cos: self.cos * by.cos - self.sin * by.sin, sin: self.sin * by.cos + self.cos * by.sin }
+    }
+}
+
+/// One RK4 step of the slip ODE, with what the phase quadrature needs: the
+/// four stage displacements (m) and the base's trig at the step's start,
+/// middle and end.
+#[derive(Clone, Copy, Debug)]
+struct SlipStep {
+    x_m: f64,
+    v_m_per_s: f64,
+    /// The lagged friction coefficient at the end (hysteresis `lag`), –.
+    lagged_mu: f64,
+    stage_x_m: [f64; 4],
+    trig: [Trig; 3],
+}
+
+/// The phase lag (rad) of a period's fundamental behind the base, from
+/// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the period: the fundamental is
+/// `sqrt(a² + b²) cos(Ωt − φ)` with `φ = atan2(b, a)` (`interfaces.md`).
+pub fn phase_of(cos_integral: f64, sin_integral: f64) -> f64 {
+    sin_integral.atan2(cos_integral)
+}
+
 /// The state of one realisation.
 #[derive(Clone, Debug)]
-struct Path<'a> {
+pub(crate) struct Path<'a> {
     osc: &'a Oscillator,
     key: [u32; 2],
     realisation: u32,
     /// Displacement x, m.
-    x_m: f64,
+    pub(crate) x_m: f64,
     /// Velocity v, m/s.
-    v_m_per_s: f64,
+    pub(crate) v_m_per_s: f64,
     mode: Mode,
     /// Index of the current excitation period.
     period: u64,
@@ -64,44 +122,44 @@ struct Path<'a> {
     friction_noise: f64,
     /// Normal force in the current interval, N.
     normal_force_n: f64,
-    /// x where the current slip began, m (hysteresis, decaying stiction).
+    /// x where the current slip began, m (displacement hysteresis, stiction release).
     slip_start_x_m: f64,
-    /// Coloured noise state: the previous ξ (ar1) or the slow part (two_scale), –.
-    colour_state: f64,
+    /// Coloured noise states: the AR(1) parts of `ar1`, `two_scale` and
+    /// `multi_scale`, –.
+    colour_state: [f64; 3],
     /// Start of the current noise interval within its period, in periods.
     interval_phase: f64,
     /// Static-friction excess in the current interval, –.
     stiction_excess: f64,
+    /// The lagged friction coefficient μ_f of hysteresis `lag`, –.
+    lagged_mu: f64,
+    /// When the current stick began, s from the run's start (stiction `dwell`).
+    stick_since_s: f64,
+    /// Whether sliding friction depends on more than the current velocity
+    /// and interval (hysteresis, or a stiction excess carried into the slip).
+    history: bool,
+    /// Whether hysteresis `lag` is on (its memory time is not zero).
+    lag: bool,
+    /// 1 / m, 1/kg.
+    inv_mass: f64,
     /// Largest x so far in the current period, m.
-    period_max_x_m: f64,
+    pub(crate) period_max_x_m: f64,
     /// Time stuck so far in the current period, s.
-    period_stick_s: f64,
+    pub(crate) period_stick_s: f64,
     /// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the current period so far,
     /// m·s (the response's fundamental; see [`phase_of`]).
-    period_cos_integral: f64,
-    period_sin_integral: f64,
-}
-
-/// One RK4 step of the slip ODE, with what the phase quadrature needs: the
-/// four stage displacements (m) and `cos(Ωt)` at the step's start, middle
-/// and end.
-#[derive(Clone, Copy, Debug)]
-struct SlipStep {
-    x_m: f64,
-    v_m_per_s: f64,
-    stage_x_m: [f64; 4],
-    cos: [f64; 3],
-}
-
-/// The phase lag (rad) of a period's fundamental behind the base, from
-/// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the period: the fundamental is
-/// `sqrt(a² + b²) cos(Ωt − φ)` with `φ = atan2(b, a)` (`interfaces.md`).
-pub fn phase_of(cos_integral: f64, sin_integral: f64) -> f64 {
-    sin_integral.atan2(cos_integral)
+    pub(crate) period_cos_integral: f64,
+    pub(crate) period_sin_integral: f64,
 }
 
 impl<'a> Path<'a> {
-    fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
+    pub(crate) fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
+        let e = &osc.effects;
+        let lag = e.hysteresis_form == HysteresisForm::Lag && e.hysteresis_lag_s > 0.0;
+        let history = lag
+            || (e.hysteresis_length_m != 0.0 && e.hysteresis_form != HysteresisForm::Lag)
+            || e.stiction_form == StictionForm::Decaying
+            || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
         let mut path = Path {
             osc,
             key: rng::seed_key(seed),
@@ -115,9 +173,14 @@ impl<'a> Path<'a> {
             friction_noise: 0.0,
             normal_force_n: 0.0,
             slip_start_x_m: initial.x_m,
-            colour_state: 0.0,
+            colour_state: [0.0; 3],
             interval_phase: 0.0,
             stiction_excess: 0.0,
+            lagged_mu: 0.0,
+            stick_since_s: 0.0,
+            history,
+            lag,
+            inv_mass: 1.0 / osc.mass_kg,
             period_max_x_m: initial.x_m,
             period_stick_s: 0.0,
             period_cos_integral: 0.0,
@@ -129,36 +192,66 @@ impl<'a> Path<'a> {
         } else if initial.v_m_per_s < 0.0 {
             Mode::Slip(-1)
         } else {
-            path.stick_or_slip(0.0)
+            path.stick_or_slip(Trig { cos: 1.0, sin: 0.0 })
         };
+        if path.mode == Mode::Stick {
+            path.start_stick(0.0);
+        } else {
+            path.lagged_mu = path.static_coefficient();
+        }
         path
     }
 
-    /// Noise values (and everything else held per interval) of the current interval.
+    /// Noise values (and everything else held per interval) of the current
+    /// interval. The main stream's pair A gives the friction's white value
+    /// and the normal force's; pair B and the colour stream are drawn only
+    /// by the effects that use them.
     fn draw_noise(&mut self) {
         let o = self.osc;
         let e = &o.effects;
-        let friction_interval = if e.colour_form == ColourForm::Hold {
-            self.interval / u64::from(e.colour_hold_intervals)
+        let main = rng::block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
+        let (white, xi_n) = rng::pair_a(main);
+        let friction_block = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
+            rng::block(self.key, self.realisation, rng::STREAM_MAIN, self.interval / u64::from(e.colour_hold_intervals))
         } else {
-            self.interval
+            main
         };
-        let (z, z2) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_FRICTION, friction_interval);
-        let innovation = (1.0 - e.colour_rho * e.colour_rho).sqrt();
-        let g = if e.colour_form == ColourForm::TwoScale && e.colour_rho > 0.0 {
-            let (slow, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
-            self.colour_state =
-                if self.interval == 0 { slow } else { e.colour_rho * self.colour_state + innovation * slow };
-            std::f64::consts::FRAC_1_SQRT_2 * (z + self.colour_state)
-        } else if e.colour_form == ColourForm::Ar1 {
-            self.colour_state = if self.interval == 0 { z } else { e.colour_rho * self.colour_state + innovation * z };
-            self.colour_state
+        let z = if friction_block == main { white } else { rng::pair_a(friction_block).0 };
+        let colour = || rng::block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
+        let first = self.interval == 0;
+        let ar1 = |state: f64, rho: f64, innovation: f64| {
+            if first { innovation } else { rho * state + (1.0 - rho * rho).sqrt() * innovation }
+        };
+        let g = match e.colour_form {
+            _ if e.colour_rho == 0.0 => z,
+            ColourForm::Ar1 if e.colour_share >= 1.0 => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, z);
+                self.colour_state[0]
+            }
+            ColourForm::Ar1 => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, rng::pair_a(colour()).0);
+                (1.0 - e.colour_share).sqrt() * z + e.colour_share.sqrt() * self.colour_state[0]
+            }
+            ColourForm::Hold => z,
+            ColourForm::TwoScale => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, rng::pair_a(colour()).0);
+                std::f64::consts::FRAC_1_SQRT_2 * (z + self.colour_state[0])
+            }
+            ColourForm::MultiScale => {
+                let words = colour();
+                let ((c0, c1), (c2, _)) = (rng::pair_a(words), rng::pair_b(words));
+                for (k, innovation) in [c0, c1, c2].into_iter().enumerate() {
+                    self.colour_state[k] = ar1(self.colour_state[k], e.colour_rhos[k], innovation);
+                }
+                self.colour_state.iter().sum::<f64>() * (1.0 / 3f64.sqrt())
+            }
+        };
+        let xi_mu = if e.non_gaussian_strength == 0.0 {
+            g
         } else {
-            z
+            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block).0)
         };
-        let xi_mu = effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, z2);
         self.friction_noise = o.friction_sigma * xi_mu;
-        let (xi_n, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_NORMAL_FORCE, self.interval);
         let t_s = self.interval as f64 * o.noise_interval_s;
         let mean_n = o.normal_force_mean_n * effects::drift_factor(e.drift_form, e.drift_rate_per_s, t_s);
         let theta = std::f64::consts::TAU * self.interval_phase;
@@ -171,32 +264,65 @@ impl<'a> Path<'a> {
             }
         }
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
-        self.stiction_excess = if e.stiction_form == StictionForm::Noisy {
-            let (zs, _) = rng::gaussian_pair(self.key, self.realisation, rng::STREAM_STICTION, self.interval);
-            e.stiction_excess * (1.0 + 0.5 * zs).max(0.0)
-        } else {
-            e.stiction_excess
+        self.stiction_excess = match e.stiction_form {
+            StictionForm::Noisy if e.stiction_excess != 0.0 => {
+                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main).1).max(0.0)
+            }
+            StictionForm::Dwell if self.mode == Mode::Stick => {
+                effects::dwell_excess(e.stiction_excess, t_s - self.stick_since_s, e.stiction_dwell_s)
+            }
+            StictionForm::Dwell => 0.0,
+            _ => e.stiction_excess,
         };
     }
 
-    /// Force of springs and damper on the block at rest, `k (u(t) − x)`, N.
-    fn spring_force(&self, t_local_s: f64, x_m: f64) -> f64 {
+    /// Marks the start of a stick at `t_s` (from the run's start): the
+    /// `dwell` stiction's ageing starts again.
+    fn start_stick(&mut self, t_s: f64) {
+        self.stick_since_s = t_s;
+        if self.osc.effects.stiction_form == StictionForm::Dwell {
+            let e = &self.osc.effects;
+            self.stiction_excess = effects::dwell_excess(e.stiction_excess, 0.0, e.stiction_dwell_s);
+        }
+    }
+
+    /// Force of springs and damper on the block at rest, `k (u − x)` with
+    /// the base at `cos_omega_t` of its amplitude, N.
+    #[inline(always)]
+    fn spring_force(&self, cos_omega_t: f64, x_m: f64) -> f64 {
         let o = self.osc;
-        o.stiffness_n_per_m * (o.base_amplitude_m * (o.omega_rad_per_s * t_local_s).cos() - x_m)
+        o.stiffness_n_per_m * (o.base_amplitude_m * cos_omega_t - x_m)
+    }
+
+    /// The steady friction law while slipping with speed `speed` (m/s) at
+    /// velocity `v` (m/s), before effects of history: `a + Δa + b/(1 + c s)
+    /// + d v² + σ ξ`, –.
+    #[inline(always)]
+    fn steady_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+        let o = self.osc;
+        o.friction_a
+            + o.effects.friction_offset
+            + o.friction_b / (1.0 + o.friction_c_s_per_m * speed_m_per_s)
+            + o.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
+            + self.friction_noise
     }
 
     /// Friction coefficient while slipping with speed `speed` (m/s) at
-    /// displacement `x_m`, clipped at 0.
-    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64) -> f64 {
-        let o = self.osc;
-        let e = &o.effects;
+    /// displacement `x_m`, with the lagged coefficient `lagged_mu` (used by
+    /// hysteresis `lag` only), clipped at 0.
+    #[inline(always)]
+    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, lagged_mu: f64) -> f64 {
+        if !self.history {
+            return self.steady_law(speed_m_per_s, v_m_per_s).max(0.0);
+        }
+        let e = &self.osc.effects;
         let slipped_m = (x_m - self.slip_start_x_m).abs();
-        let law = o.friction_a
-            + e.friction_offset
-            + o.friction_b / (1.0 + o.friction_c_s_per_m * speed_m_per_s)
-            + o.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
-            + self.friction_noise;
-        let mut mu = law * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m);
+        let mut mu = if self.lag {
+            lagged_mu
+        } else {
+            self.steady_law(speed_m_per_s, v_m_per_s)
+                * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
+        };
         if e.stiction_form == StictionForm::Decaying {
             mu += self.stiction_excess * (-slipped_m / STICTION_DECAY_M).exp();
         } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
@@ -205,73 +331,86 @@ impl<'a> Path<'a> {
         mu.max(0.0)
     }
 
-    /// Breakaway force `μ_s N` with `μ_s = μ(0) + stiction excess`, N.
+    /// The static coefficient `μ(0) + stiction excess`, clipped at 0, –.
+    fn static_coefficient(&self) -> f64 {
+        let o = self.osc;
+        (o.friction_a + o.effects.friction_offset + o.friction_b + self.friction_noise + self.stiction_excess).max(0.0)
+    }
+
+    /// Breakaway force `μ_s N`, N.
     fn breakaway_force(&self) -> f64 {
-        let o = self.osc;
-        let mu_static =
-            o.friction_a + o.effects.friction_offset + o.friction_b + self.friction_noise + self.stiction_excess;
-        mu_static.max(0.0) * self.normal_force_n
+        self.static_coefficient() * self.normal_force_n
     }
 
-    /// Acceleration while slipping in direction `sign`, m/s², with the
-    /// base at `cos_omega_t` of its amplitude.
-    fn slip_acceleration(&self, cos_omega_t: f64, x_m: f64, v_m_per_s: f64, sign: f64) -> f64 {
+    /// Acceleration (m/s²) while slipping in direction `sign`, with the base
+    /// at `cos_omega_t` of its amplitude, and the rate of the lagged friction
+    /// coefficient (1/s; 0 unless hysteresis `lag` is on).
+    #[inline(always)]
+    fn slip_rates(&self, cos_omega_t: f64, x_m: f64, v_m_per_s: f64, lagged_mu: f64, sign: f64) -> (f64, f64) {
         let o = self.osc;
-        let friction = sign * self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m) * self.normal_force_n;
-        let spring = o.stiffness_n_per_m * (o.base_amplitude_m * cos_omega_t - x_m);
-        (spring - o.damping_n_s_per_m * v_m_per_s - friction) / o.mass_kg
+        let mu = self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
+        let spring = self.spring_force(cos_omega_t, x_m);
+        let acceleration = (spring - o.damping_n_s_per_m * v_m_per_s - sign * mu * self.normal_force_n) * self.inv_mass;
+        let lag_rate = if self.lag {
+            (self.steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / o.effects.hysteresis_lag_s
+        } else {
+            0.0
+        };
+        (acceleration, lag_rate)
     }
 
-    /// One classical RK4 step of the slip ODE from `t` over `h` seconds.
-    /// Stages 2 and 3 share the excitation's `cos` at the midpoint.
-    fn rk4_slip(&self, t_local_s: f64, x_m: f64, v_m_per_s: f64, h_s: f64, sign: f64) -> SlipStep {
-        let w = self.osc.omega_rad_per_s;
-        let half = 0.5 * h_s;
-        let cos = [(w * t_local_s).cos(), (w * (t_local_s + half)).cos(), (w * (t_local_s + h_s)).cos()];
+    /// One classical RK4 step of the slip ODE from `t` (where the base's trig
+    /// is `start`) over `h` seconds; `half` rotates by `Ωh/2`.
+    #[inline]
+    fn rk4_slip(&self, start: Trig, x_m: f64, v_m_per_s: f64, h_s: f64, half: Trig, sign: f64) -> SlipStep {
+        let mid = start.rotated(half);
+        let end = mid.rotated(half);
+        let m0 = self.lagged_mu;
+        let hh = 0.5 * h_s;
         let k1x = v_m_per_s;
-        let k1v = self.slip_acceleration(cos[0], x_m, v_m_per_s, sign);
-        let k2x = v_m_per_s + half * k1v;
-        let x2 = x_m + half * k1x;
-        let k2v = self.slip_acceleration(cos[1], x2, k2x, sign);
-        let k3x = v_m_per_s + half * k2v;
-        let x3 = x_m + half * k2x;
-        let k3v = self.slip_acceleration(cos[1], x3, k3x, sign);
+        let (k1v, k1m) = self.slip_rates(start.cos, x_m, v_m_per_s, m0, sign);
+        let k2x = v_m_per_s + hh * k1v;
+        let x2 = x_m + hh * k1x;
+        let (k2v, k2m) = self.slip_rates(mid.cos, x2, k2x, m0 + hh * k1m, sign);
+        let k3x = v_m_per_s + hh * k2v;
+        let x3 = x_m + hh * k2x;
+        let (k3v, k3m) = self.slip_rates(mid.cos, x3, k3x, m0 + hh * k2m, sign);
         let k4x = v_m_per_s + h_s * k3v;
         let x4 = x_m + h_s * k3x;
-        let k4v = self.slip_acceleration(cos[2], x4, k4x, sign);
+        let (k4v, k4m) = self.slip_rates(end.cos, x4, k4x, m0 + h_s * k3m, sign);
         SlipStep {
             x_m: x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
             v_m_per_s: v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+            lagged_mu: m0 + h_s / 6.0 * (k1m + 2.0 * k2m + 2.0 * k3m + k4m),
             stage_x_m: [x_m, x2, x3, x4],
-            cos,
+            trig: [start, mid, end],
         }
     }
 
     /// Adds an accepted slip step to the period's phase integrals: the RK4
     /// quadrature of `x cos(Ωt)` and `x sin(Ωt)` over the step, with the
     /// step's own stage displacements (the integrals are two more RK4 states).
-    fn add_slip_phase(&mut self, t_local_s: f64, h_s: f64, step: &SlipStep) {
-        let w = self.osc.omega_rad_per_s;
-        let sin = [(w * t_local_s).sin(), (w * (t_local_s + 0.5 * h_s)).sin(), (w * (t_local_s + h_s)).sin()];
+    fn add_slip_phase(&mut self, h_s: f64, step: &SlipStep) {
         let [x1, x2, x3, x4] = step.stage_x_m;
-        self.period_cos_integral += h_s / 6.0 * (x1 * step.cos[0] + 2.0 * (x2 + x3) * step.cos[1] + x4 * step.cos[2]);
-        self.period_sin_integral += h_s / 6.0 * (x1 * sin[0] + 2.0 * (x2 + x3) * sin[1] + x4 * sin[2]);
+        let [a, m, b] = step.trig;
+        self.period_cos_integral += h_s / 6.0 * (x1 * a.cos + 2.0 * (x2 + x3) * m.cos + x4 * b.cos);
+        self.period_sin_integral += h_s / 6.0 * (x1 * a.sin + 2.0 * (x2 + x3) * m.sin + x4 * b.sin);
     }
 
-    /// Adds a stuck interval `[t_a, t_b]` to the period's phase integrals,
-    /// exactly: x is constant.
-    fn add_stick_phase(&mut self, t_a: f64, t_b: f64) {
+    /// Adds a stuck interval between base trigs `a` and `b` to the period's
+    /// phase integrals, exactly: x is constant.
+    fn add_stick_phase(&mut self, a: Trig, b: Trig) {
         let w = self.osc.omega_rad_per_s;
-        let (sin_a, cos_a) = (w * t_a).sin_cos();
-        let (sin_b, cos_b) = (w * t_b).sin_cos();
-        self.period_cos_integral += self.x_m * (sin_b - sin_a) / w;
-        self.period_sin_integral += self.x_m * (cos_a - cos_b) / w;
+        self.period_cos_integral += self.x_m * (b.sin - a.sin) / w;
+        self.period_sin_integral += self.x_m * (a.cos - b.cos) / w;
     }
 
     /// The step length `h* ∈ (0, h]` at which the RK4 map's velocity reaches
     /// zero, given that `sign · v` is ≤ 0 after the full step `h`.
-    fn locate_velocity_zero(&self, t_local_s: f64, h_s: f64, sign: f64) -> f64 {
-        let g = |h: f64| sign * self.rk4_slip(t_local_s, self.x_m, self.v_m_per_s, h, sign).v_m_per_s;
+    fn locate_velocity_zero(&self, start: Trig, h_s: f64, sign: f64) -> f64 {
+        let w = self.osc.omega_rad_per_s;
+        let g =
+            |h: f64| sign * self.rk4_slip(start, self.x_m, self.v_m_per_s, h, Trig::turn(0.5 * w * h), sign).v_m_per_s;
         let (mut lo, mut g_lo) = (0.0, sign * self.v_m_per_s);
         let (mut hi, mut g_hi) = (h_s, g(h_s));
         if g_lo <= 0.0 {
@@ -320,10 +459,11 @@ impl<'a> Path<'a> {
         hi
     }
 
-    /// At rest at `t`: stick if the spring force does not exceed the
-    /// breakaway force, otherwise slip in the direction of that force.
-    fn stick_or_slip(&self, t_local_s: f64) -> Mode {
-        let force = self.spring_force(t_local_s, self.x_m);
+    /// At rest with the base at `trig`: stick if the spring force does not
+    /// exceed the breakaway force, otherwise slip in the direction of that
+    /// force.
+    fn stick_or_slip(&self, trig: Trig) -> Mode {
+        let force = self.spring_force(trig.cos, self.x_m);
         if force.abs() <= self.breakaway_force() {
             Mode::Stick
         } else if force > 0.0 {
@@ -335,9 +475,9 @@ impl<'a> Path<'a> {
 
     /// Earliest time in `[t_a, t_b]` at which a stuck block breaks away, and
     /// the direction. `k (U0 cos(Ω t) − x) = ±μ_s N` is solved in closed form.
-    fn breakaway_time(&self, t_a: f64, t_b: f64) -> Option<(f64, i8)> {
+    fn breakaway_time(&self, t_a: f64, start: Trig, t_b: f64) -> Option<(f64, i8)> {
         let o = self.osc;
-        let force = self.spring_force(t_a, self.x_m);
+        let force = self.spring_force(start.cos, self.x_m);
         let threshold = self.breakaway_force();
         if force > threshold {
             return Some((t_a, 1));
@@ -376,136 +516,193 @@ impl<'a> Path<'a> {
         if t <= t_b && best.is_none_or(|(tb, _)| t < tb) { Some((t, sign)) } else { best }
     }
 
-    /// Advances from `t_a` to `t_b` (local times in the period) with the
-    /// noise held, through any stick/slip events on the way.
-    fn advance_segment(&mut self, mut t_a: f64, t_b: f64, measuring: bool) {
+    /// Advances from `t_a` to `t_b` (local times in the period, where the
+    /// base's trig is `start`) with the noise held, through any stick/slip
+    /// events on the way. `regular` is the rotation by half the segment
+    /// (computed once for equal steps). Returns the base's trig at `t_b`.
+    fn advance_segment(
+        &mut self,
+        mut t_a: f64,
+        t_b: f64,
+        mut start: Trig,
+        regular: Option<Trig>,
+        measuring: bool,
+    ) -> Trig {
+        let w = self.osc.omega_rad_per_s;
+        let period_start_s = self.period as f64 * self.osc.period_s;
         let mut events = 0;
+        let mut whole = regular;
         while t_a < t_b {
             match self.mode {
                 Mode::Stick => {
-                    let until = if events < MAX_EVENTS_PER_SEGMENT { self.breakaway_time(t_a, t_b) } else { None };
+                    let until =
+                        if events < MAX_EVENTS_PER_SEGMENT { self.breakaway_time(t_a, start, t_b) } else { None };
                     let (t_end, next) = match until {
                         None => (t_b, Mode::Stick),
                         Some((t, sign)) => (t, Mode::Slip(sign)),
                     };
+                    let end = Trig::at(w * t_end);
                     if measuring {
                         self.period_stick_s += t_end - t_a;
-                        self.add_stick_phase(t_a, t_end);
+                        self.add_stick_phase(start, end);
                     }
                     self.mode = next;
                     self.slip_start_x_m = self.x_m;
-                    t_a = t_end;
+                    if next != Mode::Stick {
+                        self.lagged_mu = self.static_coefficient();
+                    }
+                    (t_a, start, whole) = (t_end, end, None);
                     events += 1;
                 }
                 Mode::Slip(s) => {
                     let sign = f64::from(s);
                     let h = t_b - t_a;
-                    let step = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h, sign);
+                    let half = whole.unwrap_or_else(|| Trig::turn(0.5 * w * h));
+                    let step = self.rk4_slip(start, self.x_m, self.v_m_per_s, h, half, sign);
                     if sign * step.v_m_per_s > 0.0 {
                         if measuring {
-                            self.add_slip_phase(t_a, h, &step);
+                            self.add_slip_phase(h, &step);
                         }
                         self.x_m = step.x_m;
                         self.v_m_per_s = step.v_m_per_s;
+                        self.lagged_mu = step.lagged_mu;
                         self.period_max_x_m = self.period_max_x_m.max(step.x_m);
-                        t_a = t_b;
-                    } else {
-                        let h_zero = self.locate_velocity_zero(t_a, h, sign);
-                        let to_zero = self.rk4_slip(t_a, self.x_m, self.v_m_per_s, h_zero, sign);
-                        if measuring {
-                            self.add_slip_phase(t_a, h_zero, &to_zero);
-                        }
-                        let x_zero = to_zero.x_m;
-                        self.x_m = x_zero;
-                        self.v_m_per_s = 0.0;
-                        self.period_max_x_m = self.period_max_x_m.max(x_zero);
-                        t_a += h_zero;
-                        self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(t_a) } else { Mode::Stick };
-                        self.slip_start_x_m = self.x_m;
-                        events += 1;
+                        return step.trig[2];
                     }
+                    let h_zero = self.locate_velocity_zero(start, h, sign);
+                    let to_zero =
+                        self.rk4_slip(start, self.x_m, self.v_m_per_s, h_zero, Trig::turn(0.5 * w * h_zero), sign);
+                    if measuring {
+                        self.add_slip_phase(h_zero, &to_zero);
+                    }
+                    self.x_m = to_zero.x_m;
+                    self.v_m_per_s = 0.0;
+                    self.lagged_mu = to_zero.lagged_mu;
+                    self.period_max_x_m = self.period_max_x_m.max(to_zero.x_m);
+                    t_a += h_zero;
+                    start = Trig::at(w * t_a);
+                    whole = None;
+                    self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(start) } else { Mode::Stick };
+                    if self.mode == Mode::Stick {
+                        self.start_stick(period_start_s + t_a);
+                    }
+                    self.slip_start_x_m = self.x_m;
+                    events += 1;
                 }
             }
         }
+        start
     }
 
-    /// Friction force on the block at local time `t` (for output samples), N.
-    fn friction_force(&self, t_local_s: f64) -> f64 {
+    /// Friction force on the block with the base at `trig` (for output
+    /// samples), N.
+    fn friction_force(&self, trig: Trig) -> f64 {
         match self.mode {
-            Mode::Stick => -self.spring_force(t_local_s, self.x_m),
+            Mode::Stick => -self.spring_force(trig.cos, self.x_m),
             Mode::Slip(s) => {
                 let sign = f64::from(s);
-                -sign * self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s, self.x_m) * self.normal_force_n
+                let mu = self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.lagged_mu);
+                -sign * mu * self.normal_force_n
             }
         }
     }
 
-    /// Integrates one excitation period, splitting steps at noise boundaries
-    /// and at output samples.
-    fn run_period(&mut self, measuring: bool, mut sampler: Option<&mut Sampler>) {
+    /// Integrates one excitation period. Noise-interval boundaries, output
+    /// samples and the period's end are step boundaries: each span between
+    /// them is divided into the fewest equal steps no longer than `T / S`
+    /// (`S` = `steps_per_period`). The base's trig starts exact at the
+    /// period's start and is carried by rotation (recomputed exactly after
+    /// each event); in f64 the rotations drift by about 1e-16 each.
+    pub(crate) fn run_period(&mut self, measuring: bool, mut sampler: Option<&mut Sampler>) {
         let o = self.osc;
-        let steps = o.steps_per_period;
-        let dt = o.period_s / f64::from(steps);
+        let w = o.omega_rad_per_s;
+        let max_step_s = o.period_s / f64::from(o.steps_per_period);
         let period_start_s = self.period as f64 * o.period_s;
         self.period_max_x_m = self.x_m;
         self.period_stick_s = 0.0;
         self.period_cos_integral = 0.0;
         self.period_sin_integral = 0.0;
         let mut t = 0.0;
-        let mut step = 0u32;
-        loop {
-            let step_end = if step + 1 == steps { o.period_s } else { f64::from(step + 1) * dt };
+        let mut trig = Trig { cos: 1.0, sin: 0.0 };
+        while t < o.period_s {
             let noise_t = if self.next_boundary >> 32 == self.period {
                 (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE * o.period_s
             } else {
                 f64::INFINITY
             };
-            let sample_t = sampler.as_ref().map_or(f64::INFINITY, |s| s.next_time_s() - period_start_s);
-            let target = step_end.min(noise_t).min(sample_t).max(t);
-            self.advance_segment(t, target, measuring);
+            let sample_t = sampler
+                .as_ref()
+                .filter(|s| s.from_interval.is_none())
+                .map_or(f64::INFINITY, |s| s.next_time_s() - period_start_s);
+            let target = o.period_s.min(noise_t).min(sample_t).max(t);
+            let span = target - t;
+            if span > 0.0 {
+                let steps = span_steps(span, max_step_s);
+                let h = span / f64::from(steps);
+                let turn = Trig::turn(0.5 * w * h);
+                let mut step_start = t;
+                for k in 1..=steps {
+                    let step_end = if k == steps { target } else { t + f64::from(k) * h };
+                    trig = self.advance_segment(step_start, step_end, trig, Some(turn), measuring);
+                    step_start = step_end;
+                }
+            }
             t = target;
+            let mut sample_now = sample_t <= target;
             if noise_t <= target {
                 self.interval_phase = (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
                 self.interval += 1;
                 self.next_boundary += o.noise_interval_fixed;
                 self.draw_noise();
+                // A sampler aligned with the noise samples at each boundary.
+                sample_now |= sampler.as_ref().and_then(|s| s.from_interval).is_some_and(|j| self.interval >= j);
             }
-            if sample_t <= target {
+            if sample_now {
                 let sample = Sample {
                     t_s: period_start_s + t,
                     x_m: self.x_m,
                     v_m_per_s: self.v_m_per_s,
                     normal_force_n: self.normal_force_n,
-                    friction_force_n: self.friction_force(t),
+                    friction_force_n: self.friction_force(trig),
                 };
                 sampler.as_mut().expect("sample time implies a sampler").push(sample);
-            }
-            if step_end <= target {
-                step += 1;
-                if step == steps {
-                    break;
-                }
             }
         }
         self.period += 1;
     }
 }
 
+/// The fewest equal steps no longer than `max_step_s` that cover `span_s`
+/// (a span of exactly k steps takes k, up to rounding).
+pub(crate) fn span_steps(span_s: f64, max_step_s: f64) -> u32 {
+    ((span_s / max_step_s) * (1.0 - 1e-12)).ceil().max(1.0) as u32
+}
+
 /// Collects output samples at a fixed rate.
 #[derive(Clone, Debug)]
 pub(crate) struct Sampler {
     /// Sampling interval, s.
-    pub interval_s: f64,
+    pub(crate) interval_s: f64,
     /// Samples so far.
-    pub samples: Vec<Sample>,
+    pub(crate) samples: Vec<Sample>,
     /// Time of the first sample, s.
-    pub start_s: f64,
+    pub(crate) start_s: f64,
+    /// Aligned with the noise: one sample at the start of every noise
+    /// interval from this index on (then `interval_s` and `start_s` are
+    /// unused), so samples add no step boundaries of their own.
+    pub(crate) from_interval: Option<u64>,
 }
 
 impl Sampler {
     /// A sampler recording at `start_s + i * interval_s`.
     pub(crate) fn new(interval_s: f64, start_s: f64) -> Self {
-        Sampler { interval_s, samples: Vec::new(), start_s }
+        Sampler { interval_s, samples: Vec::new(), start_s, from_interval: None }
+    }
+
+    /// A sampler recording at each noise-interval boundary from interval
+    /// `first` on.
+    pub(crate) fn at_noise_boundaries(first: u64) -> Self {
+        Sampler { interval_s: 0.0, samples: Vec::new(), start_s: 0.0, from_interval: Some(first) }
     }
 
     fn next_time_s(&self) -> f64 {
@@ -517,58 +714,28 @@ impl Sampler {
     }
 }
 
-/// One realisation sampled like a measured record: `seconds` of samples
-/// every `sample_interval_s`, starting after `warmup_cycles` periods, with
-/// times measured from the record's start.
-pub fn sample_record(
-    osc: &Oscillator,
-    seed: u64,
-    realisation: u32,
-    warmup_cycles: u32,
-    seconds: f64,
-    sample_interval_s: f64,
-    initial: InitialState,
-) -> Vec<Sample> {
-    let start_s = f64::from(warmup_cycles) * osc.period_s;
-    let cycles = (seconds / osc.period_s).ceil() as u32 + 1;
-    let mut sampler = Sampler::new(sample_interval_s, start_s);
-    simulate_path(
-        osc,
-        seed,
-        realisation,
-        RunPlan { warmup_cycles, measured_cycles: cycles },
-        initial,
-        Some(&mut sampler),
-    );
-    let mut samples = sampler.samples;
-    samples.truncate((seconds / sample_interval_s).round() as usize);
-    for s in &mut samples {
-        s.t_s -= start_s;
-    }
-    samples
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Runs one realisation and returns its per-period peaks.
-pub(crate) fn simulate_path(
-    osc: &Oscillator,
-    seed: u64,
-    realisation: u32,
-    plan: RunPlan,
-    initial: InitialState,
-    mut sampler: Option<&mut Sampler>,
-) -> PathResult {
-    let mut path = Path::new(osc, seed, realisation, initial);
-    let mut peaks_m = Vec::with_capacity(plan.measured_cycles as usize);
-    let mut phases_rad = Vec::with_capacity(plan.measured_cycles as usize);
-    let mut stick_time_s = 0.0;
-    for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
-        let measuring = cycle >= plan.warmup_cycles;
-        path.run_period(measuring, sampler.as_deref_mut());
-        if measuring {
-            peaks_m.push(path.period_max_x_m);
-            phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
-            stick_time_s += path.period_stick_s;
+    #[test]
+    fn small_turns_match_sin_cos() {
+        for theta in [0.0, 1e-9, 1e-4, 0.0123, -0.03, 0.0499] {
+            let (turn, exact) = (Trig::turn(theta), Trig::at(theta));
+            assert!(
+                (turn.cos - exact.cos).abs() <= 2.3e-16 && (turn.sin - exact.sin).abs() <= 1e-17,
+                "{theta}: {turn:?} {exact:?}"
+            );
         }
     }
-    PathResult { peaks_m, phases_rad, stick_time_s }
+
+    #[test]
+    fn rotation_by_half_steps_matches_the_functions() {
+        let w = 44.0;
+        let (t, h) = (0.0123, 0.004);
+        let half = Trig::at(0.5 * w * h);
+        let end = Trig::at(w * t).rotated(half).rotated(half);
+        let exact = Trig::at(w * (t + h));
+        assert!((end.cos - exact.cos).abs() < 1e-15 && (end.sin - exact.sin).abs() < 1e-15, "{end:?} {exact:?}");
+    }
 }

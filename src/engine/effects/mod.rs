@@ -155,9 +155,16 @@ impl Effects {
     /// Range checks; errors name the dotted key.
     pub fn validate(&self) -> Result<()> {
         if let Some(h) = &self.normal_force_harmonics {
-            for (k, (a, p)) in h.amplitudes_n.iter().zip(&h.phases_rad).enumerate() {
-                check(&format!("normal_force_harmonics.amplitudes_n[{k}]"), *a, true, "must be a finite number of N")?;
-                check(&format!("normal_force_harmonics.phases_rad[{k}]"), *p, true, "must be a finite angle")?;
+            for k in 0..4 {
+                let (a, r, p) = (h.amplitudes_n[k], h.amplitudes_per_n0[k], h.phases_rad[k]);
+                check(&format!("normal_force_harmonics.amplitudes_n[{k}]"), a, true, "must be a finite number of N")?;
+                check(
+                    &format!("normal_force_harmonics.amplitudes_per_n0[{k}]"),
+                    r,
+                    r.abs() <= 10.0,
+                    "must be a share of N0 within ±10",
+                )?;
+                check(&format!("normal_force_harmonics.phases_rad[{k}]"), p, true, "must be a finite angle")?;
             }
             check("normal_force_harmonics.shape", h.shape, h.shape > 0.0, "must be > 0")?;
         }
@@ -166,12 +173,13 @@ impl Effects {
                 NonGaussianForm::Skew => true,
                 NonGaussianForm::Lognormal => g.strength >= 0.0 && g.strength <= 3.0,
                 NonGaussianForm::TukeyH => (0.0..0.25).contains(&g.strength),
+                NonGaussianForm::Mixture => (0.0..=3.0).contains(&g.strength),
             };
             check(
                 "non_gaussian_friction.strength",
                 g.strength,
                 ok,
-                "lognormal needs 0..=3, tukey_h needs 0 <= h < 0.25",
+                "lognormal and mixture need 0..=3, tukey_h needs 0 <= h < 0.25",
             )?;
             check("non_gaussian_friction.load_exponent", g.load_exponent, true, "must be finite")?;
             check(
@@ -183,6 +191,12 @@ impl Effects {
         }
         if let Some(h) = &self.friction_hysteresis {
             check("friction_hysteresis.length_m", h.length_m, h.length_m >= 0.0, "must be >= 0 m")?;
+            check(
+                "friction_hysteresis.time_constant_s",
+                h.time_constant_s,
+                h.time_constant_s >= 0.0,
+                "must be >= 0 s",
+            )?;
         }
         if let Some(c) = &self.coloured_friction_noise {
             check(
@@ -191,10 +205,17 @@ impl Effects {
                 c.correlation_time_s >= 0.0,
                 "must be >= 0 s",
             )?;
+            check(
+                "coloured_friction_noise.coloured_share",
+                c.coloured_share,
+                (0.0..=1.0).contains(&c.coloured_share),
+                "must be a share in [0, 1]",
+            )?;
         }
         if let Some(s) = &self.stiction {
             check("stiction.excess", s.excess, s.excess >= 0.0, "must be >= 0")?;
             check("stiction.release_length_m", s.release_length_m, s.release_length_m >= 0.0, "must be >= 0 m")?;
+            check("stiction.dwell_time_s", s.dwell_time_s, s.dwell_time_s >= 0.0, "must be >= 0 s")?;
         }
         if let Some(l) = &self.load_dependent_friction {
             check("load_dependent_friction.strength", l.strength, true, "must be finite")?;

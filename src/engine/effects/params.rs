@@ -8,7 +8,7 @@ use super::{ColourForm, DriftForm, Effects, HarmonicForm, HysteresisForm, LoadFo
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EffectParams {
     pub harmonic_form: HarmonicForm,
-    /// N
+    /// Amplitudes at this point's N0 (load scaling applied), N.
     pub harmonic_amplitudes_n: [f64; 4],
     /// rad
     pub harmonic_phases_rad: [f64; 4],
@@ -21,15 +21,23 @@ pub struct EffectParams {
     pub hysteresis_form: HysteresisForm,
     /// m
     pub hysteresis_length_m: f64,
+    /// Memory time of the `lag` form, s.
+    pub hysteresis_lag_s: f64,
     pub colour_form: ColourForm,
     /// AR(1) coefficient per interval, –.
     pub colour_rho: f64,
+    /// Coloured share of the variance (`ar1`), –.
+    pub colour_share: f64,
+    /// AR(1) coefficients per interval of `multi_scale`'s parts (τc/4, τc, 4τc), –.
+    pub colour_rhos: [f64; 3],
     /// Intervals a value is held (hold form).
     pub colour_hold_intervals: u32,
     pub stiction_form: StictionForm,
     pub stiction_excess: f64,
     /// Slip over which the constant form's excess fades, m.
     pub stiction_release_m: f64,
+    /// Ageing time of the `dwell` form, s.
+    pub stiction_dwell_s: f64,
     /// Δa at this point's N0, –.
     pub friction_offset: f64,
     pub drift_form: DriftForm,
@@ -47,10 +55,11 @@ impl EffectParams {
     /// Flattens `effects` for a point with mean normal force `n0` (N), base
     /// friction level `a` and noise hold interval `interval_s` (s).
     pub fn new(effects: &Effects, n0: f64, a: f64, interval_s: f64) -> EffectParams {
-        let mut p = EffectParams { harmonic_shape: 2.0, colour_hold_intervals: 1, ..Default::default() };
+        let mut p =
+            EffectParams { harmonic_shape: 2.0, colour_hold_intervals: 1, colour_share: 1.0, ..Default::default() };
         if let Some(h) = &effects.normal_force_harmonics {
             p.harmonic_form = h.form;
-            p.harmonic_amplitudes_n = h.amplitudes_n;
+            p.harmonic_amplitudes_n = std::array::from_fn(|k| h.amplitudes_n[k] + h.amplitudes_per_n0[k] * n0);
             p.harmonic_phases_rad = h.phases_rad;
             p.harmonic_shape = h.shape;
             p.harmonic_shape_mean = bump_mean(h.shape);
@@ -67,16 +76,21 @@ impl EffectParams {
         if let Some(h) = &effects.friction_hysteresis {
             p.hysteresis_form = h.form;
             p.hysteresis_length_m = h.length_m;
+            p.hysteresis_lag_s = h.time_constant_s;
         }
         if let Some(c) = &effects.coloured_friction_noise {
             p.colour_form = c.form;
-            p.colour_rho = if c.correlation_time_s > 0.0 { (-interval_s / c.correlation_time_s).exp() } else { 0.0 };
+            let rho = |tau_s: f64| if tau_s > 0.0 { (-interval_s / tau_s).exp() } else { 0.0 };
+            p.colour_rho = rho(c.correlation_time_s);
+            p.colour_share = c.coloured_share;
+            p.colour_rhos = [0.25, 1.0, 4.0].map(|f| rho(f * c.correlation_time_s));
             p.colour_hold_intervals = ((c.correlation_time_s / interval_s).round() as u32).max(1);
         }
         if let Some(s) = &effects.stiction {
             p.stiction_form = s.form;
             p.stiction_excess = s.excess;
             p.stiction_release_m = s.release_length_m;
+            p.stiction_dwell_s = s.dwell_time_s;
         }
         if let Some(l) = &effects.load_dependent_friction {
             let r = l.reference_force_n;
@@ -84,6 +98,7 @@ impl EffectParams {
                 LoadForm::Linear => l.strength * (n0 - r),
                 LoadForm::Power => a * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
                 LoadForm::Saturating => l.strength * r * (1.0 - (-(n0 - r) / r).exp()),
+                LoadForm::Exponential => l.strength * r * (((n0 - r) / r).exp() - 1.0),
             };
         }
         if let Some(d) = &effects.normal_force_drift {

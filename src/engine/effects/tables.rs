@@ -14,7 +14,12 @@ pub struct NormalForceHarmonics {
     #[serde(default)]
     pub form: HarmonicForm,
     /// Amplitudes A_1..A_4, N.
+    #[serde(default)]
     pub amplitudes_n: [f64; 4],
+    /// Amplitudes that scale with the load, as shares of N0 (each harmonic's
+    /// amplitude is `amplitudes_n[k] + amplitudes_per_n0[k]·N0`), –.
+    #[serde(default)]
+    pub amplitudes_per_n0: [f64; 4],
     /// Phases φ_1..φ_4, rad.
     #[serde(default)]
     pub phases_rad: [f64; 4],
@@ -45,10 +50,13 @@ impl Form for HarmonicForm {
 #[serde(deny_unknown_fields)]
 pub struct NonGaussianFriction {
     /// `skew`: (z + s (z'² − 1)/√2)/√(1+s²); `lognormal`: standardised exp(s z);
-    /// `tukey_h`: standardised z·exp(h z²/2) (heavy tails). All have mean 0, variance 1.
+    /// `tukey_h`: standardised z·exp(h z²/2) (heavy tails); `mixture`: with
+    /// probability 0.1 (z' below its 10% quantile) an outlier component
+    /// N(3s, (1 + s)²), else N(0, 1), standardised (skewed and heavy-tailed).
+    /// All have mean 0, variance 1.
     #[serde(default)]
     pub form: NonGaussianForm,
-    /// s (skew, lognormal) or h (tukey_h, < 0.5), –.
+    /// s (skew, lognormal, mixture) or h (tukey_h, < 0.25), –.
     pub strength: f64,
     /// Strength scales as (N0 / reference)^load_exponent, –.
     #[serde(default)]
@@ -65,28 +73,38 @@ pub enum NonGaussianForm {
     Skew = 0,
     Lognormal = 1,
     TukeyH = 2,
+    Mixture = 3,
 }
 
 impl Form for NonGaussianForm {
-    const ALL: &'static [Self] = &[NonGaussianForm::Skew, NonGaussianForm::Lognormal, NonGaussianForm::TukeyH];
+    const ALL: &'static [Self] =
+        &[NonGaussianForm::Skew, NonGaussianForm::Lognormal, NonGaussianForm::TukeyH, NonGaussianForm::Mixture];
 
     fn code(self) -> u32 {
         self as u32
     }
 }
 
-/// Friction that depends on the motion's history: after each slip start the
-/// sliding friction builds up over a displacement (Dahl-like pre-sliding), so
-/// accelerating and decelerating branches differ.
+/// Friction that depends on the motion's history, so accelerating and
+/// decelerating branches differ: after each slip start the sliding friction
+/// builds up over a displacement (Dahl-like pre-sliding), or it lags behind
+/// the steady law in time (Hess & Soom's frictional memory).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionHysteresis {
     /// Build-up φ(d) of the sliding friction with displacement d since slip
-    /// start: `exponential` 1 − e^(−d/δ); `tanh` tanh(d/δ); `rational` d/(d+δ).
+    /// start: `exponential` 1 − e^(−d/δ); `tanh` tanh(d/δ); `rational`
+    /// d/(d+δ). `lag`: the friction coefficient μ_f follows the steady law
+    /// μ(v) with a first-order lag, dμ_f/dt = (μ(v) − μ_f)/τ_m, starting at
+    /// the static coefficient at each breakaway.
     #[serde(default)]
     pub form: HysteresisForm,
-    /// Characteristic displacement δ, m.
+    /// Characteristic displacement δ of the build-up forms, m.
+    #[serde(default)]
     pub length_m: f64,
+    /// Memory time τ_m of the `lag` form, s.
+    #[serde(default)]
+    pub time_constant_s: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -96,10 +114,12 @@ pub enum HysteresisForm {
     Exponential = 0,
     Tanh = 1,
     Rational = 2,
+    Lag = 3,
 }
 
 impl Form for HysteresisForm {
-    const ALL: &'static [Self] = &[HysteresisForm::Exponential, HysteresisForm::Tanh, HysteresisForm::Rational];
+    const ALL: &'static [Self] =
+        &[HysteresisForm::Exponential, HysteresisForm::Tanh, HysteresisForm::Rational, HysteresisForm::Lag];
 
     fn code(self) -> u32 {
         self as u32
@@ -110,14 +130,19 @@ impl Form for HysteresisForm {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ColouredFrictionNoise {
-    /// `ar1`: Ornstein–Uhlenbeck sampled per interval, ρ = e^(−τ/τc);
+    /// `ar1`: Ornstein–Uhlenbeck sampled per interval, ρ = e^(−τ/τc), of
+    /// which `coloured_share` of the variance (the rest stays white);
     /// `hold`: each value held for round(τc/τ) intervals;
     /// `two_scale`: half white, half AR(1) with τc (variance split equally;
-    /// white only when τc = 0).
+    /// white only when τc = 0); `multi_scale`: the mean of three AR(1) parts
+    /// with τc/4, τc and 4τc, equal in variance (a spectrum close to 1/f).
     #[serde(default)]
     pub form: ColourForm,
     /// Correlation time τc, s.
     pub correlation_time_s: f64,
+    /// Share of the variance that is coloured (`ar1`), –, in [0, 1].
+    #[serde(default = "one")]
+    pub coloured_share: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -127,10 +152,11 @@ pub enum ColourForm {
     Ar1 = 0,
     Hold = 1,
     TwoScale = 2,
+    MultiScale = 3,
 }
 
 impl Form for ColourForm {
-    const ALL: &'static [Self] = &[ColourForm::Ar1, ColourForm::Hold, ColourForm::TwoScale];
+    const ALL: &'static [Self] = &[ColourForm::Ar1, ColourForm::Hold, ColourForm::TwoScale, ColourForm::MultiScale];
 
     fn code(self) -> u32 {
         self as u32
@@ -146,7 +172,9 @@ pub struct Stiction {
     /// L of slip (L = 0: friction drops to the kinetic law at once);
     /// `noisy`: Δ·max(0, 1 + z/2) per interval, dropping at once;
     /// `decaying`: Δ at breakaway, and an extra Δ·e^(−d/0.1 mm) while the
-    /// slip begins (a smooth static-to-kinetic transition).
+    /// slip begins (a smooth static-to-kinetic transition);
+    /// `dwell`: the excess grows with the time stuck, Δ·(1 − e^(−t_d/τ_d))
+    /// (Rabinowicz; rate-and-state ageing), dropping at once at breakaway.
     #[serde(default)]
     pub form: StictionForm,
     /// Excess Δ of the static coefficient, –.
@@ -154,6 +182,9 @@ pub struct Stiction {
     /// Slip L over which the `constant` form's excess fades, m (0: at once).
     #[serde(default)]
     pub release_length_m: f64,
+    /// Ageing time τ_d of the `dwell` form, s (0: the full excess at once).
+    #[serde(default)]
+    pub dwell_time_s: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -163,10 +194,12 @@ pub enum StictionForm {
     Constant = 0,
     Noisy = 1,
     Decaying = 2,
+    Dwell = 3,
 }
 
 impl Form for StictionForm {
-    const ALL: &'static [Self] = &[StictionForm::Constant, StictionForm::Noisy, StictionForm::Decaying];
+    const ALL: &'static [Self] =
+        &[StictionForm::Constant, StictionForm::Noisy, StictionForm::Decaying, StictionForm::Dwell];
 
     fn code(self) -> u32 {
         self as u32
@@ -178,7 +211,8 @@ impl Form for StictionForm {
 #[serde(deny_unknown_fields)]
 pub struct LoadDependentFriction {
     /// Offset Δa added to `a`: `linear` k (N0 − Nref) with k in 1/N;
-    /// `power` a ((N0/Nref)^k − 1); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref)).
+    /// `power` a ((N0/Nref)^k − 1); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
+    /// `exponential` k Nref (e^((N0 − Nref)/Nref) − 1).
     #[serde(default)]
     pub form: LoadForm,
     /// k (see `form`).
@@ -195,10 +229,11 @@ pub enum LoadForm {
     Linear = 0,
     Power = 1,
     Saturating = 2,
+    Exponential = 3,
 }
 
 impl Form for LoadForm {
-    const ALL: &'static [Self] = &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating];
+    const ALL: &'static [Self] = &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating, LoadForm::Exponential];
 
     fn code(self) -> u32 {
         self as u32
@@ -240,4 +275,8 @@ fn two() -> f64 {
 
 fn ten() -> f64 {
     10.0
+}
+
+fn one() -> f64 {
+    1.0
 }

@@ -27,6 +27,9 @@ pub const PROBE_HALVINGS: u32 = 30;
 pub const ILLINOIS_ITERATIONS: u32 = 40;
 /// Illinois stops when the bracket is below this fraction of the step (CPU: 1e-15).
 pub const ILLINOIS_TOLERANCE: f64 = 2e-7;
+/// Within a span, the base's trig is recomputed exactly every this many
+/// steps (the CPU carries it through the whole span: f32 rotations drift).
+pub const TRIG_REFRESH_STEPS: u32 = 16;
 /// Words of one point's accumulator in `reduce.wgsl`.
 pub const ACCUMULATOR_WORDS: usize = 16;
 
@@ -82,6 +85,7 @@ fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histog
     acc.clamped = u64::from(words[9]);
     acc.sum_phase_sin = wide(&words[10..12]) as i128 - (i128::from(peaks) << 31);
     acc.sum_phase_versine = wide(&words[12..14]);
+    acc.non_finite = u64::from(words[14]);
     acc.histogram = histogram.iter().map(|&c| u64::from(c)).collect();
     acc
 }
@@ -237,12 +241,23 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
         let histogram_words = read_back(device, queue, &histograms, histogram_bytes)?;
         let histogram_words: &[u32] = bytemuck::cast_slice(&histogram_words);
         for (i, point) in chunk.iter().enumerate() {
-            output.sums.push(decode_accumulator(
+            let acc = decode_accumulator(
                 point.range,
                 job.realisations,
                 &sum_words[i * ACCUMULATOR_WORDS..(i + 1) * ACCUMULATOR_WORDS],
                 &histogram_words[i * HISTOGRAM_BINS as usize..(i + 1) * HISTOGRAM_BINS as usize],
-            ));
+            );
+            if acc.non_finite > 0 {
+                return Err(Error::Diverged {
+                    point: point.condition.describe(),
+                    message: format!(
+                        "{} measured periods produced a non-finite peak or phase (the f32 GPU kernel); the model \
+                         drives the oscillator out of range there, so check its parameters",
+                        acc.non_finite
+                    ),
+                });
+            }
+            output.sums.push(acc);
         }
     }
     Ok(output)

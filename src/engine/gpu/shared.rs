@@ -63,11 +63,6 @@ pub struct EffectParams {
     pub harmonic_shape: f32,
     pub harmonic_shape_mean: f32,
     pub non_gaussian_form: u32,
-    /// N
-    pub harmonic_amplitude_1_n: f32,
-    pub harmonic_amplitude_2_n: f32,
-    pub harmonic_amplitude_3_n: f32,
-    pub harmonic_amplitude_4_n: f32,
     /// rad
     pub harmonic_phase_1_rad: f32,
     pub harmonic_phase_2_rad: f32,
@@ -76,23 +71,34 @@ pub struct EffectParams {
     pub hysteresis_form: u32,
     /// m
     pub hysteresis_length_m: f32,
+    /// s
+    pub hysteresis_lag_s: f32,
     pub colour_form: u32,
     pub colour_rho: f32,
+    pub colour_share: f32,
+    pub colour_rho_1: f32,
+    pub colour_rho_2: f32,
+    pub colour_rho_3: f32,
     pub colour_hold_intervals: u32,
     pub stiction_form: u32,
     pub stiction_excess: f32,
+    /// m
+    pub stiction_release_m: f32,
+    /// s
+    pub stiction_dwell_s: f32,
     pub drift_form: u32,
     /// 1/s
     pub drift_rate_per_s: f32,
     /// s
     pub noise_interval_s: f32,
-    /// m
-    pub stiction_release_m: f32,
     pub _pad1: u32,
+    pub _pad2: u32,
+    pub _pad3: u32,
 }
 
 impl EffectParams {
-    /// The uniform for an oscillator's effects.
+    /// The uniform for an oscillator's effects (the per-point ones are in
+    /// [`GridPoint`]).
     pub fn from_oscillator(o: &Oscillator) -> EffectParams {
         let e = &o.effects;
         EffectParams {
@@ -100,26 +106,30 @@ impl EffectParams {
             harmonic_shape: e.harmonic_shape as f32,
             harmonic_shape_mean: e.harmonic_shape_mean as f32,
             non_gaussian_form: e.non_gaussian_form.code(),
-            harmonic_amplitude_1_n: e.harmonic_amplitudes_n[0] as f32,
-            harmonic_amplitude_2_n: e.harmonic_amplitudes_n[1] as f32,
-            harmonic_amplitude_3_n: e.harmonic_amplitudes_n[2] as f32,
-            harmonic_amplitude_4_n: e.harmonic_amplitudes_n[3] as f32,
             harmonic_phase_1_rad: e.harmonic_phases_rad[0] as f32,
             harmonic_phase_2_rad: e.harmonic_phases_rad[1] as f32,
             harmonic_phase_3_rad: e.harmonic_phases_rad[2] as f32,
             harmonic_phase_4_rad: e.harmonic_phases_rad[3] as f32,
             hysteresis_form: e.hysteresis_form.code(),
             hysteresis_length_m: e.hysteresis_length_m as f32,
+            hysteresis_lag_s: e.hysteresis_lag_s as f32,
             colour_form: e.colour_form.code(),
             colour_rho: e.colour_rho as f32,
+            colour_share: e.colour_share as f32,
+            colour_rho_1: e.colour_rhos[0] as f32,
+            colour_rho_2: e.colour_rhos[1] as f32,
+            colour_rho_3: e.colour_rhos[2] as f32,
             colour_hold_intervals: e.colour_hold_intervals,
             stiction_form: e.stiction_form.code(),
             stiction_excess: e.stiction_excess as f32,
+            stiction_release_m: e.stiction_release_m as f32,
+            stiction_dwell_s: e.stiction_dwell_s as f32,
             drift_form: e.drift_form.code(),
             drift_rate_per_s: e.drift_rate_per_s as f32,
             noise_interval_s: o.noise_interval_s as f32,
-            stiction_release_m: e.stiction_release_m as f32,
             _pad1: 0,
+            _pad2: 0,
+            _pad3: 0,
         }
     }
 }
@@ -156,6 +166,11 @@ pub struct GridPoint {
     pub non_gaussian_strength: f32,
     /// Phases are reduced as their deviation from this angle, rad.
     pub phase_ref_rad: f32,
+    /// Normal-force harmonic amplitudes at this point's N0, N.
+    pub harmonic_amplitude_1_n: f32,
+    pub harmonic_amplitude_2_n: f32,
+    pub harmonic_amplitude_3_n: f32,
+    pub harmonic_amplitude_4_n: f32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -177,6 +192,12 @@ pub struct PathState {
     pub colour_state: f32,
     pub interval_phase: f32,
     pub stiction_excess: f32,
+    pub colour_state_1: f32,
+    pub colour_state_2: f32,
+    /// The lagged friction coefficient of hysteresis `lag`, –.
+    pub lagged_mu: f32,
+    /// When the current stick began, s from the run's start.
+    pub stick_since_s: f32,
 }
 
 /// Uniform of `check.wgsl` (struct `CheckParams`).
@@ -245,6 +266,10 @@ impl GridPoint {
             friction_offset: o.effects.friction_offset as f32,
             non_gaussian_strength: o.effects.non_gaussian_strength as f32,
             phase_ref_rad: point.range.phase_ref_f32(),
+            harmonic_amplitude_1_n: o.effects.harmonic_amplitudes_n[0] as f32,
+            harmonic_amplitude_2_n: o.effects.harmonic_amplitudes_n[1] as f32,
+            harmonic_amplitude_3_n: o.effects.harmonic_amplitudes_n[2] as f32,
+            harmonic_amplitude_4_n: o.effects.harmonic_amplitudes_n[3] as f32,
         }
     }
 }

@@ -13,12 +13,14 @@
 
 use std::fmt::Write;
 
+use crate::engine::cpu::effects::{MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE};
 use crate::engine::effects::{
     ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm, HysteresisForm, LoadForm,
     NonGaussianForm, STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::gpu::ensemble::{
     ACCUMULATOR_WORDS, ILLINOIS_ITERATIONS, ILLINOIS_TOLERANCE, MAX_EVENTS_PER_SEGMENT, PROBE_HALVINGS,
+    TRIG_REFRESH_STEPS,
 };
 use crate::engine::gpu::{MAX_WORKGROUPS_PER_DIMENSION, WORKGROUP_SIZE};
 use crate::engine::reduce::{HISTOGRAM_BINS, PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
@@ -67,15 +69,14 @@ fn constants() -> String {
     u32s("PHILOX_M1", rng::PHILOX_M1);
     u32s("PHILOX_W0", rng::PHILOX_W0);
     u32s("PHILOX_W1", rng::PHILOX_W1);
-    u32s("STREAM_FRICTION", rng::STREAM_FRICTION);
-    u32s("STREAM_NORMAL_FORCE", rng::STREAM_NORMAL_FORCE);
+    u32s("STREAM_MAIN", rng::STREAM_MAIN);
     u32s("STREAM_COLOUR", rng::STREAM_COLOUR);
-    u32s("STREAM_STICTION", rng::STREAM_STICTION);
     u32s("HISTOGRAM_BINS", HISTOGRAM_BINS);
     u32s("ACCUMULATOR_WORDS", ACCUMULATOR_WORDS as u32);
     u32s("MAX_EVENTS_PER_SEGMENT", MAX_EVENTS_PER_SEGMENT);
     u32s("PROBE_HALVINGS", PROBE_HALVINGS);
     u32s("ILLINOIS_ITERATIONS", ILLINOIS_ITERATIONS);
+    u32s("TRIG_REFRESH_STEPS", TRIG_REFRESH_STEPS);
     for (name, value) in [
         ("ILLINOIS_TOLERANCE", ILLINOIS_TOLERANCE),
         ("QUANTISE_LIMIT", f64::from(QUANTISE_LIMIT)),
@@ -84,6 +85,8 @@ fn constants() -> String {
         ("DRIFT_SATURATION_S", DRIFT_SATURATION_S),
         ("DRIFT_WANDER_S", DRIFT_WANDER_S),
         ("STICTION_DECAY_M", STICTION_DECAY_M),
+        ("MIXTURE_OUTLIER_SHARE", MIXTURE_OUTLIER_SHARE),
+        ("MIXTURE_OUTLIER_QUANTILE", MIXTURE_OUTLIER_QUANTILE),
     ] {
         writeln!(s, "const {name}: f32 = {};", f32_literal(value)).expect("writing to a String");
     }
