@@ -20,12 +20,17 @@ pub enum Error {
     InvalidSetting { what: String, message: String },
 
     /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", crate::io::shown(path))]
     Io { path: PathBuf, source: std::io::Error },
 
-    /// A measurement set that the format spec refuses.
-    #[error("{}{}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    /// A measurement set (or shard accumulator file) that is refused.
+    #[error("{}{}: {message}", crate::io::shown(file), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Measurement { file: PathBuf, line: Option<u64>, message: String },
+
+    /// An integrator produced a non-finite value (the model drives it out
+    /// of range); `point` names the grid point, nothing is reduced.
+    #[error("the simulation diverged at {point}: {message}")]
+    Diverged { point: String, message: String },
 
     /// No usable GPU adapter / device.
     #[error("GPU unavailable: {0}")]

@@ -13,7 +13,8 @@ use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::write_diagnosis;
 use crate::diagnose::synthetic::{SetShape, benchmark_plan};
 use crate::diagnose::{DiagnoseSettings, diagnose_set};
-use crate::engine::{Effect, Engine, GpuOptions};
+use crate::engine::{Effect, Engine, GpuOptions, Job};
+use crate::io::{OutputSet, owned};
 
 #[derive(Args, Debug)]
 pub(crate) struct DiagnoseArgs {
@@ -69,15 +70,39 @@ pub(crate) struct BenchmarkArgs {
     pub(crate) replicates: u32,
 }
 
+/// Fewest simulated replicates per condition: a spread needs two.
+const MIN_REPLICATES: u32 = 2;
+/// Most simulated replicates per condition (each is a whole record in memory).
+const MAX_REPLICATES: u32 = 1000;
+/// Fewest realisations in the ensembles that score summary data.
+const MIN_ENSEMBLE_REALISATIONS: u32 = 4;
+
 pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
-    // Read (and so validate) the set before anything else: bad input writes nothing.
+    // The flags, the set and --out are checked before any computation; bad
+    // input writes nothing.
+    if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&args.replicates) {
+        anyhow::bail!(
+            "invalid --replicates: {} simulated replicates per condition; a z-score needs a spread, so at least \
+             {MIN_REPLICATES} (and at most {MAX_REPLICATES})",
+            args.replicates
+        );
+    }
+    if !(MIN_ENSEMBLE_REALISATIONS..=Job::MAX_REALISATIONS).contains(&args.realisations) {
+        anyhow::bail!(
+            "invalid --realisations: {} realisations per condition; the ensembles that score summary data need \
+             at least {MIN_ENSEMBLE_REALISATIONS} (and at most {})",
+            args.realisations,
+            Job::MAX_REALISATIONS
+        );
+    }
     let set = read_measurement_set(&args.dir)?;
+    let out = OutputSet::prepare(&args.out, "--out", owned::DIAGNOSIS, &[args.dir.as_path()])?;
     let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
     eprintln!("backend: {}", engine.description());
     let settings = DiagnoseSettings {
         seed: args.seed,
-        replicates: args.replicates.max(2),
-        ensemble_realisations: args.realisations.max(4),
+        replicates: args.replicates,
+        ensemble_realisations: args.realisations,
         ..DiagnoseSettings::default()
     };
     let started = Instant::now();
@@ -86,7 +111,8 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| spinner.set_message(step.to_string()))?;
     spinner.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
-    let report = write_diagnosis(&args.out, &diagnosis, &args.dir, elapsed)?;
+    let report = write_diagnosis(out.dir(), &diagnosis, &args.dir, elapsed)?;
+    out.commit()?;
     println!(
         "verdict: {} (confidence {:.2}); gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
         report.verdict.effect,

@@ -76,7 +76,10 @@ impl From<BackendArg> for BackendChoice {
     }
 }
 
-/// Runs the command line; returns the process exit code.
+/// Runs the command line; returns the process exit code: 0 on success, 1
+/// when the input is refused or the run fails, 2 for a usage error (clap's:
+/// an unknown flag, a missing or malformed value), and 128 + n when signal
+/// n (SIGINT, SIGTERM, SIGHUP) stops it after removing its unfinished output.
 pub fn main() -> ExitCode {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // Mesa's Vulkan loader probes Wayland and prints a misleading
@@ -84,6 +87,9 @@ pub fn main() -> ExitCode {
         // SAFETY: no other thread exists yet.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
+    // While this is the only thread: every later thread inherits the signal
+    // mask, and one thread takes the signals and cleans up.
+    crate::io::install_interrupt_cleanup();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::simulate(args),
@@ -95,10 +101,24 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// An error and its causes on one line, each cause only when its text is
+/// not already there (an I/O error's text is part of its message).
+fn message(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }
 
 pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {

@@ -1,13 +1,15 @@
 //! `stickslip sweep` and `stickslip merge`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
 
 use super::{BackendArg, ModelArgs, progress_bar};
-use crate::engine::{Engine, GpuOptions, Model, Oscillator, RunPlan};
+use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
+use crate::engine::{Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
+use crate::io::{OutputSet, excerpt, owned};
 use crate::sweep::{self, Grid, RunIdentity, Shard, SweepSettings, write_output_set};
 
 #[derive(Args, Debug)]
@@ -15,10 +17,10 @@ pub(crate) struct SweepArgs {
     #[command(flatten)]
     pub(crate) model: ModelArgs,
     /// Excitation frequencies, Hz: a comma list or START:STOP:COUNT.
-    #[arg(long, default_value = "5:15:41")]
+    #[arg(long, default_value = "5:15:41", allow_hyphen_values = true)]
     pub(crate) frequencies: String,
     /// Nominal normal forces, N: a comma list or START:STOP:COUNT.
-    #[arg(long, default_value = "4,8,12,16.39")]
+    #[arg(long, default_value = "4,8,12,16.39", allow_hyphen_values = true)]
     pub(crate) normal_forces: String,
     /// Realisations per grid point.
     #[arg(long, default_value_t = 64)]
@@ -44,7 +46,7 @@ pub(crate) struct SweepArgs {
     #[arg(long, value_name = "K/N")]
     pub(crate) shard: Option<String>,
     /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
-    #[arg(long, default_value_t = 7.0)]
+    #[arg(long, default_value_t = 7.0, allow_negative_numbers = true)]
     pub(crate) fig8_frequency: f64,
     /// Skip the PNG/SVG plots.
     #[arg(long)]
@@ -60,34 +62,112 @@ pub(crate) struct MergeArgs {
     #[arg(required = true)]
     pub(crate) shards: Vec<PathBuf>,
     /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
-    #[arg(long, default_value_t = 7.0)]
+    #[arg(long, default_value_t = 7.0, allow_negative_numbers = true)]
     pub(crate) fig8_frequency: f64,
 }
 
+/// Parses a grid flag after checking, before anything is allocated, that
+/// it names at most [`Job::MAX_POINTS`] values; every value must be a
+/// physical frequency or force (`check`), and the error names the flag.
+fn grid_values(flag: &str, text: &str, check: fn(f64) -> Option<String>) -> Result<Vec<f64>> {
+    let count = match text.split(':').collect::<Vec<_>>().as_slice() {
+        [_, _, count] => count.trim().parse::<u64>().unwrap_or(0),
+        _ => text.split(',').count() as u64,
+    };
+    if count > Job::MAX_POINTS as u64 {
+        anyhow::bail!(
+            "invalid {flag}: `{}` gives {count} values; a grid may have at most {} points",
+            excerpt(text, 60),
+            Job::MAX_POINTS
+        );
+    }
+    let values = sweep::parse_list(flag, text)?;
+    for &v in &values {
+        if let Some(problem) = check(v) {
+            anyhow::bail!("invalid {flag}: `{}`: {problem}", fmt_value(v));
+        }
+    }
+    Ok(values)
+}
+
+/// The run settings' limits, blamed on their flags (the engine checks the
+/// same limits again, for every caller).
+fn check_run_flags(realisations: u32, warmup_cycles: u32, cycles: u32) -> Result<()> {
+    if realisations > Job::MAX_REALISATIONS {
+        anyhow::bail!(
+            "invalid --realisations: {realisations} per grid point exceed the limit of {} (2^20) on either backend",
+            Job::MAX_REALISATIONS
+        );
+    }
+    let total = u64::from(warmup_cycles) + u64::from(cycles);
+    if total > Job::MAX_CYCLES {
+        anyhow::bail!(
+            "invalid --cycles/--warmup-cycles: {warmup_cycles} + {cycles} = {total} excitation periods per \
+             realisation exceed the limit of {} (2^24) on either backend",
+            Job::MAX_CYCLES
+        );
+    }
+    let peaks = u64::from(realisations) * u64::from(cycles);
+    if peaks > Job::MAX_PEAKS_PER_POINT {
+        anyhow::bail!(
+            "invalid --realisations × --cycles: {peaks} peaks per grid point exceed the limit of 2^32 − 1 on either \
+             backend"
+        );
+    }
+    Ok(())
+}
+
 pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
+    // Everything is checked before any computation and before anything is written.
     let model = args.model.load()?;
     let grid = Grid {
-        frequencies_hz: sweep::parse_list("--frequencies", &args.frequencies)?,
-        normal_forces_n: sweep::parse_list("--normal-forces", &args.normal_forces)?,
+        frequencies_hz: grid_values("--frequencies", &args.frequencies, excitation_frequency_problem)?,
+        normal_forces_n: grid_values("--normal-forces", &args.normal_forces, normal_force_problem)?,
     };
+    let total_points = grid.frequencies_hz.len() * grid.normal_forces_n.len();
+    if total_points > Job::MAX_POINTS {
+        anyhow::bail!(
+            "invalid grid: --frequencies × --normal-forces = {total_points} points, over the limit of {} per run; \
+             split it into several runs",
+            Job::MAX_POINTS
+        );
+    }
     let shard = match &args.shard {
         Some(text) => Shard::parse(text)?,
         None => Shard::WHOLE,
     };
-    let all_conditions = grid.conditions();
-    for c in &all_conditions {
-        Oscillator::new(&model, *c)?;
-    }
-    let conditions = &all_conditions[shard.points(all_conditions.len())];
     let settings = SweepSettings {
         realisations: args.realisations,
         plan: RunPlan { warmup_cycles: args.warmup_cycles, measured_cycles: args.cycles },
         seed: args.seed,
     };
     settings.validate()?;
+    check_run_flags(args.realisations, args.warmup_cycles, args.cycles)?;
     if args.steps_per_dispatch == 0 {
         anyhow::bail!("invalid --steps-per-dispatch: must be at least 1");
     }
+    if !args.fig8_frequency.is_finite() {
+        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
+    }
+    let all_conditions = grid.conditions();
+    for c in &all_conditions {
+        Oscillator::new(&model, *c)?;
+    }
+    let conditions = &all_conditions[shard.points(all_conditions.len())];
+    if !conditions.is_empty() {
+        let points: Vec<Point> = conditions.iter().map(|&c| Point::steady(&model, c)).collect();
+        let job = Job {
+            model: &model,
+            points: &points,
+            realisations: settings.realisations,
+            first_realisation: 0,
+            seed: settings.seed,
+            plan: settings.plan,
+            record: Record::Sums,
+        };
+        job.validate()?;
+    }
+    let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
     let engine = Engine::open(args.backend.into(), GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;
     let description = engine.description().to_string();
     eprintln!("backend: {description}");
@@ -120,7 +200,8 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     };
     let timings = serde_json::json!({ "run_s": run_s });
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
-    write_output_set(&args.out, &model, &identity, shard, &result, &description, timings, plots)?;
+    write_output_set(out.dir(), &model, &identity, shard, &result, &description, timings, plots)?;
+    out.commit()?;
     eprintln!(
         "{} grid points × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
         conditions.len(),
@@ -132,12 +213,19 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
 }
 
 pub(crate) fn merge(args: MergeArgs) -> Result<()> {
+    if !args.fig8_frequency.is_finite() {
+        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
+    }
+    let inputs: Vec<&Path> = args.shards.iter().map(PathBuf::as_path).collect();
+    // --out may be neither a shard nor contain one: checked before reading them.
+    let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &inputs)?;
     let (identity, result) = sweep::merge_shards(&args.shards)?;
     let model = Model::from_toml_str(&identity.model_toml, "merged shards", &[])?;
     let description = format!("merged from {} shards", args.shards.len());
     let timings = serde_json::json!({ "merged_shards": args.shards.len() });
     let plots = Some(args.fig8_frequency);
-    write_output_set(&args.out, &model, &identity, Shard::WHOLE, &result, &description, timings, plots)?;
+    write_output_set(out.dir(), &model, &identity, Shard::WHOLE, &result, &description, timings, plots)?;
+    out.commit()?;
     eprintln!(
         "merged {} shards ({} grid points) into {}",
         args.shards.len(),

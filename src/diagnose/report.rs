@@ -12,7 +12,7 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 use crate::diagnose::{Diagnosis, Unexplained, chart};
 use crate::error::Result;
-use crate::io::{create_dir, write_atomically};
+use crate::io::{OutputSet, owned, write_atomically};
 
 /// The format tag of `report.json`.
 pub const REPORT_FORMAT: &str = "stickslip-diagnosis/1";
@@ -185,7 +185,10 @@ fn escape(text: &str) -> String {
 /// Writes `report.json`, `baseline-model.toml`, `fitted-model.toml`,
 /// `report.html` and `gap.png`/`gap.svg` into `out`; returns the report.
 pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed_s: f64) -> Result<Report> {
-    create_dir(out)?;
+    // The set is built beside `out` and swapped in whole; a set the caller
+    // prepared (the command line, before computing) is written straight into.
+    let set = OutputSet::prepare(out, "output directory", owned::DIAGNOSIS, &[source])?;
+    let out = set.dir();
     let report = diagnosis.report(source, elapsed_s);
     write_atomically(&out.join("report.json"), |w| {
         serde_json::to_writer_pretty(&mut *w, &report)?;
@@ -210,6 +213,7 @@ pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed
     chart::write_gap_chart(out, diagnosis)?;
     let html = html(diagnosis, &report);
     write_atomically(&out.join("report.html"), |w| w.write_all(html.as_bytes()))?;
+    set.commit()?;
     Ok(report)
 }
 

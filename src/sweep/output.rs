@@ -1,13 +1,16 @@
 //! A sweep's output set: `sweep.csv` (the columns of `interfaces.md`),
 //! `histograms.csv`, `accumulators.json` (what `merge` combines), the
-//! figures and the `sweep.json` sidecar. Every file is written under a
-//! temporary name and renamed into place.
+//! figures and the `sweep.json` sidecar. The set is built in a temporary
+//! sibling directory and swapped in whole ([`OutputSet`]): the output
+//! directory holds one run's complete set or the previous one, never a mix.
+//! Nothing non-finite is written: a statistic that is not finite is refused.
 
 use std::path::Path;
 
 use crate::engine::{Model, PointStats};
+use crate::error::Error;
 use crate::error::Result;
-use crate::io::{create_dir, write_atomically};
+use crate::io::{OutputSet, owned, write_atomically};
 use crate::sweep::SweepResult;
 use crate::sweep::plot;
 use crate::sweep::shard::{AccumulatorFile, RunIdentity, Shard};
@@ -98,7 +101,9 @@ pub fn write_accumulators(path: &Path, file: &AccumulatorFile) -> Result<()> {
 /// Writes everything a sweep (or a merge) produces into `out`: sweep.csv,
 /// histograms.csv, accumulators.json, sweep.json and, with `plots_at_hz`
 /// (Figure 8's frequency, Hz), the figures. `description` names the backend
-/// and adapter; `timings` goes into sweep.json as it is.
+/// and adapter; `timings` goes into sweep.json as it is. The set replaces
+/// the previous one in `out` whole (see [`OutputSet`]); when `out` is a set
+/// the caller prepared, the files go straight into it.
 #[allow(clippy::too_many_arguments)]
 pub fn write_output_set(
     out: &Path,
@@ -110,7 +115,48 @@ pub fn write_output_set(
     timings: serde_json::Value,
     plots_at_hz: Option<f64>,
 ) -> Result<()> {
-    create_dir(out)?;
+    let set = OutputSet::prepare(out, "output directory", owned::SWEEP, &[])?;
+    write_output_files(set.dir(), model, identity, shard, result, description, timings, plots_at_hz)?;
+    set.commit()
+}
+
+/// Refuses a result with a statistic that is not finite (nothing
+/// non-finite is written or plotted).
+pub fn check_finite(result: &SweepResult) -> Result<()> {
+    for row in result.rows() {
+        let values = [
+            row.peak_mean_m,
+            row.peak_var_m2,
+            row.peak_p05_m,
+            row.peak_p50_m,
+            row.peak_p95_m,
+            row.stick_fraction,
+            row.phase_mean_deg,
+            row.phase_var_deg2,
+        ];
+        if values.iter().any(|v| !v.is_finite()) || row.peaks == 0 {
+            return Err(Error::Diverged {
+                point: format!("{} Hz, {} N", row.excitation_frequency_hz, row.normal_force_n),
+                message: format!("a statistic is not finite ({} peaks); nothing was written", row.peaks),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Writes the files of a sweep's output set into the directory `dir`.
+#[allow(clippy::too_many_arguments)]
+pub fn write_output_files(
+    out: &Path,
+    model: &Model,
+    identity: &RunIdentity,
+    shard: Shard,
+    result: &SweepResult,
+    description: &str,
+    timings: serde_json::Value,
+    plots_at_hz: Option<f64>,
+) -> Result<()> {
+    check_finite(result)?;
     write_sweep_csv(&out.join("sweep.csv"), &result.rows())?;
     write_histograms_csv(&out.join("histograms.csv"), result)?;
     write_accumulators(&out.join("accumulators.json"), &result.to_file(identity, shard))?;

@@ -34,6 +34,10 @@ fn curves(result: &SweepResult) -> Vec<(f64, Vec<(Condition, &PointAccumulator)>
         .collect()
 }
 
+fn finite(p: (f64, f64)) -> bool {
+    p.0.is_finite() && p.1.is_finite()
+}
+
 fn frequency_span(result: &SweepResult) -> (f64, f64) {
     let (lo, hi) = result.conditions.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
         (lo.min(c.excitation_frequency_hz), hi.max(c.excitation_frequency_hz))
@@ -48,8 +52,16 @@ where
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9a", e);
     let series = curves(result);
     let rows = result.rows();
-    let y_max = rows.iter().map(|r| r.peak_p95_m.max(r.peak_mean_m)).fold(0.0, f64::max) * 1e3 * 1.08;
-    let y_min = rows.iter().map(|r| r.peak_p05_m.min(r.peak_mean_m)).fold(f64::INFINITY, f64::min).min(0.0) * 1e3;
+    // Only finite statistics set the axes (plotters spins on non-finite ranges).
+    let y_max =
+        rows.iter().map(|r| r.peak_p95_m.max(r.peak_mean_m)).filter(|v| v.is_finite()).fold(0.0, f64::max) * 1e3 * 1.08;
+    let y_min = rows
+        .iter()
+        .map(|r| r.peak_p05_m.min(r.peak_mean_m))
+        .filter(|v| v.is_finite())
+        .fold(f64::INFINITY, f64::min)
+        .min(0.0)
+        * 1e3;
     let (f_lo, f_hi) = frequency_span(result);
     let mut chart = ChartBuilder::on(&root)
         .caption(title, (FONT, 22))
@@ -72,11 +84,12 @@ where
             .iter()
             .map(|(cond, a)| (cond.excitation_frequency_hz, a.quantile(0.95) * 1e3))
             .chain(pts.iter().rev().map(|(cond, a)| (cond.excitation_frequency_hz, a.quantile(0.05) * 1e3)))
+            .filter(|p| finite(*p))
             .collect();
         chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.18).filled()))).map_err(e)?;
         chart
             .draw_series(LineSeries::new(
-                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, a.moments().0 * 1e3)),
+                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, a.moments().0 * 1e3)).filter(|p| finite(*p)),
                 c.stroke_width(2),
             ))
             .map_err(e)?
@@ -92,7 +105,8 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9b", e);
     let series = curves(result);
-    let vars: Vec<f64> = result.accumulators.iter().map(|a| a.moments().1 * 1e6).filter(|v| *v > 0.0).collect();
+    let vars: Vec<f64> =
+        result.accumulators.iter().map(|a| a.moments().1 * 1e6).filter(|v| v.is_finite() && *v > 0.0).collect();
     let v_max = vars.iter().copied().fold(1e-12, f64::max) * 2.0;
     let v_min = vars.iter().copied().fold(f64::INFINITY, f64::min).min(v_max / 10.0) / 2.0;
     let (f_lo, f_hi) = frequency_span(result);
@@ -117,7 +131,7 @@ where
         let line: Vec<(f64, f64)> = pts
             .iter()
             .map(|(cond, a)| (cond.excitation_frequency_hz, a.moments().1 * 1e6))
-            .filter(|(_, v)| *v > 0.0)
+            .filter(|p| finite(*p) && p.1 > 0.0)
             .collect();
         chart
             .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
@@ -166,11 +180,12 @@ where
             .iter()
             .map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 + lag(a).1))
             .chain(pts.iter().rev().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 - lag(a).1)))
+            .filter(|p| finite(*p))
             .collect();
         chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.18).filled()))).map_err(e)?;
         chart
             .draw_series(LineSeries::new(
-                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0)),
+                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0)).filter(|p| finite(*p)),
                 c.stroke_width(2),
             ))
             .map_err(e)?
@@ -185,16 +200,22 @@ where
 fn density_bars(a: &PointAccumulator, target_bars: usize) -> (Vec<(f64, f64, f64)>, f64, f64) {
     let (mean, var) = a.moments();
     let fine = (a.range.hi_m - a.range.lo_m) / f64::from(HISTOGRAM_BINS - 2);
-    let sd = var.sqrt().max(fine);
-    let per_bar = ((8.0 * sd / target_bars as f64) / fine).round().max(1.0) as u32;
     let inner = HISTOGRAM_BINS - 2;
-    let first = (((mean - 4.0 * sd - a.range.lo_m) / fine).floor().max(0.0) as u32 / per_bar) * per_bar;
-    let last = (((mean + 4.0 * sd - a.range.lo_m) / fine).ceil() as u32).min(inner);
+    if !(mean.is_finite() && var.is_finite() && fine.is_finite() && fine > 0.0) {
+        // Nothing to draw (a result with such statistics is refused before plotting).
+        return (Vec::new(), a.range.lo_m * 1e3, a.range.hi_m * 1e3);
+    }
+    let sd = var.max(0.0).sqrt().max(fine);
+    let per_bar = ((8.0 * sd / target_bars as f64) / fine).round().clamp(1.0, f64::from(inner)) as u32;
+    let first =
+        (((mean - 4.0 * sd - a.range.lo_m) / fine).floor().clamp(0.0, f64::from(inner)) as u32 / per_bar) * per_bar;
+    let last = ((mean + 4.0 * sd - a.range.lo_m) / fine).ceil().clamp(0.0, f64::from(inner)) as u32;
     let total = a.peaks.max(1) as f64;
     let mut bars = Vec::new();
     let mut start = first;
+    // Each step advances by at least one bin and stops at `inner`: the loop ends.
     while start < last {
-        let end = (start + per_bar).min(inner);
+        let end = start.saturating_add(per_bar).min(inner);
         let count: u64 = (start..end).map(|i| a.histogram[(i + 1) as usize]).sum();
         let x0 = a.range.lo_m + f64::from(start) * fine;
         let x1 = a.range.lo_m + f64::from(end) * fine;
@@ -221,16 +242,17 @@ where
     let panels = root.split_evenly((rows, cols));
     for ((cond, a), panel) in points.iter().zip(panels) {
         let (bars, lo, hi) = density_bars(a, 40);
+        let (lo, hi) = if lo.is_finite() && hi.is_finite() && lo < hi { (lo, hi) } else { (0.0, 1.0) };
         let (mean, var) = a.moments();
-        let (mean_mm, sd_mm) = (mean * 1e3, var.sqrt() * 1e3);
+        let (mean_mm, sd_mm) = (mean * 1e3, var.max(0.0).sqrt() * 1e3);
         let gauss = |x: f64| {
-            if sd_mm > 0.0 {
+            if sd_mm > 0.0 && sd_mm.is_finite() && mean_mm.is_finite() {
                 (-(x - mean_mm).powi(2) / (2.0 * sd_mm * sd_mm)).exp() / (sd_mm * (std::f64::consts::TAU).sqrt())
             } else {
                 0.0
             }
         };
-        let top = bars.iter().map(|b| b.2).fold(gauss(mean_mm), f64::max) * 1.15;
+        let top = bars.iter().map(|b| b.2).filter(|d| d.is_finite()).fold(gauss(mean_mm), f64::max) * 1.15;
         let mut chart = ChartBuilder::on(&panel)
             .caption(
                 format!(

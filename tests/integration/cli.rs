@@ -71,7 +71,7 @@ fn bad_input_is_named_and_nothing_is_written() {
     run(&["--set", "friction.sigma=-0.01"], "friction.sigma");
     run(&["--set", "normal_force.sigma=-1"], "normal_force.sigma");
     run(&["--set", "rig.natural_frequency_hz=0"], "rig.natural_frequency_hz");
-    run(&["--frequencies", "0,7"], "excitation_frequency_hz");
+    run(&["--frequencies", "0,7"], "--frequencies");
     run(&["--set", "solver.steps_per_period=4"], "solver.steps_per_period");
     run(&["--set", "noise.interval_s=0"], "noise.interval_s");
     run(&["--frequencies", "5:15"], "--frequencies");
@@ -79,7 +79,7 @@ fn bad_input_is_named_and_nothing_is_written() {
     run(&["--config", dir.join("absent.toml").to_str().unwrap()], "absent.toml");
 
     refused(&["simulate", "--out", out_s, "--set", "rig.mass_kg=-1"], &out, "rig.mass_kg");
-    refused(&["simulate", "--out", out_s, "--frequency", "0"], &out, "excitation_frequency_hz");
+    refused(&["simulate", "--out", out_s, "--frequency", "0"], &out, "--frequency");
     refused(&["simulate", "--out", out_s, "--sample-rate", "0"], &out, "--sample-rate");
     refused(&["benchmark-diagnosis", "--out", out_s, "--load-shares", "0.5,-1"], &out, "--load-shares");
     refused(&["benchmark-diagnosis", "--out", out_s, "--effects", "stickiness"], &out, "stickiness");

@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 
 use super::json::{Bound, bad};
 use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow};
+use crate::engine::Job;
+use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::error::{Error, Result};
+use crate::io::{EXCERPT_CHARS, excerpt};
 
 /// A CSV column the reader wants.
 struct Column {
@@ -44,11 +47,8 @@ struct Table {
 }
 
 impl Table {
-    /// Reads `path`, parses the header and finds `columns`.
-    /// `named_by` says which manifest key names the file (for messages).
-    fn open(path: &Path, named_by: &str, columns: &[Column]) -> Result<Table> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| bad(path, None, format!("cannot read the file named by {named_by}: {e}")))?;
+    /// Parses the content `bytes` of `path`: the header, and where `columns` are.
+    fn open(path: &Path, bytes: Vec<u8>, columns: &[Column]) -> Result<Table> {
         let line_ends = (0..bytes.len())
             .filter(|&i| bytes[i] == b'\n' || (bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
             .collect();
@@ -73,7 +73,7 @@ impl Table {
                 return Err(bad(
                     path,
                     Some(header_line),
-                    format!("column `{name}` appears more than once in the header"),
+                    format!("column `{}` appears more than once in the header", excerpt(name, EXCERPT_CHARS)),
                 ));
             }
         }
@@ -81,11 +81,12 @@ impl Table {
         for c in columns {
             let at = positions.get(c.name).copied();
             if at.is_none() && c.required {
-                let have: Vec<&str> = header.iter().collect();
+                let have: Vec<String> = header.iter().take(8).map(|h| excerpt(h, 24)).collect();
+                let more = if header.len() > 8 { format!(" and {} more", header.len() - 8) } else { String::new() };
                 return Err(bad(
                     path,
                     Some(header_line),
-                    format!("missing required column `{}` (the header has: {})", c.name, have.join(", ")),
+                    format!("missing required column `{}` (the header has: {}{more})", c.name, have.join(", ")),
                 ));
             }
             index.push(at);
@@ -117,7 +118,7 @@ impl Table {
             }
             csv::ErrorKind::Utf8 { .. } => bad(file, line, "the row is not valid UTF-8 text"),
             csv::ErrorKind::Io(io) => bad(file, line, format!("cannot read the file: {io}")),
-            _ => bad(file, line, format!("cannot read the file as CSV: {e}")),
+            _ => bad(file, line, format!("cannot read the file as CSV: {}", excerpt(&e.to_string(), 160))),
         }
     }
 
@@ -152,13 +153,18 @@ impl Table {
 /// The finite number in one CSV field.
 fn parse_number(file: &Path, line: u64, column: &str, text: &str) -> Result<f64> {
     let value: f64 = text.parse().map_err(|_| {
-        let shown = if text.is_empty() { "an empty field".to_string() } else { format!("`{text}`") };
+        let shown =
+            if text.is_empty() { "an empty field".to_string() } else { format!("`{}`", excerpt(text, EXCERPT_CHARS)) };
         bad(file, Some(line), format!("column `{column}`: {shown} is not a number"))
     })?;
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(bad(file, Some(line), format!("column `{column}`: `{text}` is not a finite number")))
+        Err(bad(
+            file,
+            Some(line),
+            format!("column `{column}`: `{}` is not a finite number", excerpt(text, EXCERPT_CHARS)),
+        ))
     }
 }
 
@@ -170,9 +176,15 @@ const RUN_COLUMNS: [Column; 5] = [
     Column::optional("friction_force"),
 ];
 
-/// Reads and checks one run file; the manifest entry `ctx` named it.
-pub(super) fn read_run_file(path: &Path, ctx: &str, frequency_hz: f64, amplitude_m: f64, force_n: f64) -> Result<Run> {
-    let table = Table::open(path, &format!("manifest.json {ctx}.file"), &RUN_COLUMNS)?;
+/// Checks one run file's content (`bytes`, read from `path`).
+pub(super) fn read_run_file(
+    path: &Path,
+    bytes: Vec<u8>,
+    frequency_hz: f64,
+    amplitude_m: f64,
+    force_n: f64,
+) -> Result<Run> {
+    let table = Table::open(path, bytes, &RUN_COLUMNS)?;
     let has = |j: usize| table.index[j].is_some();
     let (has_v, has_n, has_f) = (has(2), has(3), has(4));
     let mut t_s = Vec::new();
@@ -235,6 +247,33 @@ pub(super) fn read_run_file(path: &Path, ctx: &str, frequency_hz: f64, amplitude
             ));
         }
     }
+    let (dt_lo, dt_hi) = limits::NOISE_INTERVAL_S;
+    if !(dt_lo..=dt_hi).contains(&median) {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "the sample interval {} s lies outside {}..{} s (the simulated replicates hold their noise over \
+                 one sample interval)",
+                fmt_value(median),
+                fmt_bound(dt_lo),
+                fmt_bound(dt_hi)
+            ),
+        ));
+    }
+    let rate_hz = 1.0 / median;
+    if rate_hz <= 2.0 * frequency_hz {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "the record is sampled at {} Hz, not above twice its excitation frequency ({} Hz; the Nyquist \
+                 rate): its periods and peaks cannot be resolved",
+                fmt_value((rate_hz * 1e6).round() / 1e6),
+                fmt_value(2.0 * frequency_hz)
+            ),
+        ));
+    }
     let duration_s = t_s[n - 1] - t_s[0] + median;
     if duration_s < MIN_PERIODS * period_s * (1.0 - 1e-9) {
         return Err(bad(
@@ -272,8 +311,8 @@ const SUMMARY_COLUMNS: [Column; 9] = [
 ];
 
 /// Reads and checks the summary table.
-pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
-    let table = Table::open(path, "manifest.json summary", &SUMMARY_COLUMNS)?;
+pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<SummaryRow>> {
+    let table = Table::open(path, bytes, &SUMMARY_COLUMNS)?;
     if table.index[4].is_none() && table.index[7].is_none() {
         return Err(bad(
             path,
@@ -304,9 +343,33 @@ pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
                 Some(value as u64)
             }
             Some(value) => {
-                return Err(bad(path, Some(line), format!("column `n_peaks`: {value} is not a whole number ≥ 0")));
+                return Err(bad(
+                    path,
+                    Some(line),
+                    format!("column `n_peaks`: {} is not a whole number ≥ 0", fmt_value(value)),
+                ));
             }
         };
+        let gives_variance = values[5].is_some() || values[8].is_some();
+        match n_peaks {
+            Some(0) => {
+                return Err(bad(path, Some(line), "column `n_peaks`: 0 peaks cannot give a statistic (at least 1)"));
+            }
+            Some(1) if gives_variance => {
+                return Err(bad(path, Some(line), "column `n_peaks`: a variance needs at least 2 peaks, not 1"));
+            }
+            Some(n) if n > Job::MAX_CYCLES => {
+                return Err(bad(
+                    path,
+                    Some(line),
+                    format!(
+                        "column `n_peaks`: {n} is more than {} (the most periods one simulated record may run)",
+                        Job::MAX_CYCLES
+                    ),
+                ));
+            }
+            _ => {}
+        }
         let peak_mean_m = check(4, Bound::Finite, "m")?;
         let phase_mean_deg = check(7, Bound::Finite, "degrees")?;
         if peak_mean_m.is_none() && phase_mean_deg.is_none() {
@@ -316,11 +379,13 @@ pub(super) fn read_summary_file(path: &Path) -> Result<Vec<SummaryRow>> {
                 "the row gives neither `peak_mean_m` nor `phase_mean_deg`; a summary row needs at least one of them",
             ));
         }
+        let (f_lo, f_hi) = limits::FREQUENCY_HZ;
+        let force_max = limits::FORCE_MAX_N;
         rows.push(SummaryRow {
-            excitation_frequency_hz: required(0, Bound::Positive, "Hz")?,
-            excitation_amplitude_m: required(1, Bound::NonNegative, "m")?,
-            normal_force_mean_n: required(2, Bound::NonNegative, "N")?,
-            normal_force_var_n2: check(3, Bound::NonNegative, "N²")?,
+            excitation_frequency_hz: required(0, Bound::within(f_lo, f_hi), "Hz")?,
+            excitation_amplitude_m: required(1, Bound::within(0.0, limits::AMPLITUDE_MAX_M), "m")?,
+            normal_force_mean_n: required(2, Bound::within(0.0, force_max), "N")?,
+            normal_force_var_n2: check(3, Bound::within(0.0, force_max * force_max), "N²")?,
             peak_mean_m,
             peak_var_m2: check(5, Bound::NonNegative, "m²")?,
             n_peaks,

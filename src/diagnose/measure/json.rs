@@ -25,28 +25,46 @@ pub(super) fn kind(v: &Value) -> &'static str {
 }
 
 /// Accepted range of a number.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Bound {
     /// Any finite number.
     Finite,
     /// Finite and ≥ 0.
     NonNegative,
-    /// Finite and > 0.
-    Positive,
+    /// Finite, in `[lo, hi]` (`lo` itself refused when `lo_open`): the
+    /// physically sensible ranges of [`crate::engine::model::limits`].
+    Range { lo: f64, hi: f64, lo_open: bool },
 }
 
 impl Bound {
+    /// `[lo, hi]`.
+    pub(super) const fn within(lo: f64, hi: f64) -> Bound {
+        Bound::Range { lo, hi, lo_open: false }
+    }
+
     /// `None` if `value` is acceptable, else what is wrong with it.
     pub(super) fn violation(self, value: f64, unit: &str) -> Option<String> {
+        use crate::engine::model::{fmt_bound, fmt_value};
+        let shown = fmt_value(value);
         let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
         if !value.is_finite() {
-            return Some(format!("{value} is not a finite number"));
+            return Some(format!("{shown} is not a finite number"));
         }
         match self {
             Bound::Finite => None,
-            Bound::NonNegative if value < 0.0 => Some(format!("{value} must not be negative (≥ 0{unit})")),
-            Bound::Positive if value < 0.0 => Some(format!("{value} must not be negative (> 0{unit})")),
-            Bound::Positive if value == 0.0 => Some(format!("{value} must be positive (> 0{unit})")),
+            Bound::NonNegative if value < 0.0 => Some(format!("{shown} must not be negative (≥ 0{unit})")),
+            Bound::Range { lo, .. } if value < 0.0 && lo >= 0.0 => {
+                Some(format!("{shown} must not be negative (≥ {}{unit})", fmt_bound(lo)))
+            }
+            Bound::Range { lo, lo_open, .. } if value == 0.0 && (lo > 0.0 || lo_open) => {
+                Some(format!("{shown} must be positive (≥ {}{unit})", fmt_bound(lo)))
+            }
+            Bound::Range { lo, lo_open, .. } if value < lo || (lo_open && value == lo) => {
+                Some(format!("{shown} must be {} {}{unit}", if lo_open { ">" } else { "≥" }, fmt_bound(lo)))
+            }
+            Bound::Range { hi, .. } if value > hi => {
+                Some(format!("{shown} must be ≤ {}{unit} (a physically sensible range)", fmt_bound(hi)))
+            }
             _ => None,
         }
     }
@@ -82,7 +100,10 @@ impl Json<'_> {
             Value::Number(n) => n.as_f64(),
             _ => None,
         }
-        .ok_or_else(|| bad(self.file, None, format!("`{ctx}.{key}` must be a number, found {value}")))?;
+        .ok_or_else(|| {
+            let found = crate::io::excerpt(&value.to_string(), crate::io::EXCERPT_CHARS);
+            bad(self.file, None, format!("`{ctx}.{key}` must be a number, found {found}"))
+        })?;
         match bound.violation(number, unit) {
             None => Ok(number),
             Some(problem) => Err(bad(self.file, None, format!("`{ctx}.{key}` = {problem}"))),

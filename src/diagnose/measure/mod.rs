@@ -24,6 +24,28 @@
 //! whose sample interval anywhere differs from the record's median interval
 //! by more than 1 % ([`SAMPLING_TOLERANCE`]) is refused. Unknown manifest keys
 //! and extra CSV columns are ignored; columns may come in any order.
+//!
+//! Hostile input is refused too (issue 11):
+//!
+//! - **Confinement.** Every file the manifest names (and the manifest itself)
+//!   must resolve, after following links, inside the set's directory. An
+//!   absolute name, a `..` that climbs out or a link that leads out is
+//!   refused by name, without the file being opened.
+//! - **Bounded reading.** Each file must be a regular file (a FIFO, device or
+//!   directory is refused at once, never blocking) within its limit
+//!   ([`MAX_MANIFEST_BYTES`](crate::io::MAX_MANIFEST_BYTES),
+//!   [`MAX_TABLE_FILE_BYTES`](crate::io::MAX_TABLE_FILE_BYTES)), and the set's
+//!   files together within [`MAX_SET_BYTES`](crate::io::MAX_SET_BYTES). A
+//!   UTF-8 byte-order mark is accepted. Messages quote at most a short,
+//!   escaped excerpt of a file of the set.
+//! - **Physical ranges.** Masses, frequencies, amplitudes, forces and the
+//!   damping ratio must lie in the model's ranges
+//!   ([`limits`](crate::engine::model::limits)), so a set the simulator cannot
+//!   run is refused here, not half-way through a diagnosis.
+//! - **Sampling.** A record must be sampled above twice its excitation
+//!   frequency (Nyquist), with an interval the simulator can hold noise over.
+//! - **Summary counts.** `n_peaks` must be at least 1 (2 with a variance) and
+//!   at most the periods one simulated record may run.
 
 mod csv;
 mod json;
@@ -34,7 +56,9 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::engine::Sample;
+use crate::engine::model::limits;
 use crate::error::Result;
+use crate::io;
 use json::{Bound, Json, bad, kind};
 
 pub use write::{RunEntry, write_manifest, write_run_file};
@@ -187,20 +211,26 @@ pub fn sample_rate_hz(run: &Run) -> f64 {
 /// the files that names). See the module documentation for what is refused.
 pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
     let manifest_path = dir.join("manifest.json");
-    let bytes = std::fs::read(&manifest_path)
-        .map_err(|e| bad(&manifest_path, None, format!("cannot read the manifest: {e}")))?;
-    let root: Value = serde_json::from_slice(&bytes).map_err(|e| {
-        let line = (e.line() > 0).then_some(e.line() as u64);
-        bad(&manifest_path, line, format!("not valid JSON: {e}"))
+    let root = std::fs::canonicalize(dir).map_err(|e| {
+        bad(&manifest_path, None, format!("cannot read the manifest: the set's directory cannot be opened: {e}"))
     })?;
+    let mut budget = io::MAX_SET_BYTES;
+    let bytes =
+        read_inside(&root, dir, "manifest.json", &manifest_path, "the manifest", io::MAX_MANIFEST_BYTES, &mut budget)?;
+    let root_value: Value = serde_json::from_slice(io::strip_bom(&bytes)).map_err(|e| {
+        let line = (e.line() > 0).then_some(e.line() as u64);
+        bad(&manifest_path, line, format!("not valid JSON: {}", io::excerpt(&e.to_string(), 160)))
+    })?;
+    let root_json = &root_value;
     let manifest = Json { file: &manifest_path };
-    let top = root.as_object().ok_or_else(|| bad(&manifest_path, None, "the manifest must be a JSON object"))?;
+    let top = root_json.as_object().ok_or_else(|| bad(&manifest_path, None, "the manifest must be a JSON object"))?;
+    let quote = |v: &Value| io::excerpt(&v.to_string(), io::EXCERPT_CHARS);
 
     match top.get("format") {
         None => return Err(manifest.missing("format")),
         Some(Value::String(s)) if s == FORMAT => {}
         Some(other) => {
-            return Err(bad(&manifest_path, None, format!("`format` is {other}, expected \"{FORMAT}\"")));
+            return Err(bad(&manifest_path, None, format!("`format` is {}, expected \"{FORMAT}\"", quote(other))));
         }
     }
     let description = match top.get("description") {
@@ -213,10 +243,24 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
 
     let rig_value = top.get("rig").ok_or_else(|| manifest.missing("rig"))?;
     let rig_obj = manifest.object(rig_value, "rig")?;
+    let (m_lo, m_hi) = limits::MASS_KG;
+    let (f_lo, f_hi) = limits::FREQUENCY_HZ;
     let rig = RigInfo {
-        mass_kg: manifest.number(rig_obj, "rig", "mass_kg", Bound::Positive, "kg")?,
-        natural_frequency_hz: manifest.number(rig_obj, "rig", "natural_frequency_hz", Bound::Positive, "Hz")?,
-        damping_ratio: manifest.number(rig_obj, "rig", "damping_ratio", Bound::NonNegative, "")?,
+        mass_kg: manifest.number(rig_obj, "rig", "mass_kg", Bound::within(m_lo, m_hi), "kg")?,
+        natural_frequency_hz: manifest.number(
+            rig_obj,
+            "rig",
+            "natural_frequency_hz",
+            Bound::within(f_lo, f_hi),
+            "Hz",
+        )?,
+        damping_ratio: manifest.number(
+            rig_obj,
+            "rig",
+            "damping_ratio",
+            Bound::within(0.0, limits::DAMPING_RATIO_BELOW * (1.0 - f64::EPSILON)),
+            "",
+        )?,
     };
 
     let run_values: &[Value] = match top.get("runs") {
@@ -228,12 +272,12 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
     };
     let summary_name = match top.get("summary") {
         None | Some(Value::Null) => None,
-        Some(Value::String(s)) => Some(s.clone()),
+        Some(Value::String(s)) if !s.is_empty() => Some(s.clone()),
         Some(other) => {
             return Err(bad(
                 &manifest_path,
                 None,
-                format!("`summary` must be a file name (string), found {}", kind(other)),
+                format!("`summary` must be a file name (string), found {}", quote(other)),
             ));
         }
     };
@@ -253,29 +297,89 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
                 return Err(bad(
                     &manifest_path,
                     None,
-                    format!("`{ctx}.file` must be a non-empty file name, found {other}"),
+                    format!("`{ctx}.file` must be a non-empty file name, found {}", quote(other)),
                 ));
             }
         };
-        let frequency = manifest.number(obj, &ctx, "excitation_frequency_hz", Bound::Positive, "Hz")?;
-        let amplitude = manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::NonNegative, "m")?;
-        let force = manifest.number(obj, &ctx, "normal_force_n", Bound::NonNegative, "N")?;
+        let frequency = manifest.number(obj, &ctx, "excitation_frequency_hz", Bound::within(f_lo, f_hi), "Hz")?;
+        let amplitude =
+            manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::within(0.0, limits::AMPLITUDE_MAX_M), "m")?;
+        let force = manifest.number(obj, &ctx, "normal_force_n", Bound::within(0.0, limits::FORCE_MAX_N), "N")?;
         entries.push((file, frequency, amplitude, force));
     }
 
     let mut runs = Vec::with_capacity(entries.len());
     for (i, (file, frequency, amplitude, force)) in entries.into_iter().enumerate() {
+        let ctx = format!("runs[{i}]");
+        let named_by = format!("manifest.json {ctx}.file");
         let path = dir.join(&file);
-        runs.push(csv::read_run_file(&path, &format!("runs[{i}]"), frequency, amplitude, force)?);
+        let bytes = read_inside(&root, dir, &file, &manifest_path, &named_by, io::MAX_TABLE_FILE_BYTES, &mut budget)?;
+        runs.push(csv::read_run_file(&path, bytes, frequency, amplitude, force)?);
     }
 
     let (summary, summary_file) = match summary_name {
         None => (Vec::new(), None),
         Some(name) => {
             let path = dir.join(&name);
-            (csv::read_summary_file(&path)?, Some(path))
+            let bytes = read_inside(
+                &root,
+                dir,
+                &name,
+                &manifest_path,
+                "manifest.json summary",
+                io::MAX_TABLE_FILE_BYTES,
+                &mut budget,
+            )?;
+            (csv::read_summary_file(&path, bytes)?, Some(path))
         }
     };
 
     Ok(MeasurementSet { dir: dir.to_path_buf(), description, rig, runs, summary, summary_file })
+}
+
+/// Reads the file `name` of the set whose directory is `dir` (canonical:
+/// `root`), refusing, without reading it, a name that leads outside the set
+/// (an absolute path, `..`, or a link), and anything that is not a regular
+/// file within `limit` bytes or the set's remaining byte `budget`.
+fn read_inside(
+    root: &Path,
+    dir: &Path,
+    name: &str,
+    manifest: &Path,
+    named_by: &str,
+    limit: u64,
+    budget: &mut u64,
+) -> Result<Vec<u8>> {
+    let path = dir.join(name);
+    let cannot = |problem: String| {
+        let what = if name == "manifest.json" && named_by == "the manifest" {
+            "cannot read the manifest".to_string()
+        } else {
+            format!("cannot read the file named by {named_by}")
+        };
+        bad(&path, None, format!("{what}: {problem}"))
+    };
+    let resolved = match io::confine(root, name) {
+        io::Confined::Inside(p) => p,
+        io::Confined::Outside => {
+            return Err(bad(
+                manifest,
+                None,
+                format!(
+                    "{named_by} `{}` leads outside the measurement set (an absolute path, `..` or a link that \
+                     leaves it); every file of a set must lie inside its directory, and this one was not read",
+                    io::excerpt(name, 120)
+                ),
+            ));
+        }
+        io::Confined::Unresolved(e) => return Err(cannot(e.to_string())),
+    };
+    let bytes = io::read_bounded(&resolved, limit.min(*budget)).map_err(|e| match e {
+        io::ReadRefusal::TooLarge { .. } if *budget < limit => {
+            cannot(format!("{e}: the set's files together may hold at most {} bytes", io::MAX_SET_BYTES))
+        }
+        e => cannot(e.to_string()),
+    })?;
+    *budget -= bytes.len() as u64;
+    Ok(bytes)
 }
