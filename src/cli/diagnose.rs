@@ -11,7 +11,7 @@ use super::{BackendArg, progress_bar};
 use crate::diagnose::benchmark::{BenchmarkSettings, run_benchmark as run_benchmark_sets};
 use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::write_diagnosis;
-use crate::diagnose::synthetic::{SetShape, benchmark_plan};
+use crate::diagnose::synthetic::SetShape;
 use crate::diagnose::{DiagnoseSettings, diagnose_set};
 use crate::engine::{Effect, Engine, GpuOptions, Job};
 use crate::io::{OutputSet, owned};
@@ -40,10 +40,16 @@ pub(crate) struct BenchmarkArgs {
     /// Where the synthetic sets and their diagnoses go.
     #[arg(long, default_value = "out/benchmark-diagnosis")]
     pub(crate) out: PathBuf,
-    /// Null sets (no effect).
-    #[arg(long, default_value_t = 8)]
+    /// Null sets (no effect), from the whole eq. 7 family.
+    #[arg(long, default_value_t = 20)]
     pub(crate) nulls: u32,
-    /// Effect forms used (1 and 2 are the non-candidate forms).
+    /// Two-effect sets.
+    #[arg(long, default_value_t = 6)]
+    pub(crate) pairs: u32,
+    /// Phase-only summary sets (null and load-dependent friction alternately).
+    #[arg(long, default_value_t = 2)]
+    pub(crate) phase_only: u32,
+    /// Withheld effect forms used (1, 2; neither is a form the candidates fit).
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub(crate) forms: Vec<u32>,
     /// Strength levels (0 moderate, 1 strong).
@@ -53,7 +59,7 @@ pub(crate) struct BenchmarkArgs {
     #[arg(long, value_delimiter = ',')]
     pub(crate) effects: Vec<String>,
     /// Runs per condition and record length (s).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 1)]
     pub(crate) runs_per_condition: u32,
     #[arg(long, default_value_t = 20.0)]
     pub(crate) duration: f64,
@@ -114,9 +120,21 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     let report = write_diagnosis(out.dir(), &diagnosis, &args.dir, elapsed)?;
     out.commit()?;
     println!(
-        "verdict: {} (confidence {:.2}); gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
+        "verdict: {} (confidence {:.2}){}; gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
         report.verdict.effect,
         report.verdict.confidence,
+        if report.verdict.effects.len() > 1 {
+            format!(
+                ", with {}",
+                report.verdict.effects[1..]
+                    .iter()
+                    .map(|e| format!("{} ({:.2})", e.effect, e.confidence))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        } else {
+            String::new()
+        },
         report.gap.baseline,
         report.gap.after,
         report.gap.shrink,
@@ -139,16 +157,39 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
             args.load_shares
         );
     }
+    if let Some(f) = args.forms.iter().find(|f| !(1..=2).contains(*f)) {
+        anyhow::bail!("invalid --forms: {f}; the withheld forms are 1 and 2");
+    }
+    if let Some(l) = args.levels.iter().find(|l| **l > 1) {
+        anyhow::bail!("invalid --levels: {l}; the strength levels are 0 (moderate) and 1 (strong)");
+    }
+    if args.runs_per_condition == 0 || args.runs_per_condition > 100 {
+        anyhow::bail!("invalid --runs-per-condition: {}; it must be 1 to 100", args.runs_per_condition);
+    }
+    if !(args.duration.is_finite() && (5.0..=600.0).contains(&args.duration)) {
+        anyhow::bail!(
+            "invalid --duration: {} s; a record must be 5 s to 600 s (at least tens of periods at the sets' 5-10 Hz)",
+            args.duration
+        );
+    }
+    if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&args.replicates) {
+        anyhow::bail!("invalid --replicates: {}; it must be {MIN_REPLICATES} to {MAX_REPLICATES}", args.replicates);
+    }
+    if args.load_shares.len() > 8 {
+        anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
+    }
     let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
     eprintln!("backend: {}", engine.description());
     let settings = BenchmarkSettings {
         out: args.out,
         nulls: args.nulls,
+        pairs: args.pairs,
+        phase_only: args.phase_only,
         forms: args.forms,
         levels: args.levels,
         effects,
         shape: SetShape {
-            runs_per_condition: args.runs_per_condition.max(1),
+            runs_per_condition: args.runs_per_condition,
             duration_s: args.duration,
             ..SetShape::default()
         },
@@ -156,10 +197,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         seed: args.seed,
         replicates: args.replicates,
     };
-    let sets = benchmark_plan(settings.nulls, &settings.forms, &settings.levels)
-        .iter()
-        .filter(|(e, _, _)| settings.effects.is_empty() || e.is_none_or(|e| settings.effects.contains(&e)))
-        .count();
+    let sets = settings.plan().len();
     let bar = progress_bar(sets as u64, "diagnosing");
     let (_, text) = run_benchmark_sets(&settings, &engine, &mut |line| {
         // A hidden bar (output not a terminal) drops println: print directly.

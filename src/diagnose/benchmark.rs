@@ -1,16 +1,22 @@
 //! The blind benchmark of the diagnosis (`stickslip benchmark-diagnosis`):
-//! synthetic sets ([`crate::diagnose::synthetic`]) with a withheld effect,
-//! each diagnosed without being told what it hides, scored as a confusion
-//! matrix, top-1 accuracy, false-positive rate and median held-out shrink.
+//! synthetic sets ([`crate::diagnose::synthetic`]) with withheld effects in
+//! forms no candidate has, two-effect sets, phase-only summary sets and null
+//! sets from the whole eq. 7 family, each diagnosed without being told what
+//! it hides. The summary reports top-1 accuracy, both-named rates, the
+//! false-positive rate, a reliability table of the confidence, and the shrink
+//! of the fitted model's error at the withheld load level against the
+//! generator's truth there.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::diagnose::measure::read_measurement_set;
+use crate::diagnose::candidates::NULL_HUBER;
+use crate::diagnose::measure::{MeasurementSet, RigInfo, SummaryRow, read_measurement_set};
 use crate::diagnose::report::write_diagnosis;
-use crate::diagnose::simulate::ensemble_path_stats;
-use crate::diagnose::synthetic::{SetShape, benchmark_plan, random_truth, write_set};
+use crate::diagnose::simulate::{PathStats, ensemble_path_stats};
+use crate::diagnose::synthetic::{PlannedSet, SetShape, benchmark_plan, random_truth, write_set};
 use crate::diagnose::{DiagnoseSettings, diagnose_set, mean, sd};
+use crate::engine::reduce::circular_mean_var;
 use crate::engine::{Condition, Effect, Engine, Model};
 use crate::error::Result;
 use crate::io::{create_dir, write_atomically};
@@ -22,11 +28,15 @@ pub struct BenchmarkSettings {
     pub out: PathBuf,
     /// Null sets (no effect).
     pub nulls: u32,
-    /// Effect forms used (1 and 2 are the non-candidate forms).
+    /// Withheld effect forms used (1, 2).
     pub forms: Vec<u32>,
     /// Strength levels (0 moderate, 1 strong).
     pub levels: Vec<u32>,
-    /// Only these effects; all of them when empty.
+    /// Two-effect sets.
+    pub pairs: u32,
+    /// Phase-only summary sets.
+    pub phase_only: u32,
+    /// Only sets hiding these effects (and nulls); all when empty.
     pub effects: Vec<Effect>,
     pub shape: SetShape,
     /// Normal-force levels as shares of Den Hartog's no-stop threshold.
@@ -37,20 +47,52 @@ pub struct BenchmarkSettings {
     pub replicates: u32,
 }
 
+impl BenchmarkSettings {
+    /// The sets this benchmark runs.
+    pub fn plan(&self) -> Vec<PlannedSet> {
+        benchmark_plan(self.nulls, &self.forms, &self.levels, self.pairs, self.phase_only)
+            .into_iter()
+            .filter(|p| self.effects.is_empty() || p.hidden.iter().all(|h| self.effects.contains(&h.effect)))
+            .collect()
+    }
+}
+
 /// One diagnosed set.
 #[derive(Clone, Debug)]
 pub struct BenchmarkRow {
-    /// What the set hides (`None`: a null set).
-    pub truth: Option<Effect>,
-    pub form: u32,
-    pub level: u32,
-    /// What the diagnosis named.
-    pub verdict: Option<Effect>,
+    /// What the set hides, leading first (empty: a null set).
+    pub truth: Vec<Effect>,
+    pub phase_only: bool,
+    /// What the diagnosis named, best first.
+    pub verdict: Vec<Effect>,
+    /// The verdict's confidence.
+    pub confidence: f64,
+    /// The report's held-out shrink.
     pub heldout_shrink: Option<f64>,
-    /// Whether the effect moves the peak statistics beyond their noise.
-    pub moves_peaks: bool,
+    /// The shrink of the fitted model's error at the withheld load level
+    /// against the truth there (`None` without a withheld load level).
+    pub truth_shrink: Option<f64>,
+    /// Whether the effects move the statistics at the withheld level beyond
+    /// their noise.
+    pub moves_statistics: bool,
+    /// Whether the calibrated baseline's gap was within its noise threshold
+    /// of the noise floor.
+    pub baseline_within_noise: bool,
     /// Time of the diagnosis, s.
     pub seconds: f64,
+}
+
+impl BenchmarkRow {
+    /// Whether the leading verdict is right (`none` for a null set; for a
+    /// two-effect set, the leading hidden effect).
+    pub fn leading_right(&self) -> bool {
+        self.verdict.first() == self.truth.first()
+    }
+
+    /// Whether exactly the hidden effects were named.
+    pub fn all_right(&self) -> bool {
+        self.verdict.len() == self.truth.len() && self.truth.iter().all(|e| self.verdict.contains(e))
+    }
 }
 
 /// How far an effect moves the peak statistics, in units of their noise in
@@ -80,6 +122,82 @@ pub fn peak_shift_in_noise_units(
     Ok(worst)
 }
 
+/// The error of `model` against `truth` at `conditions`: the mean over
+/// conditions of the squared differences of the ensemble mean peak, peak
+/// variance and phase, each in units of the truth's per-record noise (the
+/// spread over paths of one record's statistic over `runs` records).
+pub fn error_against_truth(
+    model: &Model,
+    truth: &Model,
+    conditions: &[Condition],
+    shape: SetShape,
+    engine: &Engine,
+) -> Result<f64> {
+    let cycles = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).max().unwrap_or(100);
+    let t = ensemble_path_stats(engine, truth, conditions, cycles, 32, 77, 60)?;
+    let m = ensemble_path_stats(engine, model, conditions, cycles, 32, 77, 60)?;
+    let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
+    let mut terms = Vec::new();
+    for (pt, pm) in t.iter().zip(&m) {
+        let stat = |p: &[PathStats], f: fn(&PathStats) -> f64| p.iter().map(f).collect::<Vec<f64>>();
+        for f in [|p: &PathStats| p.peak_mean_m, |p: &PathStats| p.peak_var_m2] {
+            let (a, b) = (stat(pt, f), stat(pm, f));
+            terms.push(((mean(&b) - mean(&a)) / (sd(&a).max(1e-30) / runs)).powi(2));
+        }
+        let phases = |p: &[PathStats]| p.iter().map(|s| s.phase_mean_deg.to_radians()).collect::<Vec<f64>>();
+        let (a, b) = (phases(pt), phases(pm));
+        let (ca, va) = circular_mean_var(&a);
+        let (cb, _) = circular_mean_var(&b);
+        let d = crate::engine::reduce::wrap_angle(cb - ca);
+        terms.push((d / (va.sqrt().max(1e-9) / runs)).powi(2));
+    }
+    Ok(mean(&terms))
+}
+
+/// A phase-only summary set: one record's phase mean and variance per
+/// condition (no amplitudes, no records), as some rigs publish.
+fn phase_only_set(
+    truth: &Model,
+    conditions: &[Condition],
+    shape: SetShape,
+    seed: u64,
+    engine: &Engine,
+) -> Result<MeasurementSet> {
+    let reference = Engine::cpu("the synthetic truth");
+    let _ = engine;
+    let cycles = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).max().unwrap_or(100);
+    let stats = ensemble_path_stats(&reference, truth, conditions, cycles, 1, seed, 60)?;
+    let summary = conditions
+        .iter()
+        .zip(&stats)
+        .enumerate()
+        .map(|(i, (c, s))| SummaryRow {
+            excitation_frequency_hz: c.excitation_frequency_hz,
+            excitation_amplitude_m: truth.excitation.amplitude_m,
+            normal_force_mean_n: c.normal_force_n,
+            normal_force_var_n2: None,
+            peak_mean_m: None,
+            peak_var_m2: None,
+            n_peaks: Some(u64::from(cycles)),
+            phase_mean_deg: Some(s[0].phase_mean_deg),
+            phase_var_deg2: Some(s[0].phase_var_deg2),
+            line: i as u64 + 2,
+        })
+        .collect();
+    Ok(MeasurementSet {
+        dir: PathBuf::from("(in memory)"),
+        description: "phase-only summary set (stickslip benchmark-diagnosis)".into(),
+        rig: RigInfo {
+            mass_kg: truth.rig.mass_kg,
+            natural_frequency_hz: truth.rig.natural_frequency_hz,
+            damping_ratio: truth.rig.damping_ratio,
+        },
+        runs: Vec::new(),
+        summary,
+        summary_file: None,
+    })
+}
+
 /// Writes, diagnoses and scores every set of the plan; `line` receives one
 /// line per set as it finishes. Returns the rows and the summary text
 /// (also written to `OUT/summary.txt`).
@@ -88,10 +206,7 @@ pub fn run_benchmark(
     engine: &Engine,
     line: &mut dyn FnMut(&str),
 ) -> Result<(Vec<BenchmarkRow>, String)> {
-    let plan: Vec<_> = benchmark_plan(settings.nulls, &settings.forms, &settings.levels)
-        .into_iter()
-        .filter(|(e, _, _)| settings.effects.is_empty() || e.is_none_or(|e| settings.effects.contains(&e)))
-        .collect();
+    let plan = settings.plan();
     let diagnose_settings = DiagnoseSettings {
         seed: settings.seed ^ 0xD1A6,
         replicates: settings.replicates.max(2),
@@ -100,41 +215,69 @@ pub fn run_benchmark(
     let shape = settings.shape;
     let mut rows = Vec::new();
     let started = Instant::now();
-    for (i, &(effect, form, level)) in plan.iter().enumerate() {
+    for (i, planned) in plan.iter().enumerate() {
         let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-        let (truth, conditions) = random_truth(seed, effect, form, level, &settings.load_shares)?;
+        let (truth, conditions) = random_truth(seed, &planned.hidden, &settings.load_shares)?;
         let dir = settings.out.join(format!("set-{i:03}"));
-        write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
-        let set = read_measurement_set(&dir.join("data"))?;
+        let set = if planned.phase_only {
+            phase_only_set(&truth, &conditions, shape, seed, engine)?
+        } else {
+            write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
+            read_measurement_set(&dir.join("data"))?
+        };
         let t0 = Instant::now();
         let d = diagnose_set(&set, &diagnose_settings, engine, &mut |_| {})?;
         let seconds = t0.elapsed().as_secs_f64();
         let report = write_diagnosis(&dir.join("diagnosis"), &d, &dir.join("data"), seconds)?;
-        // Does the effect move the peak statistics beyond their noise? Compare
-        // the truth with and without it on the same noise.
-        let moves_peaks = match effect {
-            None => false,
-            Some(_) => {
-                let mut without = truth.clone();
-                without.effects = Default::default();
-                peak_shift_in_noise_units(&truth, &without, &conditions, shape, engine)? > 2.0
-            }
+        // The fitted model's error at the withheld load level against the
+        // truth there, relative to the baseline's.
+        let withheld: Vec<Condition> = match &d.hold_out {
+            crate::diagnose::data::HoldOut::LoadLevels(levels) => conditions
+                .iter()
+                .copied()
+                .filter(|c| levels.iter().any(|l| (l - c.normal_force_n).abs() <= 1e-6 * l.abs().max(1.0)))
+                .collect(),
+            _ => Vec::new(),
         };
-        let heldout = report.gap.heldout_shrink;
-        let truth_name = effect.map_or("none", Effect::name);
+        let (truth_shrink, moves_statistics) = if withheld.is_empty() || planned.hidden.is_empty() {
+            (None, false)
+        } else {
+            let mut without = truth.clone();
+            without.effects = Default::default();
+            let moved = error_against_truth(&without, &truth, &withheld, shape, engine)?;
+            let base = error_against_truth(&d.baseline, &truth, &withheld, shape, engine)?;
+            let fitted = error_against_truth(&d.fitted, &truth, &withheld, shape, engine)?;
+            ((base > 0.0).then(|| 1.0 - fitted / base), moved > 4.0)
+        };
+        let key0 = report.gap.heldout_baseline.unwrap_or(report.gap.baseline);
+        let baseline_within_noise = key0 - NULL_HUBER <= report.gap.noise_threshold;
+        let name = |v: &[Effect]| {
+            if v.is_empty() { "none".to_string() } else { v.iter().map(|e| e.name()).collect::<Vec<_>>().join("+") }
+        };
+        let truth_effects: Vec<Effect> = planned.hidden.iter().map(|h| h.effect).collect();
+        let verdict: Vec<Effect> = d.effects.iter().map(|e| e.effect).collect();
+        let forms: Vec<String> =
+            planned.hidden.iter().map(|h| format!("{}{}", h.form, if h.level == 1 { "s" } else { "m" })).collect();
         line(&format!(
-            "set {i:3}: truth {truth_name:<24} form {form} level {level} -> {:<24} held-out shrink {} {}({seconds:.0} s)",
-            d.verdict_name(),
-            heldout.map_or("n/a".into(), |h| format!("{h:+.2}")),
-            if moves_peaks || effect.is_none() { "" } else { "[effect within peak noise] " }
+            "set {i:3}: truth {:<40} [{}{}] -> {:<40} conf {:.2} held-out shrink {} truth shrink {} ({seconds:.0} s)",
+            name(&truth_effects),
+            forms.join(","),
+            if planned.phase_only { " phase-only" } else { "" },
+            name(&verdict),
+            d.confidence,
+            report.gap.heldout_shrink.map_or("n/a".into(), |h| format!("{h:+.2}")),
+            truth_shrink
+                .map_or("n/a".into(), |h| format!("{h:+.2}{}", if moves_statistics { "" } else { " (within noise)" })),
         ));
         rows.push(BenchmarkRow {
-            truth: effect,
-            form,
-            level,
-            verdict: d.verdict,
-            heldout_shrink: heldout,
-            moves_peaks,
+            truth: truth_effects,
+            phase_only: planned.phase_only,
+            verdict,
+            confidence: d.confidence,
+            heldout_shrink: report.gap.heldout_shrink,
+            truth_shrink,
+            moves_statistics,
+            baseline_within_noise,
             seconds,
         });
     }
@@ -144,41 +287,46 @@ pub fn run_benchmark(
     Ok((rows, text))
 }
 
-/// The confusion matrix and the three headline numbers.
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// The confusion matrix (leading verdict), the headline numbers against
+/// their targets and the reliability table.
 fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow], total_s: f64) -> String {
     let labels: Vec<Option<Effect>> = Effect::ALL.iter().copied().map(Some).chain([None]).collect();
     let index = |e: Option<Effect>| labels.iter().position(|l| *l == e).expect("every effect and none is a label");
     let mut confusion = vec![vec![0u32; labels.len()]; labels.len()];
     for r in rows {
-        confusion[index(r.truth)][index(r.verdict)] += 1;
+        confusion[index(r.truth.first().copied())][index(r.verdict.first().copied())] += 1;
     }
-    let effect_rows: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.is_some()).collect();
-    let null_rows: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.is_none()).collect();
-    let correct = effect_rows.iter().filter(|r| r.truth == r.verdict).count();
-    let false_positives = null_rows.iter().filter(|r| r.verdict.is_some()).count();
-    let mut shrinks: Vec<f64> = effect_rows.iter().filter(|r| r.moves_peaks).filter_map(|r| r.heldout_shrink).collect();
-    shrinks.sort_by(f64::total_cmp);
-    let median = if shrinks.is_empty() {
-        f64::NAN
-    } else if shrinks.len() % 2 == 1 {
-        shrinks[shrinks.len() / 2]
-    } else {
-        0.5 * (shrinks[shrinks.len() / 2 - 1] + shrinks[shrinks.len() / 2])
-    };
+    let singles: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.len() == 1 && !r.phase_only).collect();
+    let pairs: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.len() == 2).collect();
+    let nulls: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.is_empty() && !r.phase_only).collect();
+    let phase: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.phase_only).collect();
+    let count = |v: &[&BenchmarkRow], f: &dyn Fn(&BenchmarkRow) -> bool| v.iter().filter(|r| f(r)).count();
+    let pct = |a: usize, b: usize| if b == 0 { f64::NAN } else { 100.0 * a as f64 / b as f64 };
     let name = |e: Option<Effect>| e.map_or("none", Effect::name);
     let shape = settings.shape;
     let mut text = String::new();
     text.push_str(&format!(
-        "blind benchmark of the diagnosis: {} sets ({} with an effect, {} null), {} runs x {} s per condition, 2 frequencies x loads at {:?} of the no-stop threshold; {}\n",
+        "blind benchmark of the diagnosis: {} sets ({} single-effect, {} two-effect, {} phase-only, {} null), {} run(s) x {} s per condition, 2 frequencies x loads at {:?} of the no-stop threshold, baselines from the whole eq. 7 family, effects in forms no candidate has; {}\n",
         rows.len(),
-        effect_rows.len(),
-        null_rows.len(),
+        singles.len(),
+        pairs.len(),
+        phase.len(),
+        nulls.len(),
         shape.runs_per_condition,
         shape.duration_s,
         settings.load_shares,
         engine.description()
     ));
-    text.push_str("confusion matrix (rows: withheld effect, columns: verdict)\n");
+    text.push_str("confusion matrix of the leading verdict (rows: leading hidden effect, columns: verdict)\n");
     let short = |l: &str| l.split('_').map(|w| &w[..w.len().min(4)]).collect::<Vec<_>>().join("_");
     text.push_str(&format!("{:<26}", ""));
     for &l in &labels {
@@ -187,27 +335,66 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     text.push('\n');
     for (r, &l) in labels.iter().enumerate() {
         text.push_str(&format!("{:<26}", name(l)));
-        for count in &confusion[r] {
-            text.push_str(&format!("{count:>11}"));
+        for c in &confusion[r] {
+            text.push_str(&format!("{c:>11}"));
         }
         text.push('\n');
     }
-    let pct = |a: usize, b: usize| if b == 0 { f64::NAN } else { 100.0 * a as f64 / b as f64 };
+    let single_right = count(&singles, &|r| r.leading_right());
     text.push_str(&format!(
-        "top-1 accuracy: {correct}/{} = {:.1}% (target >= 90%)\n",
-        effect_rows.len(),
-        pct(correct, effect_rows.len())
+        "single-effect sets, top-1: {single_right}/{} = {:.1}% (target >= 90%)\n",
+        singles.len(),
+        pct(single_right, singles.len())
+    ));
+    let (both, lead) = (count(&pairs, &|r| r.all_right()), count(&pairs, &|r| r.leading_right()));
+    text.push_str(&format!(
+        "two-effect sets: both named and no third {both}/{} = {:.1}% (target >= 80%); leading right {lead}/{} = {:.1}% (target >= 90%)\n",
+        pairs.len(),
+        pct(both, pairs.len()),
+        pairs.len(),
+        pct(lead, pairs.len())
+    ));
+    let (fp, within) = (count(&nulls, &|r| !r.verdict.is_empty()), count(&nulls, &|r| r.baseline_within_noise));
+    text.push_str(&format!(
+        "null sets: false positives {fp}/{} = {:.1}% (target <= 5%); calibrated baseline's gap within its noise threshold on {within}/{}\n",
+        nulls.len(),
+        pct(fp, nulls.len()),
+        nulls.len()
+    ));
+    let phase_right = count(&phase, &|r| r.all_right());
+    text.push_str(&format!("phase-only summary sets: right {phase_right}/{}\n", phase.len()));
+    text.push_str("reliability of the confidence (every verdict, `none` included; right = the leading verdict is the leading hidden effect, or none for a null)\n");
+    text.push_str("  confidence    verdicts   right   share right\n");
+    for (lo, hi) in [(0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.01)] {
+        let bin: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.confidence >= lo && r.confidence < hi).collect();
+        let right = count(&bin, &|r| r.leading_right());
+        text.push_str(&format!(
+            "  [{lo:.1}, {:.1})  {:>8} {:>7}   {}\n",
+            hi.min(1.0),
+            bin.len(),
+            right,
+            if bin.is_empty() { "–".into() } else { format!("{:.0}%", pct(right, bin.len())) }
+        ));
+    }
+    let named: Vec<&BenchmarkRow> = rows.iter().filter(|r| !r.verdict.is_empty() && r.confidence >= 0.9).collect();
+    let named_right = count(&named, &|r| r.truth.contains(&r.verdict[0]));
+    text.push_str(&format!(
+        "effects named at confidence >= 0.9: {named_right}/{} right = {:.1}% (target >= 90%)\n",
+        named.len(),
+        pct(named_right, named.len())
+    ));
+    let moving: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.moves_statistics && r.truth_shrink.is_some()).collect();
+    let truth_shrinks: Vec<f64> = moving.iter().filter_map(|r| r.truth_shrink).collect();
+    let gaps: Vec<f64> = moving.iter().filter_map(|r| Some((r.heldout_shrink? - r.truth_shrink?).abs())).collect();
+    text.push_str(&format!(
+        "withheld load level, sets whose effects move the statistics there beyond their noise ({}): median shrink of the fitted model's error against the truth {:.2} (target >= 0.60); mean |reported held-out shrink - that shrink| {:.2} (target <= 0.15)\n",
+        moving.len(),
+        median(truth_shrinks),
+        mean(&gaps)
     ));
     text.push_str(&format!(
-        "false-positive rate on null sets: {false_positives}/{} = {:.1}% (target <= 10%)\n",
-        null_rows.len(),
-        pct(false_positives, null_rows.len())
+        "time: {total_s:.0} s in all, median {:.0} s per diagnosis\n",
+        median(rows.iter().map(|r| r.seconds).collect())
     ));
-    text.push_str(&format!(
-        "median held-out shrink where the effect moves the peak statistics beyond their noise ({} sets): {:.2} (target >= 0.60)\n",
-        shrinks.len(),
-        median
-    ));
-    text.push_str(&format!("total time {total_s:.0} s\n"));
     text
 }

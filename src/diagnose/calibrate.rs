@@ -8,6 +8,7 @@
 //! that the simulated mean peaks match the measured ones.
 
 use crate::diagnose::data::{Data, Unit};
+use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
@@ -101,13 +102,15 @@ fn solve_friction_level(
 
 /// Calibrates the friction law of `model` to the data and scores it.
 ///
-/// With friction channels this is indirect inference: the same
-/// least-squares Stribeck fit (`fit_friction_law_at`, at the measured data's
-/// best `c`) is run on the measured records and on the model's simulated
-/// replicate records, and `a`, `b` and σ_μ are moved by the difference
-/// (σ_μ² by the difference of the residual variances). The fit's numbers are
-/// then those of the data whatever else the model carries (two steps, each
-/// from the fitting units' replicates alone), so an effect that
+/// With friction channels this is indirect inference over the whole of
+/// eq. 7: the same least-squares fit of `a + b/(1 + c|v|) + d v²`
+/// ([`fit_friction_law`]) is run on the measured records and on the model's
+/// simulated replicate records (which carry the data's measurement noise),
+/// and `a`, `b`, `d` are moved by the difference, `c` by the ratio and σ_μ²
+/// by the difference of the residual variances. The fit's numbers are then
+/// those of the data whatever else the model carries (`law_steps` steps, 0
+/// for the baseline's [`LAW_STEPS`], each from the fitting units'
+/// replicates alone), so an effect that
 /// changes friction (hysteresis lowering it early in a slip, stiction raising
 /// it, a noise that is coloured or skewed) is judged with the law and noise
 /// level that the data imply *given that effect*, not the ones it distorted.
@@ -119,16 +122,13 @@ pub(crate) fn calibrate_and_score(
     settings: &DiagnoseSettings,
     engine: &Engine,
     slope: Option<f64>,
+    law_steps: usize,
 ) -> Result<(Model, Vec<Score>, f64)> {
     if let Some(measured) = data.measured_law {
         let mut m = model.clone();
-        m.friction.c = measured.c;
-        for _ in 0..LAW_STEPS {
-            let Some(simulated) = simulated_law(engine, &m, data, settings, measured.c)? else { break };
-            m.friction.b += measured.b - simulated.b;
-            m.friction.a = (m.friction.a + measured.a - simulated.a).max((-m.friction.b).max(0.0));
-            let variance = m.friction.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
-            m.friction.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt();
+        for _ in 0..if law_steps == 0 { LAW_STEPS } else { law_steps } {
+            let Some(simulated) = simulated_law(engine, &m, data, settings)? else { break };
+            step_law(&mut m, &measured, &simulated);
         }
         let scores = score(engine, &m, data, settings)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
@@ -138,22 +138,43 @@ pub(crate) fn calibrate_and_score(
     Ok((m, scores, slope))
 }
 
-/// The friction law fitted at `c` to the model's simulated replicates of the
+/// The friction law fitted to the model's simulated replicates of the
 /// fitting units, pooled like the measured fitting runs are.
 fn simulated_law(
     engine: &Engine,
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
-    c: f64,
 ) -> Result<Option<FrictionLaw>> {
     let units: Vec<usize> =
         (0..data.units.len()).filter(|&i| !data.units[i].heldout && data.units[i].summary.is_none()).collect();
     let runs: Vec<Run> = replicates_of(engine, model, data, settings, &units)?.into_iter().flatten().collect();
-    Ok(fit_friction_law_at(&runs.iter().collect::<Vec<_>>(), c))
+    Ok(fit_friction_law(&runs.iter().collect::<Vec<_>>()))
 }
 
-/// The baseline from the data, before solving for `a`.
+/// One step of the indirect inference, in curve space: the model's law
+/// μ(v) is moved at the measured slipping speeds' deciles by what the
+/// measured fit and the fit on its own simulated records differ by there,
+/// and eq. 7 is refitted to the moved curve (so the step cannot wander off
+/// along the directions in which a, b, c and d trade off).
+fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) {
+    let current = FrictionLaw::of(model);
+    let anchors = SlipSamples {
+        speed: measured.anchors_m_per_s.to_vec(),
+        mu: measured.anchors_m_per_s.iter().map(|&v| current.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
+    };
+    if let Some(law) = anchors.fit() {
+        let f = &mut model.friction;
+        f.a = law.a.max(0.0);
+        f.b = law.b.max(-f.a);
+        f.c = law.c;
+        f.d = law.d;
+    }
+    let f = &mut model.friction;
+    let variance = f.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
+    f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt();
+}
+
 pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     let set = data.set;
     let mut m = Model::default();
@@ -183,18 +204,18 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     }
     // The friction law from the force channels, where recorded.
     if let Some(law) = data.measured_law {
-        m.friction.a = law.a;
-        m.friction.b = law.b;
+        m.friction.a = law.a.max(0.0);
+        m.friction.b = law.b.max(-m.friction.a);
         m.friction.c = law.c;
-        m.friction.d = 0.0;
+        m.friction.d = law.d;
         m.friction.sigma = law.sigma;
     }
     m.validate()?;
     Ok(m)
 }
 
-/// A Stribeck law `μ(v) = a + b / (1 + c |v|)` fitted to slipping samples,
-/// with the residual standard deviation around it.
+/// The paper's law `μ(v) = a + b / (1 + c |v|) + d v²` fitted to slipping
+/// samples, with the residual standard deviation around it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct FrictionLaw {
     /// –
@@ -203,60 +224,135 @@ pub(crate) struct FrictionLaw {
     pub(crate) b: f64,
     /// s/m
     pub(crate) c: f64,
+    /// s²/m²
+    pub(crate) d: f64,
     /// Residual standard deviation of μ, –.
     pub(crate) sigma: f64,
+    /// The slipping speeds' 5%, 15%, …, 95% quantiles, m/s: where the law
+    /// is known.
+    pub(crate) anchors_m_per_s: [f64; 10],
 }
 
-/// Steps of the friction law's indirect inference (each simulates the
-/// fitting units' replicates once).
-const LAW_STEPS: usize = 2;
+impl FrictionLaw {
+    /// The model's law (no anchors).
+    fn of(model: &Model) -> FrictionLaw {
+        let f = &model.friction;
+        FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
+    }
 
-/// Stribeck decay rates `c` (s/m) the law is fitted over.
-const LAW_C_GRID: [f64; 7] = [0.0, 2.0, 5.0, 10.0, 20.0, 40.0, 80.0];
+    /// μ at speed `v`, m/s.
+    pub(crate) fn mu(&self, v: f64) -> f64 {
+        self.a + self.b / (1.0 + self.c * v.abs()) + self.d * v * v
+    }
 
-/// The law with the smallest residual over [`LAW_C_GRID`]; `None` without
-/// force channels or with fewer than 50 slipping samples.
-pub(crate) fn fit_friction_law(runs: &[&Run]) -> Option<FrictionLaw> {
-    LAW_C_GRID
-        .iter()
-        .filter_map(|&c| fit_friction_law_at(runs, c))
-        .filter(|law| law.a >= 0.0 && law.a + law.b >= 0.0)
-        .min_by(|x, y| x.sigma.total_cmp(&y.sigma))
+    /// A law a rig could have: friction non-negative at rest, a Stribeck
+    /// drop and a v² term within an order of magnitude of any published
+    /// steel-on-steel law. Beyond these the four terms only trade off
+    /// against each other within the noise.
+    fn plausible(&self) -> bool {
+        self.a >= 0.0 && self.a + self.b >= 0.0 && self.b.abs() <= 1.0 && self.d.abs() <= 10.0
+    }
 }
 
-/// Least squares of μ = |F|/N against speed on slipping samples (|v| above
-/// 5% of the record's largest, friction opposing motion) at a given `c`:
-/// linear in (a, b) with basis (1, 1/(1 + c|v|)). `None` with too few
-/// samples. The fit is not constrained (as a statistic of simulated records
-/// it must be the same function as on the measured ones).
-fn fit_friction_law_at(runs: &[&Run], c: f64) -> Option<FrictionLaw> {
-    let mut speeds = Vec::new();
-    let mut mus = Vec::new();
-    for r in runs {
-        let (Some(v), Some(f), Some(n)) = (&r.v_m_per_s, &r.friction_force, &r.normal_force) else { continue };
-        let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        for i in 0..v.len() {
-            if v[i].abs() > 0.05 * vmax && f[i] * v[i] < 0.0 && n[i] > 0.0 {
-                speeds.push(v[i].abs());
-                mus.push(f[i].abs() / n[i]);
+/// Steps of the friction law's indirect inference for the baseline (each
+/// simulates the fitting units' replicates once); a candidate's trial takes
+/// one, from the calibrated baseline's law.
+const LAW_STEPS: usize = 3;
+
+/// Stribeck rates `c` (s/m) the fit starts from before refining: 0 and a
+/// log grid from 1 to 316 s/m.
+fn law_c_grid() -> impl Iterator<Item = f64> {
+    std::iter::once(0.0).chain((0..11).map(|i| 10f64.powf(0.25 * f64::from(i))))
+}
+
+/// The slipping samples of some records: speed |v| (m/s) and μ = |F|/N,
+/// where |v| is above 5% of its record's largest, the friction opposes the
+/// motion and N > 0.
+struct SlipSamples {
+    speed: Vec<f64>,
+    mu: Vec<f64>,
+}
+
+impl SlipSamples {
+    fn of(runs: &[&Run]) -> Option<SlipSamples> {
+        let (mut speed, mut mu) = (Vec::new(), Vec::new());
+        for r in runs {
+            let (Some(v), Some(f), Some(n)) = (&r.v_m_per_s, &r.friction_force, &r.normal_force) else { continue };
+            let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            for i in 0..v.len().min(f.len()).min(n.len()) {
+                if v[i].abs() > 0.05 * vmax && f[i] * v[i] < 0.0 && n[i] > 0.0 {
+                    speed.push(v[i].abs());
+                    mu.push(f[i].abs() / n[i]);
+                }
             }
         }
+        (mu.len() >= 50).then_some(SlipSamples { speed, mu })
     }
-    if mus.len() < 50 {
-        return None;
+
+    /// Least squares at a given `c`: linear in (a, b, d) with basis
+    /// (1, 1/(1 + c s), s²); at `c = 0` the Stribeck term is part of `a`
+    /// (reported as b = 0). Not constrained: as a statistic of simulated
+    /// records it must be the same function as on the measured ones.
+    fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
+        let n = self.mu.len();
+        let p = if c == 0.0 { 2 } else { 3 };
+        let basis = |i: usize, row: &mut [f64]| {
+            let s = self.speed[i];
+            row[0] = 1.0;
+            row[1] = s * s;
+            if p == 3 {
+                row[2] = 1.0 / (1.0 + c * s);
+            }
+        };
+        let (coef, rss) = least_squares(n, p, basis, |i| self.mu[i])?;
+        let b = if p == 3 { coef[2] } else { 0.0 };
+        let mut sorted = self.speed.clone();
+        sorted.sort_by(f64::total_cmp);
+        let anchors_m_per_s = std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
+        Some(FrictionLaw { a: coef[0], b, c, d: coef[1], sigma: (rss / (n - p).max(1) as f64).sqrt(), anchors_m_per_s })
     }
-    let basis: Vec<f64> = speeds.iter().map(|s| 1.0 / (1.0 + c * s)).collect();
-    let (n, sx, sy) = (mus.len() as f64, basis.iter().sum::<f64>(), mus.iter().sum::<f64>());
-    let sxx: f64 = basis.iter().map(|x| x * x).sum();
-    let sxy: f64 = basis.iter().zip(&mus).map(|(x, y)| x * y).sum();
-    let det = n * sxx - sx * sx;
-    let (a, b) = if c == 0.0 || det.abs() < 1e-12 {
-        (sy / n, 0.0)
-    } else {
-        ((sxx * sy - sx * sxy) / det, (n * sxy - sx * sy) / det)
-    };
-    let rss: f64 = basis.iter().zip(&mus).map(|(x, y)| (y - a - b * x).powi(2)).sum();
-    Some(FrictionLaw { a, b, c, sigma: (rss / (n - 2.0)).sqrt() })
+
+    /// The law with the smallest residual: over [`law_c_grid`], then by
+    /// golden-section search in log c between the best point's neighbours.
+    fn fit(&self) -> Option<FrictionLaw> {
+        let grid: Vec<f64> = law_c_grid().collect();
+        let laws: Vec<Option<FrictionLaw>> = grid.iter().map(|&c| self.fit_at(c)).collect();
+        let (best, law) = laws
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| l.map(|l| (i, l)))
+            .filter(|(_, l)| l.plausible())
+            .min_by(|x, y| x.1.sigma.total_cmp(&y.1.sigma))?;
+        if best == 0 {
+            return Some(law);
+        }
+        let lo = if best == 1 { grid[1] / 3.0 } else { grid[best - 1] };
+        let hi = grid.get(best + 1).copied().unwrap_or(grid[best] * 3.0);
+        let (mut lo, mut hi) = (lo.ln(), hi.ln());
+        let golden = 0.5 * (5f64.sqrt() - 1.0);
+        let sigma_at = |x: f64| self.fit_at(x.exp()).filter(|l| l.plausible()).map_or(f64::INFINITY, |l| l.sigma);
+        let (mut x1, mut x2) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+        let (mut f1, mut f2) = (sigma_at(x1), sigma_at(x2));
+        for _ in 0..14 {
+            if f1 < f2 {
+                (hi, x2, f2) = (x2, x1, f1);
+                x1 = hi - golden * (hi - lo);
+                f1 = sigma_at(x1);
+            } else {
+                (lo, x1, f1) = (x1, x2, f2);
+                x2 = lo + golden * (hi - lo);
+                f2 = sigma_at(x2);
+            }
+        }
+        let refined = self.fit_at((0.5 * (lo + hi)).exp()).filter(|l| l.plausible());
+        Some(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law))
+    }
+}
+
+/// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`]);
+/// `None` without force channels or with fewer than 50 slipping samples.
+pub(crate) fn fit_friction_law(runs: &[&Run]) -> Option<FrictionLaw> {
+    SlipSamples::of(runs)?.fit()
 }
 
 #[cfg(test)]
@@ -267,32 +363,51 @@ mod tests {
     use rand::{RngExt, SeedableRng};
 
     /// A record sliding back and forth at 1 Hz with friction from a known
-    /// Stribeck law plus Gaussian noise of sd `sigma`.
+    /// law of eq. 7 (d = 0) plus Gaussian noise of sd `sigma`.
     fn record(a: f64, b: f64, c: f64, sigma: f64, seed: u64) -> Run {
+        record_d(a, b, c, 0.0, sigma, seed)
+    }
+
+    fn record_d(a: f64, b: f64, c: f64, d: f64, sigma: f64, seed: u64) -> Run {
         let mut rng = StdRng::seed_from_u64(seed);
         let samples: Vec<Sample> = (0..12_000)
             .map(|i| {
                 let t_s = f64::from(i) / 600.0;
-                let v = 0.2 * (std::f64::consts::TAU * t_s).sin();
+                let v = 0.4 * (std::f64::consts::TAU * t_s).sin();
                 let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
                 let noise = sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                let mu = a + b / (1.0 + c * v.abs()) + noise;
+                let mu = a + b / (1.0 + c * v.abs()) + d * v * v + noise;
                 Sample { t_s, x_m: 0.0, v_m_per_s: v, normal_force_n: 10.0, friction_force_n: -v.signum() * mu * 10.0 }
             })
             .collect();
         Run::from_samples(&samples, 1.0, 1e-3, 10.0)
     }
 
+    /// The law's value at speed `v` (m/s).
+    fn mu(l: &FrictionLaw, v: f64) -> f64 {
+        l.a + l.b / (1.0 + l.c * v) + l.d * v * v
+    }
+
+    /// The whole of eq. 7 comes back: with d fitted too, c and b trade off
+    /// within the noise, so the fitted curve is checked against the true one
+    /// over the slipping speeds (here 0.02–0.4 m/s), and σ and d themselves.
     #[test]
     fn friction_law_fit_recovers_a_known_law() {
-        let run = record(0.25, 0.1, 20.0, 0.04, 1);
-        let law = fit_friction_law(&[&run]).unwrap();
-        assert_eq!(law.c, 20.0, "{law:?}");
-        assert!((law.a - 0.25).abs() < 0.005 && (law.b - 0.1).abs() < 0.01, "{law:?}");
+        let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
+        let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, anchors_m_per_s: [0.0; 10] };
+        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)]).unwrap();
+        let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
         assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
+        let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, anchors_m_per_s: [0.0; 10] };
+        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)]).unwrap();
+        let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
+        assert!((with_d.sigma / 0.019 - 1.0).abs() < 0.03, "{with_d:?}");
         // At a fixed c the fit is the unconstrained least squares, so a law
         // with friction falling below zero at rest is still reported.
-        let rising = fit_friction_law_at(&[&record(0.4, -0.3, 80.0, 0.0, 2)], 80.0).unwrap();
+        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)]).unwrap();
+        let rising = samples.fit_at(80.0).unwrap();
         assert!((rising.b + 0.3).abs() < 1e-6 && (rising.a - 0.4).abs() < 1e-6, "{rising:?}");
         assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)]).is_none_or(|l| l.a + l.b >= 0.0));
     }

@@ -4,6 +4,8 @@
 
 use std::collections::BTreeMap;
 
+use serde::Serialize;
+
 use crate::diagnose::calibrate::{self, FrictionLaw};
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::measure::{MeasurementSet, Run};
@@ -31,6 +33,8 @@ pub(crate) struct Data<'a> {
     pub(crate) units: Vec<Unit>,
     /// Measured observables per unit (mean over its runs).
     pub(crate) measured: Vec<BTreeMap<Observable, f64>>,
+    /// The features of each unit's measured runs (empty for summary rows).
+    pub(crate) features: Vec<Vec<RunFeatures>>,
     /// Record length per unit, s (for simulated records).
     pub(crate) record_s: Vec<f64>,
     pub(crate) sample_interval_s: f64,
@@ -40,6 +44,10 @@ pub(crate) struct Data<'a> {
     pub(crate) longest_record_s: f64,
     /// The friction law fitted to the fitting units' force channels.
     pub(crate) measured_law: Option<FrictionLaw>,
+    /// The measurement noise on the records' channels.
+    pub(crate) sensor: SensorNoise,
+    /// Which units are held out.
+    pub(crate) hold_out: HoldOut,
 }
 
 /// Averages the scored features of several records.
@@ -70,6 +78,129 @@ pub(crate) fn condition_key(c: Condition) -> (i64, i64) {
     ((c.excitation_frequency_hz * 1e6).round() as i64, (c.normal_force_n * 1e6).round() as i64)
 }
 
+/// How a set is split into fitting and held-out units: whole normal-force
+/// levels where there are three or more (so the held-out gap measures the
+/// fitted model at a load no fit saw), else whole frequencies, else
+/// alternate runs or conditions.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldOut {
+    /// These nominal normal forces are held out, N.
+    LoadLevels(Vec<f64>),
+    /// These excitation frequencies are held out, Hz.
+    Frequencies(Vec<f64>),
+    /// Alternate runs of every condition.
+    AlternateRuns,
+    /// Alternate conditions.
+    AlternateConditions,
+    /// Nothing is held out (too little data).
+    Nothing,
+}
+
+impl HoldOut {
+    /// In words, for the report.
+    pub fn describe(&self) -> String {
+        let list = |v: &[f64], unit: &str| v.iter().map(|x| format!("{x} {unit}")).collect::<Vec<_>>().join(", ");
+        match self {
+            HoldOut::LoadLevels(v) => format!("the normal-force level(s) {} (every condition there)", list(v, "N")),
+            HoldOut::Frequencies(v) => format!("the frequency(ies) {} (every condition there)", list(v, "Hz")),
+            HoldOut::AlternateRuns => "alternate runs of every condition".into(),
+            HoldOut::AlternateConditions => "alternate conditions".into(),
+            HoldOut::Nothing => "nothing (too little data)".into(),
+        }
+    }
+}
+
+/// The interior levels of a sorted list taken alternately (index 1, 3, …,
+/// never the extremes), from three levels up.
+fn interior_alternates(levels: &[f64]) -> Vec<f64> {
+    if levels.len() < 3 {
+        return Vec::new();
+    }
+    levels.iter().enumerate().filter(|(i, _)| i % 2 == 1 && *i + 1 < levels.len()).map(|(_, v)| *v).collect()
+}
+
+/// Distinct values, sorted, compared at 1e-6.
+fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut v: Vec<f64> = values.collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * b.abs().max(1.0));
+    v
+}
+
+/// Chooses the split for conditions with these (frequency, load) pairs.
+fn choose_hold_out(conditions: &[Condition], runs_per_condition: &[usize]) -> HoldOut {
+    let loads = levels(conditions.iter().map(|c| c.normal_force_n));
+    let frequencies = levels(conditions.iter().map(|c| c.excitation_frequency_hz));
+    if loads.len() >= 3 {
+        HoldOut::LoadLevels(interior_alternates(&loads))
+    } else if frequencies.len() >= 3 {
+        HoldOut::Frequencies(interior_alternates(&frequencies))
+    } else if !runs_per_condition.is_empty() && runs_per_condition.iter().all(|&r| r >= 2) {
+        HoldOut::AlternateRuns
+    } else if conditions.len() > 1 {
+        HoldOut::AlternateConditions
+    } else {
+        HoldOut::Nothing
+    }
+}
+
+impl HoldOut {
+    /// Whether a condition (the `index`-th of its kind) is held out.
+    fn holds(&self, c: Condition, index: usize) -> bool {
+        let near = |list: &[f64], x: f64| list.iter().any(|v| (v - x).abs() <= 1e-6 * x.abs().max(1.0));
+        match self {
+            HoldOut::LoadLevels(v) => near(v, c.normal_force_n),
+            HoldOut::Frequencies(v) => near(v, c.excitation_frequency_hz),
+            HoldOut::AlternateRuns | HoldOut::AlternateConditions => index % 2 == 1,
+            HoldOut::Nothing => false,
+        }
+    }
+}
+
+/// Standard deviation of the white measurement noise on a uniformly sampled
+/// channel: from the median absolute fourth difference, which a smooth signal
+/// barely moves at the sample rate while white noise of sd σ gives sd √70 σ
+/// (the median makes the occasional kink of a stick/slip event harmless).
+pub(crate) fn white_noise_sd(values: &[f64]) -> f64 {
+    if values.len() < 64 {
+        return 0.0;
+    }
+    let mut d4: Vec<f64> =
+        values.windows(5).map(|w| (w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4]).abs()).collect();
+    let mid = d4.len() / 2;
+    let (_, median, _) = d4.select_nth_unstable_by(mid, f64::total_cmp);
+    (*median / 0.674_489_750_196_081_7 / 70f64.sqrt()).max(0.0)
+}
+
+/// The measurement noise estimated on the records' channels, added to every
+/// simulated replicate record so that features see the same noise on both
+/// sides (a stick test at 1% of the largest speed, say, is decided by it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct SensorNoise {
+    /// Displacement noise, m.
+    pub x_m: f64,
+    /// Velocity noise, m/s.
+    pub v_m_per_s: f64,
+}
+
+impl SensorNoise {
+    /// The median over the runs of each channel's estimate.
+    fn estimate(runs: &[Run]) -> SensorNoise {
+        let median = |mut v: Vec<f64>| {
+            if v.is_empty() {
+                return 0.0;
+            }
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        SensorNoise {
+            x_m: median(runs.iter().map(|r| white_noise_sd(&r.x_m)).collect()),
+            v_m_per_s: median(runs.iter().filter_map(|r| r.v_m_per_s.as_deref().map(white_noise_sd)).collect()),
+        }
+    }
+}
+
 impl<'a> Data<'a> {
     pub(crate) fn new(set: &'a MeasurementSet) -> Result<Data<'a>> {
         let mut by_condition: BTreeMap<(i64, i64), (Condition, Vec<usize>)> = BTreeMap::new();
@@ -78,34 +209,38 @@ impl<'a> Data<'a> {
                 Condition { excitation_frequency_hz: run.excitation_frequency_hz, normal_force_n: run.normal_force_n };
             by_condition.entry(condition_key(c)).or_insert((c, Vec::new())).1.push(i);
         }
+        let conditions: Vec<Condition> = by_condition.values().map(|(c, _)| *c).collect();
+        let runs_per_condition: Vec<usize> = by_condition.values().map(|(_, r)| r.len()).collect();
+        let summary_conditions: Vec<Condition> = set
+            .summary
+            .iter()
+            .map(|row| Condition {
+                excitation_frequency_hz: row.excitation_frequency_hz,
+                normal_force_n: row.normal_force_mean_n,
+            })
+            .collect();
+        // Time series decide the split when there are any; a summary-only
+        // set is split by its rows.
+        let hold_out = if set.runs.is_empty() {
+            let h = choose_hold_out(&summary_conditions, &[]);
+            // Two summary rows leave nothing worth holding out.
+            if h == HoldOut::AlternateConditions && summary_conditions.len() <= 2 { HoldOut::Nothing } else { h }
+        } else {
+            choose_hold_out(&conditions, &runs_per_condition)
+        };
         let mut units = Vec::new();
-        let multi = by_condition.values().all(|(_, runs)| runs.len() >= 2);
         for (ci, (c, runs)) in by_condition.values().enumerate() {
-            if multi {
+            if hold_out == HoldOut::AlternateRuns {
                 for (k, r) in runs.iter().enumerate() {
                     units.push(Unit { condition: *c, runs: vec![*r], summary: None, heldout: k % 2 == 1 });
                 }
             } else {
-                units.push(Unit {
-                    condition: *c,
-                    runs: runs.clone(),
-                    summary: None,
-                    heldout: by_condition.len() > 1 && ci % 2 == 1,
-                });
+                units.push(Unit { condition: *c, runs: runs.clone(), summary: None, heldout: hold_out.holds(*c, ci) });
             }
         }
-        let n_summary = set.summary.len();
-        for (i, row) in set.summary.iter().enumerate() {
-            let c = Condition {
-                excitation_frequency_hz: row.excitation_frequency_hz,
-                normal_force_n: row.normal_force_mean_n,
-            };
-            units.push(Unit {
-                condition: c,
-                runs: Vec::new(),
-                summary: Some(i),
-                heldout: n_summary > 2 && i % 2 == 1 && set.runs.is_empty(),
-            });
+        for (i, c) in summary_conditions.iter().enumerate() {
+            let heldout = set.runs.is_empty() && hold_out.holds(*c, i);
+            units.push(Unit { condition: *c, runs: Vec::new(), summary: Some(i), heldout });
         }
         if units.is_empty() {
             return Err(Error::Measurement {
@@ -115,6 +250,7 @@ impl<'a> Data<'a> {
             });
         }
         let mut measured = Vec::new();
+        let mut features = Vec::new();
         let mut record_s = Vec::new();
         for u in &units {
             if let Some(i) = u.summary {
@@ -131,10 +267,12 @@ impl<'a> Data<'a> {
                     }
                 }
                 measured.push(m);
+                features.push(Vec::new());
                 record_s.push(row.n_peaks.unwrap_or(350) as f64 / row.excitation_frequency_hz);
             } else {
                 let feats: Vec<RunFeatures> = u.runs.iter().map(|&r| run_features(&set.runs[r])).collect();
                 measured.push(average_features(&feats));
+                features.push(feats);
                 record_s.push(mean(&u.runs.iter().map(|&r| set.runs[r].duration_s()).collect::<Vec<_>>()));
             }
         }
@@ -153,15 +291,19 @@ impl<'a> Data<'a> {
         let fit_runs: Vec<&Run> =
             units.iter().filter(|u| !u.heldout).flat_map(|u| u.runs.iter().map(|&r| &set.runs[r])).collect();
         let measured_law = calibrate::fit_friction_law(&fit_runs);
+        let sensor = SensorNoise::estimate(&set.runs);
         Ok(Data {
             set,
             units,
             measured,
+            features,
             record_s,
             sample_interval_s,
             measured_normal_force_n,
             longest_record_s,
             measured_law,
+            sensor,
+            hold_out,
         })
     }
 

@@ -43,7 +43,7 @@ use serde::Serialize;
 
 use crate::engine::{Condition, Effect, Engine, Model};
 use crate::error::Result;
-use data::{Data, condition_key};
+use data::{Data, HoldOut, condition_key};
 use measure::{MeasurementSet, read_measurement_set};
 use observable::Observable;
 use score::{Score, gap_of};
@@ -80,10 +80,16 @@ pub struct Unexplained {
     pub z: f64,
 }
 
-/// A candidate's result.
+/// A candidate's result: the best form of one effect, fitted on top of the
+/// model of its round.
 #[derive(Clone, Debug)]
 pub struct Candidate {
     pub effect: Effect,
+    /// The form that fitted best, in the model file's words.
+    pub form: &'static str,
+    /// How far the effect's signature stood above noise when it was
+    /// screened, in noise units.
+    pub signature_excess: f64,
     /// Gap on the fitting units after fitting this effect.
     pub gap_fit: f64,
     /// Gap on the held-out units.
@@ -98,6 +104,43 @@ pub struct Candidate {
     pub unexplained: Vec<Unexplained>,
     /// The calibrated model with this effect.
     pub model: Model,
+    /// Its scores.
+    pub scores: Vec<Score>,
+}
+
+/// One effect of the verdict.
+#[derive(Clone, Debug)]
+pub struct NamedEffect {
+    pub effect: Effect,
+    /// The form that fitted best.
+    pub form: &'static str,
+    /// Its fitted parameters by name (names carry units).
+    pub parameters: BTreeMap<String, f64>,
+    /// The share of the baseline's explainable gap (its key gap less the
+    /// noise floor) that adding this effect closed, –.
+    pub share: f64,
+    /// –, in [0, 1].
+    pub confidence: f64,
+}
+
+/// Where the calibrated baseline misfits in a way no effect explains.
+#[derive(Clone, Debug, Serialize)]
+pub struct Misfit {
+    /// The observables whose mean Huber loss over the fitting units is
+    /// furthest above noise, worst first.
+    pub observables: Vec<MisfitObservable>,
+    /// What that pattern points at, in words.
+    pub hints: Vec<String>,
+}
+
+/// One observable the baseline misfits.
+#[derive(Clone, Debug, Serialize)]
+pub struct MisfitObservable {
+    pub observable: Observable,
+    /// Mean z over the fitting units (sign: measured above simulated), –.
+    pub mean_z: f64,
+    /// Mean Huber loss over the fitting units, –.
+    pub mean_loss: f64,
 }
 
 /// Everything a diagnosis found.
@@ -105,8 +148,10 @@ pub struct Candidate {
 pub struct Diagnosis {
     pub baseline: Model,
     pub fitted: Model,
-    /// The effect named; `None` when the baseline explains the data.
+    /// The leading effect named; `None` when the baseline explains the data.
     pub verdict: Option<Effect>,
+    /// Every effect named, best first.
+    pub effects: Vec<NamedEffect>,
     /// –, in [0, 1].
     pub confidence: f64,
     pub baseline_scores: Vec<Score>,
@@ -115,24 +160,89 @@ pub struct Diagnosis {
     pub gap_fit: f64,
     /// The baseline's gap on the held-out units.
     pub gap_heldout: f64,
-    /// Every candidate tried, best first.
+    /// The fitted model's gaps (fitting, held-out).
+    pub gap_after: (f64, f64),
+    /// The share of the baseline's explainable gap left after the named
+    /// effects, –.
+    pub unexplained_share: f64,
+    /// Every candidate of the first round, best first.
     pub candidates: Vec<Candidate>,
     /// Threshold the held-out improvement had to beat.
     pub noise_threshold: f64,
     pub has_heldout: bool,
+    /// How the set was split.
+    pub hold_out: HoldOut,
+    /// Where the baseline misfits beyond what the named effects explain.
+    pub misfit: Option<Misfit>,
     pub conditions: Vec<Condition>,
 }
 
 impl Diagnosis {
-    /// The verdict's name: an effect's, or `none`.
+    /// The verdict's name: the leading effect's, or `none`.
     pub fn verdict_name(&self) -> &'static str {
         self.verdict.map_or("none", Effect::name)
     }
 
-    /// The candidate the verdict chose, if any.
-    pub fn chosen(&self) -> Option<&Candidate> {
-        self.candidates.iter().find(|c| Some(c.effect) == self.verdict)
+    /// The names of every effect of the verdict, joined by " + ", or `none`.
+    pub fn verdict_names(&self) -> String {
+        if self.effects.is_empty() {
+            return "none".into();
+        }
+        self.effects.iter().map(|e| e.effect.name()).collect::<Vec<_>>().join(" + ")
     }
+}
+
+/// What a misfit of an observable points at.
+fn misfit_hint(o: Observable) -> Option<&'static str> {
+    use Observable as O;
+    Some(match o {
+        O::FrictionMuMean | O::FrictionLowSpeedMuMean => "the friction law's level (a, b, c, d) or its load dependence",
+        O::FrictionResidualStd => "the friction noise level sigma_mu",
+        O::PeakMeanM | O::PhaseMeanDeg => "the friction level a or the rig (mass, stiffness, damping, base amplitude)",
+        O::PeakVarM2 | O::PhaseVarDeg2 | O::PeakSkewness => "the friction noise (its level or its spectrum)",
+        O::NormalForceMeanN | O::NormalForceVarN2 | O::NormalForceResidualVarN2 => {
+            "the normal-force noise sigma_N or N0"
+        }
+        O::StickFraction | O::FrictionBreakawayMean | O::FrictionStictionExcess => {
+            "the friction near zero speed (the Stribeck drop b, c, or stiction)"
+        }
+        _ => return None,
+    })
+}
+
+/// The baseline's misfit by observable, when it is beyond noise.
+fn misfit_of(scores: &[Score], noise: f64) -> Option<Misfit> {
+    let mut by: BTreeMap<Observable, Vec<f64>> = BTreeMap::new();
+    for s in scores.iter().filter(|s| !s.heldout) {
+        by.entry(s.observable).or_default().push(s.z);
+    }
+    let mut worst: Vec<MisfitObservable> = by
+        .into_iter()
+        .map(|(observable, z)| MisfitObservable {
+            observable,
+            mean_z: mean(&z),
+            mean_loss: mean(&z.iter().map(|&z| score::huber(z)).collect::<Vec<_>>()),
+        })
+        .filter(|m| m.mean_loss - candidates::NULL_HUBER > noise)
+        .collect();
+    if worst.is_empty() {
+        return None;
+    }
+    worst.sort_by(|a, b| b.mean_loss.total_cmp(&a.mean_loss));
+    worst.truncate(6);
+    let mut hints: Vec<String> = Vec::new();
+    for m in &worst {
+        if let Some(h) = misfit_hint(m.observable) {
+            let h = format!(
+                "{} ({} {})",
+                h,
+                m.observable.name(),
+                if m.mean_z > 0.0 { "measured above simulated" } else { "measured below simulated" }
+            );
+            hints.push(h);
+        }
+    }
+    Some(Misfit { observables: worst, hints })
 }
 
 /// Arithmetic mean; 0 for no values.
@@ -168,37 +278,65 @@ pub fn diagnose_set(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Diagnosis> {
     let data = Data::new(set)?;
-    progress("calibrating the baseline");
+    progress(&format!("calibrating the baseline (held out: {})", data.hold_out.describe()));
     let (baseline, baseline_scores, slope) =
-        calibrate::calibrate_and_score(&calibrate::initial_baseline(&data)?, &data, settings, engine, None)?;
+        calibrate::calibrate_and_score(&calibrate::initial_baseline(&data)?, &data, settings, engine, None, 0)?;
+    let has_heldout = data.has_heldout();
     let gaps = (gap_of(&baseline_scores, false), gap_of(&baseline_scores, true));
-    let specs = candidates::candidate_specs(&data, &baseline, &baseline_scores);
-    let mut candidates = Vec::new();
-    for spec in &specs {
-        progress(&format!("trying {}", spec.effect));
-        if let Some(c) = search::fit_candidate(spec, &baseline, gaps, slope, &data, settings, engine)? {
-            candidates.push(c);
-        }
-    }
-    let verdict = search::decide(&mut candidates, &baseline_scores, data.has_heldout());
-    let (fitted, fitted_scores) = match verdict.effect.and_then(|e| candidates.iter().find(|c| c.effect == e)) {
-        Some(best) => (best.model.clone(), score::score(engine, &best.model, &data, settings)?),
+    let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;
+    let key0 = if has_heldout { gaps.1 } else { gaps.0 };
+    let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
+    let effects: Vec<NamedEffect> = selection
+        .steps
+        .iter()
+        .map(|s| NamedEffect {
+            effect: s.candidate.effect,
+            form: s.candidate.form,
+            parameters: s.candidate.parameters.clone(),
+            share: ((s.before.1 - s.after_key) / explainable).clamp(0.0, 1.0),
+            confidence: search::confidence(s, selection.noise_heldout, explainable),
+        })
+        .collect();
+    let (fitted, fitted_scores) = match selection.steps.last() {
+        Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),
+    };
+    let gap_after = (gap_of(&fitted_scores, false), gap_of(&fitted_scores, true));
+    let key_after = if has_heldout { gap_after.1 } else { gap_after.0 };
+    let unexplained_share = ((key_after - candidates::NULL_HUBER).max(0.0) / explainable).clamp(0.0, 1.0);
+    let misfit = misfit_of(&fitted_scores, selection.noise_fit);
+    let (verdict, confidence) = match effects.first() {
+        Some(e) => (Some(e.effect), e.confidence),
+        None => {
+            // How sure "none" is: high when nothing was left to explain or no
+            // candidate came near the noise threshold.
+            let best_gain = selection
+                .first_round
+                .first()
+                .map(|b| (key0 - if has_heldout { b.gap_heldout } else { b.gap_fit }) / selection.noise_heldout)
+                .unwrap_or(0.0);
+            (None, (0.95 - 0.5 * best_gain.max(0.0)).clamp(0.05, 0.95))
+        }
     };
     let mut conditions: Vec<Condition> = data.units.iter().map(|u| u.condition).collect();
     conditions.dedup_by_key(|c| condition_key(*c));
     Ok(Diagnosis {
         baseline,
         fitted,
-        verdict: verdict.effect,
-        confidence: verdict.confidence,
+        verdict,
+        effects,
+        confidence,
         gap_fit: gaps.0,
         gap_heldout: gaps.1,
+        gap_after,
+        unexplained_share,
         baseline_scores,
         fitted_scores,
-        candidates,
-        noise_threshold: verdict.noise_threshold,
-        has_heldout: data.has_heldout(),
+        candidates: selection.first_round,
+        noise_threshold: selection.noise_heldout,
+        has_heldout,
+        hold_out: data.hold_out.clone(),
+        misfit,
         conditions,
     })
 }

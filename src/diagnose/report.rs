@@ -41,9 +41,51 @@ pub struct Report {
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct VerdictReport {
+    /// The leading effect (the contract's key).
     pub effect: String,
     /// –, in [0, 1].
     pub confidence: f64,
+    /// Every effect named, best first (empty for `none`).
+    #[serde(default)]
+    pub effects: Vec<VerdictEffect>,
+    /// The share of the baseline's explainable gap (its gap less the noise
+    /// floor of about 1.3) that the named effects leave, –.
+    #[serde(default)]
+    pub unexplained_share: f64,
+    /// Where the calibrated model still misfits beyond noise: which
+    /// observables, and which parameters that points at. `null` when it fits.
+    #[serde(default)]
+    pub misfit: Option<MisfitReport>,
+}
+
+/// One effect of the verdict.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VerdictEffect {
+    pub effect: String,
+    /// The form that fitted best, as in the model file.
+    pub form: String,
+    /// –, in [0, 1].
+    pub confidence: f64,
+    /// The share of the baseline's explainable gap this effect closed, –.
+    pub share_of_gap: f64,
+    /// The fitted parameters by name (names carry units).
+    pub parameters: BTreeMap<String, f64>,
+}
+
+/// `verdict.misfit`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MisfitReport {
+    pub observables: Vec<MisfitObservableReport>,
+    pub hints: Vec<String>,
+}
+
+/// One observable the model misfits: its mean z and mean Huber loss over
+/// the fitting units.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MisfitObservableReport {
+    pub observable: Observable,
+    pub mean_z: f64,
+    pub mean_loss: f64,
 }
 
 /// `gap`: the gap metric before and after the verdict's effect.
@@ -62,6 +104,9 @@ pub struct GapReport {
     pub heldout_after: Option<f64>,
     /// What the held-out gap had to fall by for an effect to be named.
     pub noise_threshold: f64,
+    /// What was held out of every fit.
+    #[serde(default)]
+    pub heldout_units: String,
 }
 
 /// One place the baseline departs from the data.
@@ -81,6 +126,12 @@ pub struct Location {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateReport {
     pub effect: String,
+    /// The form that fitted best.
+    #[serde(default)]
+    pub form: String,
+    /// How far the effect's signature stood above noise, in noise units.
+    #[serde(default)]
+    pub signature_excess: f64,
     pub shrink: f64,
     pub heldout_shrink: Option<f64>,
     pub gap_fit: f64,
@@ -121,9 +172,7 @@ impl From<&Unexplained> for UnexplainedReport {
 impl Diagnosis {
     /// `report.json` as `interfaces.md` describes it (plus extra keys).
     pub fn report(&self, source: &Path, elapsed_s: f64) -> Report {
-        let chosen = self.chosen();
-        let after_fit = chosen.map_or(self.gap_fit, |c| c.gap_fit);
-        let after_ho = chosen.map_or(self.gap_heldout, |c| c.gap_heldout);
+        let (after_fit, after_ho) = self.gap_after;
         let shrink = if self.gap_fit > 0.0 { (self.gap_fit - after_fit) / self.gap_fit } else { 0.0 };
         let heldout_shrink =
             (self.has_heldout && self.gap_heldout > 0.0).then(|| (self.gap_heldout - after_ho) / self.gap_heldout);
@@ -131,7 +180,34 @@ impl Diagnosis {
         locations.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
         Report {
             format: REPORT_FORMAT.to_string(),
-            verdict: VerdictReport { effect: self.verdict_name().to_string(), confidence: self.confidence },
+            verdict: VerdictReport {
+                effect: self.verdict_name().to_string(),
+                confidence: self.confidence,
+                effects: self
+                    .effects
+                    .iter()
+                    .map(|e| VerdictEffect {
+                        effect: e.effect.name().to_string(),
+                        form: e.form.to_string(),
+                        confidence: e.confidence,
+                        share_of_gap: e.share,
+                        parameters: e.parameters.clone(),
+                    })
+                    .collect(),
+                unexplained_share: self.unexplained_share,
+                misfit: self.misfit.as_ref().map(|m| MisfitReport {
+                    observables: m
+                        .observables
+                        .iter()
+                        .map(|o| MisfitObservableReport {
+                            observable: o.observable,
+                            mean_z: o.mean_z,
+                            mean_loss: o.mean_loss,
+                        })
+                        .collect(),
+                    hints: m.hints.clone(),
+                }),
+            },
             gap: GapReport {
                 metric: GAP_METRIC.to_string(),
                 baseline: self.gap_fit,
@@ -141,6 +217,7 @@ impl Diagnosis {
                 heldout_baseline: self.has_heldout.then_some(self.gap_heldout),
                 heldout_after: self.has_heldout.then_some(after_ho),
                 noise_threshold: self.noise_threshold,
+                heldout_units: self.hold_out.describe(),
             },
             locations: locations
                 .iter()
@@ -163,6 +240,8 @@ impl Diagnosis {
                 .iter()
                 .map(|c| CandidateReport {
                     effect: c.effect.name().to_string(),
+                    form: c.form.to_string(),
+                    signature_excess: c.signature_excess,
                     shrink: c.shrink,
                     heldout_shrink: c.heldout_shrink,
                     gap_fit: c.gap_fit,
@@ -206,7 +285,7 @@ pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed
     })?;
     write_atomically(&out.join("fitted-model.toml"), |w| {
         w.write_all(
-            header(&format!("The baseline plus the verdict's effect ({})", diagnosis.verdict_name())).as_bytes(),
+            header(&format!("The baseline plus the verdict's effects ({})", diagnosis.verdict_names())).as_bytes(),
         )?;
         w.write_all(diagnosis.fitted.to_toml_string().as_bytes())
     })?;
@@ -226,9 +305,35 @@ fn html(d: &Diagnosis, report: &Report) -> String {
     s.push_str("</style></head><body><h1>Diagnosis of the sim-to-real gap</h1>");
     s.push_str(&format!(
         "<p class=\"verdict\">Verdict: <b>{}</b> (confidence {:.2})</p>",
-        escape(d.verdict_name()),
+        escape(&d.verdict_names()),
         d.confidence
     ));
+    if !d.effects.is_empty() {
+        s.push_str("<table><tr><th>effect</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>parameters</th></tr>");
+        for e in &d.effects {
+            s.push_str(&format!(
+                "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td><td style=\"text-align:left\">{}</td></tr>",
+                escape(e.effect.name()),
+                escape(e.form),
+                e.confidence,
+                e.share,
+                escape(&e.parameters.iter().map(|(k, v)| format!("{k} = {v:.4e}")).collect::<Vec<_>>().join(", "))
+            ));
+        }
+        s.push_str("</table>");
+    }
+    s.push_str(&format!(
+        "<p>Left unexplained: {:.0}% of the baseline's gap above the noise floor. Held out of every fit: {}.</p>",
+        100.0 * d.unexplained_share,
+        escape(&d.hold_out.describe())
+    ));
+    if let Some(m) = &d.misfit {
+        s.push_str("<h2>Where the calibrated model still misfits</h2><ul>");
+        for h in &m.hints {
+            s.push_str(&format!("<li>{}</li>", escape(h)));
+        }
+        s.push_str("</ul>");
+    }
     s.push_str(&format!(
         "<p>Gap metric: {}.</p><table><tr><th></th><th>baseline</th><th>after</th><th>shrink</th></tr><tr><td>fitting units</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>held-out units</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
         escape(&gap.metric),
@@ -251,11 +356,12 @@ fn html(d: &Diagnosis, report: &Report) -> String {
             escape(&loc.detail)
         ));
     }
-    s.push_str("</table><h2>Candidates (each refitted with the baseline's friction level)</h2><table><tr><th>effect</th><th>gap (fit)</th><th>gap (held-out)</th><th>shrink</th><th>held-out shrink</th><th>parameters</th></tr>");
+    s.push_str("</table><h2>Candidates of the first round (each refitted with the baseline's friction law)</h2><table><tr><th>effect</th><th>form</th><th>gap (fit)</th><th>gap (held-out)</th><th>shrink</th><th>held-out shrink</th><th>parameters</th></tr>");
     for c in &d.candidates {
         s.push_str(&format!(
-            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
             escape(c.effect.name()),
+            escape(c.form),
             c.gap_fit,
             c.gap_heldout,
             c.shrink,

@@ -1,151 +1,301 @@
-//! Attribution and verdict: each candidate's strength is searched with the
-//! baseline recalibrated at every trial, and the best candidate is the
-//! verdict only if it lowers both the held-out and the fitting gaps by more
-//! than their noise.
+//! Attribution and verdict.
+//!
+//! Each effect is screened by its signature ([`signature_excess`]): only
+//! effects whose form-agnostic trace stands out of the noise are fitted.
+//! Each form of a screened effect ([`Variant`]) is fitted by a coordinate
+//! search, with the baseline's friction law recalibrated at every trial, so
+//! an effect cannot win by shifting the baseline. Effects are added by
+//! forward selection: the one that lowers the held-out gap most is kept if
+//! it lowers both the held-out and the fitting gaps by more than their
+//! noise; the next is searched on top of it, and so on.
+
+use std::collections::BTreeMap;
 
 use crate::diagnose::calibrate::calibrate_and_score;
-use crate::diagnose::candidates::CandidateSpec;
+use crate::diagnose::candidates::{Context, NULL_HUBER, Variant, signature_excess, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{Score, count_of, gap_of};
 use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
 
-/// The best trial so far: (gap on the fitting units, calibrated model,
-/// scores, strength, second parameter).
-type Trial = (f64, Model, Vec<Score>, f64, f64);
+/// An effect is fitted only when its signature stands this many noise units
+/// above pure noise in the current model's scores (see
+/// [`signature_excess`]); the largest few are fitted.
+pub(crate) const SCREEN_EXCESS: f64 = 3.0;
+
+/// At most this many effects are fitted per round (those with the largest
+/// signature excess).
+const SCREEN_MAX: usize = 3;
+
+/// At most this many effects are named.
+pub(crate) const MAX_EFFECTS: usize = 3;
+
+/// The leading effect must close at least this share of the baseline's
+/// explainable gap (its key gap less the noise floor): a verdict explains a
+/// real share of the gap, not a sliver of a calibration failure. Below it
+/// the verdict is `none` and the report lists the misfit.
+pub(crate) const MIN_LEADING_SHARE: f64 = 0.3;
+
+/// Each further effect must close at least this share of it.
+pub(crate) const MIN_FURTHER_SHARE: f64 = 0.05;
+
+/// Trials per parameter in the coordinate search.
+const STEPS_PER_PARAM: usize = 3;
 
 /// Prints one trial's gap and worst observables (`STICKSLIP_DEBUG=1`).
-fn debug_trial(effect: Effect, s: f64, t: f64, trial: &Model, scores: &[Score], g: f64) {
+fn debug_trial(variant: &Variant, values: &[f64], trial: &Model, scores: &[Score], g: f64) {
     let mut w: Vec<&Score> = scores.iter().filter(|s| !s.heldout).collect();
     w.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    let top: Vec<String> = w
-        .iter()
-        .take(6)
-        .map(|s| {
-            format!(
-                "{}@{:.1}N {:+.1} (m {:.3e} s {:.3e})",
-                s.observable, s.normal_force_n, s.z, s.measured, s.simulated
-            )
-        })
-        .collect();
+    let top: Vec<String> =
+        w.iter().take(5).map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z)).collect();
     eprintln!(
-        "{effect} {s:e} {t:e}: a {:.4} b {:.4} sigma {:.4} gap {g:.2} | {}",
+        "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {g:.2} ho {:.2} | {}",
+        variant.effect,
+        variant.form,
         trial.friction.a,
         trial.friction.b,
+        trial.friction.c,
+        trial.friction.d,
         trial.friction.sigma,
+        gap_of(scores, true),
         top.join("; ")
     );
 }
 
-/// Searches one candidate's strength (and second parameter) on a grid, then
-/// halfway to each neighbour of the best strength. `None` when no trial
-/// gives a valid model.
-pub(crate) fn fit_candidate(
-    spec: &CandidateSpec,
-    baseline: &Model,
-    baseline_gaps: (f64, f64),
+/// One trial: the model with a variant's parameters, recalibrated.
+struct Trial {
+    values: Vec<f64>,
+    model: Model,
+    scores: Vec<Score>,
+    gap_fit: f64,
+}
+
+/// Evaluates one set of parameter values; `None` when they give no valid model.
+fn evaluate(
+    variant: &Variant,
+    values: &[f64],
+    base: &Model,
     slope: f64,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
     engine: &Engine,
-) -> Result<Option<Candidate>> {
-    let (g0_fit, g0_ho) = baseline_gaps;
-    let mut best: Option<Trial> = None;
-    let trial_at = |s: f64, t: f64, best: &mut Option<Trial>| -> Result<()> {
-        let trial = (spec.apply)(baseline, s, t);
-        if trial.validate().is_err() {
-            return Ok(());
-        }
-        let (trial, scores, _) = calibrate_and_score(&trial, data, settings, engine, Some(slope))?;
-        let g = gap_of(&scores, false);
-        if std::env::var_os("STICKSLIP_DEBUG").is_some() {
-            debug_trial(spec.effect, s, t, &trial, &scores, g);
-        }
-        if best.as_ref().is_none_or(|b| g < b.0) {
-            *best = Some((g, trial, scores, s, t));
-        }
-        Ok(())
-    };
-    for &t in &spec.second {
-        for &s in &spec.grid {
-            trial_at(s, t, &mut best)?;
-        }
+) -> Result<Option<Trial>> {
+    let trial = (variant.apply)(base, values);
+    if trial.validate().is_err() {
+        return Ok(None);
     }
-    // Refine: halfway to each neighbour of the best strength.
-    if let Some((at, t)) = best.as_ref().map(|b| (b.3, b.4)) {
-        if let Some(i) = spec.grid.iter().position(|&g| g == at) {
-            let neighbours = [i.checked_sub(1).map(|j| spec.grid[j]), spec.grid.get(i + 1).copied()];
-            for n in neighbours.into_iter().flatten() {
-                trial_at(0.5 * (at + n), t, &mut best)?;
+    let (model, scores, _) = calibrate_and_score(&trial, data, settings, engine, Some(slope), 1)?;
+    let gap_fit = gap_of(&scores, false);
+    if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+        debug_trial(variant, values, &model, &scores, gap_fit);
+    }
+    Ok(Some(Trial { values: values.to_vec(), model, scores, gap_fit }))
+}
+
+/// Fits one variant on top of `base` by a coordinate search on the fitting
+/// gap: from the data-driven start, each parameter in turn is stepped up or
+/// down while that helps (at most [`STEPS_PER_PARAM`] trials each), then the
+/// first parameter once more at half its step.
+fn fit_variant(
+    variant: &Variant,
+    base: &Model,
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<Trial>> {
+    let Some(mut best) = evaluate(variant, &variant.start(), base, slope, data, settings, engine)? else {
+        return Ok(None);
+    };
+    let try_move = |best: &mut Trial, i: usize, k: f64| -> Result<bool> {
+        let mut values = best.values.clone();
+        values[i] = variant.params[i].moved(values[i], k);
+        if values[i] == best.values[i] {
+            return Ok(false);
+        }
+        match evaluate(variant, &values, base, slope, data, settings, engine)? {
+            Some(t) if t.gap_fit < best.gap_fit => {
+                *best = t;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    };
+    for i in 0..variant.params.len() {
+        let mut used = 0;
+        let mut direction = 1.0;
+        if !try_move(&mut best, i, direction)? {
+            used += 1;
+            direction = -1.0;
+            if !try_move(&mut best, i, direction)? {
+                continue;
             }
         }
+        used += 1;
+        while used < STEPS_PER_PARAM && try_move(&mut best, i, direction)? {
+            used += 1;
+        }
     }
-    let Some((g1_fit, model, scores, _, _)) = best else { return Ok(None) };
-    let g1_ho = gap_of(&scores, true);
-    let mut worst: Vec<&Score> = scores.iter().collect();
-    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    let unexplained = worst
+    if !variant.params.is_empty() && !try_move(&mut best, 0, 0.5)? {
+        try_move(&mut best, 0, -0.5)?;
+    }
+    Ok(Some(best))
+}
+
+/// The noise a fall of the mean Huber loss over `k` scores must beat:
+/// 3·sqrt(2/k) (the noise of a mean of k values of about z²) plus 0.5 for
+/// the replicate estimate of each z's spread.
+pub(crate) fn gap_noise(k: usize) -> f64 {
+    3.0 * (2.0 / k.max(1) as f64).sqrt() + 0.5
+}
+
+/// The best candidate for each screened effect on top of `base`.
+#[allow(clippy::too_many_arguments)]
+fn round(
+    base: &Model,
+    base_scores: &[Score],
+    named: &[Effect],
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Candidate>> {
+    let (g0_fit, g0_ho) = (gap_of(base_scores, false), gap_of(base_scores, true));
+    let mut screened: Vec<(Effect, f64)> = Effect::ALL
         .iter()
-        .take(5)
-        .map(|s| Unexplained {
-            observable: s.observable,
-            excitation_frequency_hz: s.excitation_frequency_hz,
-            normal_force_n: s.normal_force_n,
-            z: s.z,
-        })
+        .filter(|e| !named.contains(e))
+        .map(|&e| (e, signature_excess(e, base_scores)))
+        .filter(|(_, x)| *x > SCREEN_EXCESS)
         .collect();
-    Ok(Some(Candidate {
-        unexplained,
-        effect: spec.effect,
-        gap_fit: g1_fit,
-        gap_heldout: g1_ho,
-        shrink: if g0_fit > 0.0 { (g0_fit - g1_fit) / g0_fit } else { 0.0 },
-        heldout_shrink: (data.has_heldout() && g0_ho > 0.0).then(|| (g0_ho - g1_ho) / g0_ho),
-        parameters: (spec.describe)(&model),
-        model,
-    }))
-}
-
-/// The verdict on ranked candidates.
-pub(crate) struct Verdict {
-    /// The effect named, `None` when the baseline explains the data.
-    pub(crate) effect: Option<Effect>,
-    pub(crate) confidence: f64,
-    /// What the held-out (or, without held-out units, the fitting) gap had
-    /// to fall by.
-    pub(crate) noise_threshold: f64,
-}
-
-/// Ranks `candidates` (best first) and decides: the best is the verdict
-/// only if it lowers both the held-out and the fitting gaps by more than
-/// their noise, 3·sqrt(2/k) + 0.5 for k scored entries.
-pub(crate) fn decide(candidates: &mut [Candidate], baseline_scores: &[Score], has_heldout: bool) -> Verdict {
-    let (g0_fit, g0_ho) = (gap_of(baseline_scores, false), gap_of(baseline_scores, true));
-    // Rank by held-out gap where there is one, else by the fitting gap.
-    let key = |c: &Candidate| if has_heldout { c.gap_heldout } else { c.gap_fit };
-    candidates.sort_by(|a, b| key(a).total_cmp(&key(b)));
-    let k_ho = count_of(baseline_scores, has_heldout).max(1) as f64;
-    // The noise of a mean of k values of z² is about sqrt(2/k): the held-out
-    // improvement must beat three of those plus a margin of 0.5 for the
-    // replicate estimate of each z's spread.
-    let noise_threshold = 3.0 * (2.0 / k_ho).sqrt() + 0.5;
-    let g0_key = if has_heldout { g0_ho } else { g0_fit };
-    // A real effect must help where it was fitted as well as where it was
-    // not: the fitting gap must also fall by more than its own noise.
-    let k_fit = count_of(baseline_scores, false).max(1) as f64;
-    let fit_threshold = 3.0 * (2.0 / k_fit).sqrt() + 0.5;
-    match candidates.first() {
-        Some(best) if g0_key - key(best) > noise_threshold && g0_fit - best.gap_fit > fit_threshold => {
-            let margin = (g0_key - key(best)) / noise_threshold;
-            let runner_up = candidates.get(1).map(key).unwrap_or(g0_key);
-            let separation = ((runner_up - key(best)) / (g0_key - key(best)).max(1e-9)).clamp(0.0, 1.0);
-            let confidence = ((1.0 - (-margin).exp()) * (0.5 + 0.5 * separation)).clamp(0.0, 1.0);
-            Verdict { effect: Some(best.effect), confidence, noise_threshold }
+    screened.sort_by(|a, b| b.1.total_cmp(&a.1));
+    screened.truncate(SCREEN_MAX);
+    let ctx = Context::new(data, base, base_scores);
+    let mut out = Vec::new();
+    for (effect, excess) in screened {
+        progress(&format!("trying {effect} (signature {excess:.1} noise units above the baseline)"));
+        // The best form so far: its trial, name and parameters.
+        let mut best: Option<(Trial, &'static str, BTreeMap<String, f64>)> = None;
+        let forms = variants(effect, &ctx);
+        for variant in &forms {
+            if let Some(t) = fit_variant(variant, base, slope, data, settings, engine)? {
+                let key = |t: &Trial| if data.has_heldout() { gap_of(&t.scores, true) } else { t.gap_fit };
+                if best.as_ref().is_none_or(|b| key(&t) < key(&b.0)) {
+                    let parameters = variant.describe(&t.values);
+                    best = Some((t, variant.form, parameters));
+                }
+            }
         }
-        _ => {
-            let best_gain = candidates.first().map(|b| (g0_key - key(b)) / noise_threshold).unwrap_or(0.0);
-            Verdict { effect: None, confidence: (1.0 - best_gain.max(0.0)).clamp(0.05, 0.95), noise_threshold }
-        }
+        let Some((t, form, parameters)) = best else { continue };
+        let gap_heldout = gap_of(&t.scores, true);
+        let mut worst: Vec<&Score> = t.scores.iter().collect();
+        worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+        out.push(Candidate {
+            effect,
+            form,
+            signature_excess: excess,
+            gap_fit: t.gap_fit,
+            gap_heldout,
+            shrink: if g0_fit > 0.0 { (g0_fit - t.gap_fit) / g0_fit } else { 0.0 },
+            heldout_shrink: (data.has_heldout() && g0_ho > 0.0).then(|| (g0_ho - gap_heldout) / g0_ho),
+            parameters,
+            unexplained: worst
+                .iter()
+                .take(5)
+                .map(|s| Unexplained {
+                    observable: s.observable,
+                    excitation_frequency_hz: s.excitation_frequency_hz,
+                    normal_force_n: s.normal_force_n,
+                    z: s.z,
+                })
+                .collect(),
+            model: t.model,
+            scores: t.scores,
+        });
     }
+    let key = |c: &Candidate| if data.has_heldout() { c.gap_heldout } else { c.gap_fit };
+    out.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    Ok(out)
+}
+
+/// One step of the forward selection that was kept.
+#[derive(Clone, Debug)]
+pub(crate) struct Step {
+    pub(crate) candidate: Candidate,
+    /// The gaps (fitting, key) before this effect was added; the key gap is
+    /// the held-out one where there are held-out units, else the fitting one.
+    pub(crate) before: (f64, f64),
+    /// The key gap after it was added.
+    pub(crate) after_key: f64,
+    /// The best rival effect's key gap in the same round (the baseline's
+    /// when there was none).
+    pub(crate) runner_up: f64,
+}
+
+/// What the forward selection found.
+pub(crate) struct Selection {
+    pub(crate) steps: Vec<Step>,
+    /// Every candidate of the first round, best first.
+    pub(crate) first_round: Vec<Candidate>,
+    pub(crate) noise_fit: f64,
+    pub(crate) noise_heldout: f64,
+}
+
+/// Forward selection from the calibrated baseline.
+pub(crate) fn select(
+    baseline: &Model,
+    baseline_scores: &[Score],
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Selection> {
+    let has_heldout = data.has_heldout();
+    let noise_fit = gap_noise(count_of(baseline_scores, false));
+    let noise_heldout = gap_noise(count_of(baseline_scores, has_heldout));
+    let key_of = |scores: &[Score]| gap_of(scores, has_heldout);
+    let mut steps: Vec<Step> = Vec::new();
+    let mut first_round = Vec::new();
+    let (mut model, mut scores) = (baseline.clone(), baseline_scores.to_vec());
+    while steps.len() < MAX_EFFECTS {
+        let (g_fit, g_key) = (gap_of(&scores, false), key_of(&scores));
+        let named: Vec<Effect> = steps.iter().map(|s| s.candidate.effect).collect();
+        let candidates = round(&model, &scores, &named, slope, data, settings, engine, progress)?;
+        if steps.is_empty() {
+            first_round = candidates.clone();
+        }
+        let key = |c: &Candidate| if has_heldout { c.gap_heldout } else { c.gap_fit };
+        let Some(best) = candidates.first() else { break };
+        let explainable = (key_of(baseline_scores) - NULL_HUBER).max(1e-9);
+        let min_share = if steps.is_empty() { MIN_LEADING_SHARE } else { MIN_FURTHER_SHARE };
+        if !(g_key - key(best) > noise_heldout
+            && g_fit - best.gap_fit > noise_fit
+            && (g_key - key(best)) / explainable >= min_share)
+        {
+            break;
+        }
+        let runner_up = candidates.get(1).map(key).unwrap_or(g_key);
+        model = best.model.clone();
+        scores = best.scores.clone();
+        steps.push(Step { candidate: best.clone(), before: (g_fit, g_key), after_key: key(best), runner_up });
+    }
+    Ok(Selection { steps, first_round, noise_fit, noise_heldout })
+}
+
+/// The confidence in a kept step, from three things that must all hold for
+/// an attribution to be right: its fall of the key gap beats the noise
+/// (`margin`, in noise thresholds), it explains much of the baseline's
+/// explainable gap (`share`), and it beats the best rival effect by much of
+/// its own fall (`separation`: a rival that explains nearly as much means
+/// the data cannot tell them apart). The verdict's reliability on the blind
+/// benchmark is printed as a table beside it.
+pub(crate) fn confidence(step: &Step, noise: f64, explainable: f64) -> f64 {
+    let fallen = step.before.1 - step.after_key;
+    let margin = (fallen / noise).max(0.0);
+    let share = (fallen / explainable.max(1e-9)).clamp(0.0, 1.0);
+    let separation = ((step.runner_up - step.after_key) / fallen.max(1e-9)).clamp(0.0, 1.0);
+    let strength = 1.0 - (-(margin - 1.0).max(0.0) / 2.0).exp();
+    (strength * (share * separation).sqrt()).clamp(0.0, 0.99)
 }

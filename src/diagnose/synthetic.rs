@@ -1,15 +1,16 @@
-//! Synthetic measurement sets with a withheld effect, and the blind
-//! benchmark of the diagnosis on them (`stickslip benchmark-diagnosis`).
+//! Synthetic measurement sets with withheld effects, for the blind benchmark
+//! of the diagnosis (`stickslip benchmark-diagnosis`).
 //!
-//! Each set: a random rig and friction law, 2 frequencies × 2 normal-force
-//! levels (by default 45% and 90% of Den Hartog's no-stop threshold: from
-//! continuous slip to the edge of stick-slip, where the noise stops the mass
-//! now and then, as on the paper's rig at its higher loads; `--load-shares`
-//! sets others), several runs per condition at 600 Hz with sensor noise on every
-//! channel, and either no effect (a null set) or one effect in one of its
-//! non-candidate forms (forms 1 and 2: the diagnosis only ever fits form 0,
-//! so the real effect never matches a candidate's form exactly) at one of two
-//! strengths. The diagnosis sees only the directory.
+//! Each set: a random rig and a friction law drawn from the whole of the
+//! paper's eq. 7 (a, b of either sign, c, d ≠ 0, σ_μ, σ_N), 2 frequencies × 3
+//! normal-force levels (by default 40%, 65% and 90% of Den Hartog's no-stop
+//! threshold: from continuous slip to the edge of stick-slip; the middle
+//! level is the one the diagnosis holds out), runs at 600 Hz with sensor
+//! noise on every channel, and no effect (a null set), one effect or two,
+//! each in a **withheld form**: a form the candidate search never fits
+//! (`WITHHELD_FORMS`; the candidates in [`crate::diagnose::candidates`] are
+//! built from other forms, so no hidden effect matches a candidate exactly).
+//! The diagnosis sees only the directory.
 
 use std::f64::consts::TAU;
 use std::path::Path;
@@ -50,18 +51,35 @@ fn uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
 
 /// Normal-force levels of the benchmark's sets, as shares of Den Hartog's
 /// no-stop threshold (see the module's documentation).
-pub const LOAD_SHARES: [f64; 2] = [0.45, 0.9];
+pub const LOAD_SHARES: [f64; 3] = [0.4, 0.65, 0.9];
 
-/// A random rig and friction law with `effect` (`None` for a null set) in
-/// `form` (1 or 2, a non-candidate form) at `level`, at two frequencies ×
-/// the normal forces that are `load_shares` of the no-stop threshold.
-pub fn random_truth(
-    seed: u64,
-    effect: Option<Effect>,
-    form: u32,
-    level: u32,
-    load_shares: &[f64],
-) -> Result<(Model, Vec<Condition>)> {
+/// One effect hidden in a set: which, in which withheld form (1 or 2, see
+/// [`WITHHELD_FORMS`]) and at which strength (0 moderate, 1 strong).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Hidden {
+    pub effect: Effect,
+    pub form: u32,
+    pub level: u32,
+}
+
+/// The forms the benchmark hides effects in (form 1, form 2) — never among
+/// the forms the candidate search fits (Fourier harmonics; skew and Tukey-h
+/// noise; exponential build-up and time lag; AR(1) colour; constant and
+/// dwell stiction; linear and power load laws; linear drift).
+pub const WITHHELD_FORMS: [(Effect, &str, &str); 7] = [
+    (Effect::NormalForceHarmonics, "bumps", "square"),
+    (Effect::NonGaussianFriction, "lognormal (growing with load)", "mixture"),
+    (Effect::FrictionHysteresis, "tanh", "rational"),
+    (Effect::ColouredFrictionNoise, "hold", "multi_scale"),
+    (Effect::Stiction, "noisy", "decaying"),
+    (Effect::LoadDependentFriction, "saturating", "exponential"),
+    (Effect::NormalForceDrift, "saturating", "wander"),
+];
+
+/// A random rig and friction law from the whole eq. 7 family with the
+/// `hidden` effects, at two frequencies × the normal forces that are
+/// `load_shares` of the no-stop threshold.
+pub fn random_truth(seed: u64, hidden: &[Hidden], load_shares: &[f64]) -> Result<(Model, Vec<Condition>)> {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut m = Model::default();
     m.rig.mass_kg = uniform(&mut rng, 0.6, 1.6);
@@ -69,14 +87,14 @@ pub fn random_truth(
     m.rig.damping_ratio = uniform(&mut rng, 0.002, 0.01);
     m.excitation.amplitude_m = uniform(&mut rng, 1.5e-3, 3e-3);
     m.friction.a = uniform(&mut rng, 0.15, 0.35);
-    m.friction.b = uniform(&mut rng, 0.0, 0.12);
-    m.friction.c = uniform(&mut rng, 5.0, 40.0);
-    m.friction.d = 0.0;
-    m.friction.sigma = uniform(&mut rng, 0.03, 0.07);
-    m.normal_force.sigma = uniform(&mut rng, 0.15, 0.4);
+    m.friction.b = uniform(&mut rng, -0.04, 0.12);
+    m.friction.c = 10f64.powf(uniform(&mut rng, 0.3, 1.6));
+    m.friction.d = uniform(&mut rng, 0.0, 0.3);
+    m.friction.sigma = uniform(&mut rng, 0.015, 0.07);
+    m.normal_force.sigma = uniform(&mut rng, 0.1, 0.4);
     m.noise.interval_s = 1.0 / 600.0;
     let k = m.stiffness_n_per_m();
-    let mu = m.friction.a + 0.5 * m.friction.b;
+    let mu = m.friction.a + 0.5 * m.friction.b.max(0.0);
     let mut conditions = Vec::new();
     for eta in [0.65, 0.8] {
         let threshold = DenHartog::stop_threshold(eta);
@@ -86,76 +104,64 @@ pub fn random_truth(
                 .push(Condition { excitation_frequency_hz: eta * m.rig.natural_frequency_hz, normal_force_n: n0 });
         }
     }
-    let strong = level == 1;
-    let pick = |moderate: f64, strong_value: f64| if strong { strong_value } else { moderate };
     let mean_n0 = conditions.iter().map(|c| c.normal_force_n).sum::<f64>() / conditions.len() as f64;
-    match effect {
-        None => {}
-        Some(Effect::NormalForceHarmonics) => {
-            let a = pick(0.04, 0.09) * mean_n0;
-            m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
-                form: if form == 1 { HarmonicForm::Bumps } else { HarmonicForm::Square },
-                amplitudes_n: [a, 0.6 * a, 0.0, 0.0],
-                phases_rad: [uniform(&mut rng, 0.0, TAU), uniform(&mut rng, 0.0, TAU), 0.0, 0.0],
-                amplitudes_per_n0: [0.0; 4],
-                shape: if form == 1 { 4.0 } else { 2.5 },
-            });
-        }
-        Some(Effect::NonGaussianFriction) => {
-            m.effects.non_gaussian_friction = Some(if form == 1 {
-                NonGaussianFriction {
-                    form: NonGaussianForm::Lognormal,
-                    strength: pick(0.6, 1.0),
-                    load_exponent: 0.5,
+    for h in hidden {
+        let pick = |moderate: f64, strong: f64| if h.level == 1 { strong } else { moderate };
+        let first = h.form == 1;
+        match h.effect {
+            Effect::NormalForceHarmonics => {
+                let a = pick(0.04, 0.08);
+                m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
+                    form: if first { HarmonicForm::Bumps } else { HarmonicForm::Square },
+                    amplitudes_n: [0.0; 4],
+                    amplitudes_per_n0: [a, 0.6 * a, 0.0, 0.0],
+                    phases_rad: [uniform(&mut rng, 0.0, TAU), uniform(&mut rng, 0.0, TAU), 0.0, 0.0],
+                    shape: if first { 4.0 } else { 2.5 },
+                });
+            }
+            Effect::NonGaussianFriction => {
+                m.effects.non_gaussian_friction = Some(NonGaussianFriction {
+                    form: if first { NonGaussianForm::Lognormal } else { NonGaussianForm::Mixture },
+                    strength: if first { pick(0.6, 1.0) } else { pick(1.0, 2.0) },
+                    load_exponent: if first { 0.5 } else { 0.0 },
                     reference_force_n: mean_n0,
-                }
-            } else {
-                NonGaussianFriction {
-                    form: NonGaussianForm::TukeyH,
-                    strength: pick(0.12, 0.2),
-                    load_exponent: 0.0,
-                    reference_force_n: mean_n0,
-                }
-            });
-        }
-        Some(Effect::FrictionHysteresis) => {
-            m.effects.friction_hysteresis = Some(FrictionHysteresis {
-                form: if form == 1 { HysteresisForm::Tanh } else { HysteresisForm::Rational },
-                length_m: pick(1e-4, 3e-4),
-                time_constant_s: 0.0,
-            });
-        }
-        Some(Effect::ColouredFrictionNoise) => {
-            m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
-                form: if form == 1 { ColourForm::Hold } else { ColourForm::TwoScale },
-                correlation_time_s: pick(8.0, 20.0) * m.noise.interval_s,
-                coloured_share: 1.0,
-            });
-        }
-        Some(Effect::Stiction) => {
-            m.effects.stiction = Some(Stiction {
-                form: if form == 1 { StictionForm::Noisy } else { StictionForm::Decaying },
-                excess: pick(0.12, 0.25),
-                release_length_m: 0.0,
-                dwell_time_s: 0.0,
-            });
-        }
-        Some(Effect::LoadDependentFriction) => {
-            m.effects.load_dependent_friction = Some(if form == 1 {
-                LoadDependentFriction { form: LoadForm::Power, strength: pick(0.3, 0.6), reference_force_n: mean_n0 }
-            } else {
-                LoadDependentFriction {
-                    form: LoadForm::Saturating,
+                });
+            }
+            Effect::FrictionHysteresis => {
+                m.effects.friction_hysteresis = Some(FrictionHysteresis {
+                    form: if first { HysteresisForm::Tanh } else { HysteresisForm::Rational },
+                    length_m: pick(1e-4, 3e-4),
+                    time_constant_s: 0.0,
+                });
+            }
+            Effect::ColouredFrictionNoise => {
+                m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
+                    form: if first { ColourForm::Hold } else { ColourForm::MultiScale },
+                    correlation_time_s: pick(8.0, 20.0) * m.noise.interval_s,
+                    coloured_share: if first { 1.0 } else { 0.8 },
+                });
+            }
+            Effect::Stiction => {
+                m.effects.stiction = Some(Stiction {
+                    form: if first { StictionForm::Noisy } else { StictionForm::Decaying },
+                    excess: pick(0.12, 0.25),
+                    release_length_m: 0.0,
+                    dwell_time_s: 0.0,
+                });
+            }
+            Effect::LoadDependentFriction => {
+                m.effects.load_dependent_friction = Some(LoadDependentFriction {
+                    form: if first { LoadForm::Saturating } else { LoadForm::Exponential },
                     strength: pick(0.25, 0.5) * m.friction.a / mean_n0,
                     reference_force_n: mean_n0,
-                }
-            });
-        }
-        Some(Effect::NormalForceDrift) => {
-            m.effects.normal_force_drift = Some(NormalForceDrift {
-                form: if form == 1 { DriftForm::Saturating } else { DriftForm::Wander },
-                rate_per_s: pick(0.006, 0.012),
-            });
+                });
+            }
+            Effect::NormalForceDrift => {
+                m.effects.normal_force_drift = Some(NormalForceDrift {
+                    form: if first { DriftForm::Saturating } else { DriftForm::Wander },
+                    rate_per_s: pick(0.006, 0.012),
+                });
+            }
         }
     }
     m.validate()?;
@@ -207,17 +213,55 @@ pub fn write_set(dir: &Path, truth: &Model, conditions: &[Condition], shape: Set
     Ok(())
 }
 
+/// One set of the benchmark: what it hides and how it is measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedSet {
+    /// The hidden effects, leading (strongest) first; empty for a null set.
+    pub hidden: Vec<Hidden>,
+    /// Only a summary table with phase columns (no records, no amplitudes).
+    pub phase_only: bool,
+}
+
+/// The pairs of the two-effect sets: effects the seed paper's rig shows
+/// together, the first the stronger.
+pub const PAIRS: [(Effect, Effect); 6] = [
+    (Effect::NormalForceHarmonics, Effect::NonGaussianFriction),
+    (Effect::LoadDependentFriction, Effect::ColouredFrictionNoise),
+    (Effect::FrictionHysteresis, Effect::NormalForceHarmonics),
+    (Effect::Stiction, Effect::NormalForceDrift),
+    (Effect::ColouredFrictionNoise, Effect::FrictionHysteresis),
+    (Effect::NonGaussianFriction, Effect::LoadDependentFriction),
+];
+
 /// The benchmark's list of sets: every effect × `forms` × `levels`, then
-/// `nulls` null sets. Returns (effect or None, form, level).
-pub fn benchmark_plan(nulls: u32, forms: &[u32], levels: &[u32]) -> Vec<(Option<Effect>, u32, u32)> {
+/// `pairs` two-effect sets (the leading effect strong, the second moderate,
+/// forms alternating), then `phase_only` phase-only summary sets (null and
+/// load-dependent friction alternately), then `nulls` null sets.
+pub fn benchmark_plan(nulls: u32, forms: &[u32], levels: &[u32], pairs: u32, phase_only: u32) -> Vec<PlannedSet> {
     let mut plan = Vec::new();
     for effect in Effect::ALL {
         for &form in forms {
             for &level in levels {
-                plan.push((Some(effect), form, level));
+                plan.push(PlannedSet { hidden: vec![Hidden { effect, form, level }], phase_only: false });
             }
         }
     }
-    plan.extend((0..nulls).map(|_| (None, 0, 0)));
+    for i in 0..pairs as usize {
+        let (a, b) = PAIRS[i % PAIRS.len()];
+        let form = 1 + (i as u32 / PAIRS.len() as u32) % 2;
+        plan.push(PlannedSet {
+            hidden: vec![Hidden { effect: a, form, level: 1 }, Hidden { effect: b, form: 3 - form, level: 0 }],
+            phase_only: false,
+        });
+    }
+    for i in 0..phase_only {
+        let hidden = if i % 2 == 1 {
+            vec![Hidden { effect: Effect::LoadDependentFriction, form: 1 + (i / 2) % 2, level: 1 }]
+        } else {
+            Vec::new()
+        };
+        plan.push(PlannedSet { hidden, phase_only: true });
+    }
+    plan.extend((0..nulls).map(|_| PlannedSet { hidden: Vec::new(), phase_only: false }));
     plan
 }

@@ -10,7 +10,7 @@ use super::{
 
 /// Grid of Stribeck rates `c` (in units of 1 / max|v|) tried by the friction baseline.
 fn stribeck_grid() -> impl Iterator<Item = f64> {
-    (0..21).map(|i| 0.3 * 10f64.powf(i as f64 * 0.2))
+    (0..11).map(|i| 0.3 * 10f64.powf(i as f64 * 0.4))
 }
 
 /// Friction-coefficient features (see [`FrictionFeatures`]).

@@ -23,6 +23,8 @@ mod friction;
 mod record;
 mod stats;
 
+pub(crate) use stats::least_squares;
+
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 
@@ -110,6 +112,9 @@ pub struct NormalForceFeatures {
     /// `None` for harmonics at or above [`HARMONIC_RATE_LIMIT`] × the sample
     /// rate, or when the fit is singular.
     pub harmonic_amplitude_n: [Option<f64>; HARMONICS],
+    /// Its phase φ in `A cos(kΩt + φ)`, rad, with the record's own `t` (the
+    /// base at `U0 cos Ωt`).
+    pub harmonic_phase_rad: [Option<f64>; HARMONICS],
     /// Variance of what the fit leaves (mean, drift and harmonics removed),
     /// N², with the fitted parameters' degrees of freedom taken off.
     pub residual_var_n2: Option<f64>,
@@ -164,9 +169,19 @@ pub struct FrictionFeatures {
 
 /// Computes every feature of `run`.
 pub fn run_features(run: &Run) -> RunFeatures {
+    // The base's (cos Ωt, sin Ωt) at every sample, with the record's own t.
+    let omega = std::f64::consts::TAU * run.excitation_frequency_hz;
+    let base: Vec<(f64, f64)> = run
+        .t_s
+        .iter()
+        .map(|&t| {
+            let (s, c) = (omega * t).sin_cos();
+            (c, s)
+        })
+        .collect();
     RunFeatures {
-        peaks: record::peak_features(run),
-        normal_force: run.normal_force.as_deref().and_then(|n| record::normal_force_features(run, n)),
+        peaks: record::peak_features(run, &base),
+        normal_force: run.normal_force.as_deref().and_then(|n| record::normal_force_features(run, n, &base)),
         friction: match (&run.v_m_per_s, &run.friction_force, &run.normal_force) {
             (Some(v), Some(f), Some(n)) => friction::friction_features(v, f, n),
             _ => None,

@@ -7,7 +7,7 @@ use crate::diagnose::measure::{self, Run};
 use crate::engine::reduce::circular_mean_var;
 
 /// Per-period peaks (see [`PeakFeatures`]).
-pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
+pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatures> {
     let f = run.excitation_frequency_hz;
     let n = run.t_s.len().min(run.x_m.len());
     let dt = run.sample_interval_s();
@@ -23,13 +23,12 @@ pub(super) fn peak_features(run: &Run) -> Option<PeakFeatures> {
     let windows = windows as usize;
     let mut peak = vec![f64::NEG_INFINITY; windows];
     let mut fundamental = vec![FundamentalSums::default(); windows];
-    let omega = std::f64::consts::TAU * f;
-    for i in 0..n {
-        let k = ((run.t_s[i] - t0) / period_s).floor();
-        if k >= 0.0 && (k as usize) < windows && run.x_m[i].is_finite() {
+    for ((&t, &x), &b) in run.t_s.iter().zip(&run.x_m).zip(base).take(n) {
+        let k = ((t - t0) / period_s).floor();
+        if k >= 0.0 && (k as usize) < windows && x.is_finite() {
             let k = k as usize;
-            peak[k] = peak[k].max(run.x_m[i]);
-            fundamental[k].add(omega * run.t_s[i], run.x_m[i]);
+            peak[k] = peak[k].max(x);
+            fundamental[k].add(b, x);
         }
     }
     let phases: Vec<f64> = fundamental.iter().filter_map(FundamentalSums::phase_rad).collect();
@@ -73,8 +72,8 @@ struct FundamentalSums {
 }
 
 impl FundamentalSums {
-    fn add(&mut self, theta: f64, x: f64) {
-        let (s, c) = theta.sin_cos();
+    /// Adds a sample `x` where the base's (cos Ωt, sin Ωt) is `(c, s)`.
+    fn add(&mut self, (c, s): (f64, f64), x: f64) {
         self.n += 1.0;
         self.c += c;
         self.s += s;
@@ -110,8 +109,8 @@ impl FundamentalSums {
 }
 
 /// Normal-force features (see [`NormalForceFeatures`]).
-pub(super) fn normal_force_features(run: &Run, force: &[f64]) -> Option<NormalForceFeatures> {
-    let n = force.len().min(run.t_s.len());
+pub(super) fn normal_force_features(run: &Run, force: &[f64], base: &[(f64, f64)]) -> Option<NormalForceFeatures> {
+    let n = force.len().min(run.t_s.len()).min(base.len());
     if n < 2 || force[..n].iter().any(|v| !v.is_finite()) {
         return None;
     }
@@ -128,29 +127,33 @@ pub(super) fn normal_force_features(run: &Run, force: &[f64]) -> Option<NormalFo
     let span = t[n - 1] - t0;
     let centre = 0.5 * (t[n - 1] + t0);
     let p = 2 + 2 * fitted.len();
-    let fit = (span > 0.0)
-        .then(|| {
-            least_squares(
-                n,
-                p,
-                |i, row| {
-                    row[0] = 1.0;
-                    row[1] = (t[i] - centre) / span;
-                    for (j, &k) in fitted.iter().enumerate() {
-                        let phase = std::f64::consts::TAU * k as f64 * f * (t[i] - t0);
-                        row[2 + 2 * j] = phase.cos();
-                        row[3 + 2 * j] = phase.sin();
-                    }
-                },
-                |i| force[i] - mean,
-            )
-        })
-        .flatten();
+    // cos kΩt and sin kΩt from the fundamental's by the multiple-angle
+    // recurrence (one sin/cos per sample, computed once per record).
+    let fill_row = |i: usize, row: &mut [f64]| {
+        row[0] = 1.0;
+        row[1] = (t[i] - centre) / span;
+        let (c1, s1) = base[i];
+        let (mut ck, mut sk) = (1.0, 0.0);
+        let mut k_done = 0;
+        for (j, &k) in fitted.iter().enumerate() {
+            while k_done < k {
+                (ck, sk) = (ck * c1 - sk * s1, sk * c1 + ck * s1);
+                k_done += 1;
+            }
+            row[2 + 2 * j] = ck;
+            row[3 + 2 * j] = sk;
+        }
+    };
+    let fit = (span > 0.0).then(|| least_squares(n, p, fill_row, |i| force[i] - mean)).flatten();
     let mut harmonic_amplitude_n = [None; HARMONICS];
+    let mut harmonic_phase_rad = [None; HARMONICS];
     let (mut residual_var_n2, mut drift_n_per_s) = (None, None);
     if let Some((coef, ssr)) = fit {
         for (j, &k) in fitted.iter().enumerate() {
-            harmonic_amplitude_n[k - 1] = Some(coef[2 + 2 * j].hypot(coef[3 + 2 * j]));
+            let (a, b) = (coef[2 + 2 * j], coef[3 + 2 * j]);
+            harmonic_amplitude_n[k - 1] = Some(a.hypot(b));
+            // a cos kΩt + b sin kΩt = A cos(kΩt + φ) with φ = atan2(−b, a).
+            harmonic_phase_rad[k - 1] = Some((-b).atan2(a));
         }
         residual_var_n2 = (n > p).then(|| ssr / (n - p) as f64);
         drift_n_per_s = Some(coef[1] / span);
@@ -160,6 +163,7 @@ pub(super) fn normal_force_features(run: &Run, force: &[f64]) -> Option<NormalFo
         mean_n: mean,
         var_n2,
         harmonic_amplitude_n,
+        harmonic_phase_rad,
         residual_var_n2,
         drift_n_per_s,
         drift_per_s,

@@ -46,70 +46,90 @@ pub(super) fn slope(x: &[f64], y: &[f64]) -> Option<f64> {
 }
 
 /// Linear least squares: accumulates the normal equations of `rows`
-/// (`fill(i, row)` writes row `i` of the design matrix) against `y`, and
-/// solves them by Cholesky. Returns the coefficients and the residual sum of
-/// squares, or `None` when the design is (numerically) singular.
-pub(super) fn least_squares(
+/// (`fill(i, row)` writes row `i` of the design matrix) against `y` in one
+/// pass, and solves them by Cholesky. Returns the coefficients and the
+/// residual sum of squares (from the normal equations), or `None` when the
+/// design is (numerically) singular. Up to 12 columns.
+pub(crate) fn least_squares(
     n: usize,
     p: usize,
-    mut fill: impl FnMut(usize, &mut [f64]),
+    fill: impl Fn(usize, &mut [f64]),
     y: impl Fn(usize) -> f64,
 ) -> Option<(Vec<f64>, f64)> {
-    if n < p || p == 0 {
+    // One monomorphised accumulator per width keeps the hot loop in registers.
+    match p {
+        1 => fixed::<1>(n, fill, y),
+        2 => fixed::<2>(n, fill, y),
+        3 => fixed::<3>(n, fill, y),
+        4 => fixed::<4>(n, fill, y),
+        5 => fixed::<5>(n, fill, y),
+        6 => fixed::<6>(n, fill, y),
+        7 => fixed::<7>(n, fill, y),
+        8 => fixed::<8>(n, fill, y),
+        9 => fixed::<9>(n, fill, y),
+        10 => fixed::<10>(n, fill, y),
+        11 => fixed::<11>(n, fill, y),
+        12 => fixed::<12>(n, fill, y),
+        _ => None,
+    }
+}
+
+fn fixed<const P: usize>(
+    n: usize,
+    fill: impl Fn(usize, &mut [f64]),
+    y: impl Fn(usize) -> f64,
+) -> Option<(Vec<f64>, f64)> {
+    if n < P {
         return None;
     }
-    let mut ata = vec![0.0; p * p];
-    let mut aty = vec![0.0; p];
-    let mut row = vec![0.0; p];
+    let mut ata = [[0.0f64; P]; P];
+    let mut aty = [0.0f64; P];
+    let mut yty = 0.0;
+    let mut row = [0.0f64; P];
     for i in 0..n {
         fill(i, &mut row);
         let yi = y(i);
-        for a in 0..p {
+        yty += yi * yi;
+        for a in 0..P {
             aty[a] += row[a] * yi;
             for b in 0..=a {
-                ata[a * p + b] += row[a] * row[b];
+                ata[a][b] += row[a] * row[b];
             }
         }
     }
-    // Cholesky: ata = L Lᵀ, L stored in the lower triangle.
-    let mut l = vec![0.0; p * p];
-    for a in 0..p {
+    // Cholesky: ata = L Lᵀ.
+    let mut l = [[0.0f64; P]; P];
+    for a in 0..P {
         for b in 0..=a {
-            let mut sum = ata[a * p + b];
-            for k in 0..b {
-                sum -= l[a * p + k] * l[b * p + k];
-            }
+            let mut sum = ata[a][b];
+            sum -= (0..b).map(|k| l[a][k] * l[b][k]).sum::<f64>();
             if a == b {
-                if sum.is_nan() || sum <= (1e-10 * ata[a * p + a]).max(0.0) {
+                if sum.is_nan() || sum <= (1e-10 * ata[a][a]).max(0.0) {
                     return None;
                 }
-                l[a * p + a] = sum.sqrt();
+                l[a][a] = sum.sqrt();
             } else {
-                l[a * p + b] = sum / l[b * p + b];
+                l[a][b] = sum / l[b][b];
             }
         }
     }
-    let mut z = vec![0.0; p];
-    for a in 0..p {
+    let mut z = [0.0f64; P];
+    for a in 0..P {
         let mut sum = aty[a];
         for k in 0..a {
-            sum -= l[a * p + k] * z[k];
+            sum -= l[a][k] * z[k];
         }
-        z[a] = sum / l[a * p + a];
+        z[a] = sum / l[a][a];
     }
-    let mut coef = vec![0.0; p];
-    for a in (0..p).rev() {
+    let mut coef = vec![0.0; P];
+    for a in (0..P).rev() {
         let mut sum = z[a];
-        for k in a + 1..p {
-            sum -= l[k * p + a] * coef[k];
+        for k in a + 1..P {
+            sum -= l[k][a] * coef[k];
         }
-        coef[a] = sum / l[a * p + a];
+        coef[a] = sum / l[a][a];
     }
-    let mut ssr = 0.0;
-    for i in 0..n {
-        fill(i, &mut row);
-        let fit: f64 = row.iter().zip(&coef).map(|(r, c)| r * c).sum();
-        ssr += (y(i) - fit).powi(2);
-    }
+    // The residual sum of squares without a second pass: yᵀy − ‖L⁻¹Aᵀy‖².
+    let ssr = (yty - z.iter().map(|v| v * v).sum::<f64>()).max(0.0);
     coef.iter().all(|c| c.is_finite()).then_some((coef, ssr))
 }

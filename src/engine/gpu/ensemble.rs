@@ -44,6 +44,8 @@ fn validate(job: &Job<'_>, oscillators: &[Oscillator]) -> Result<()> {
         let mut effects = o.effects.clone();
         effects.friction_offset = 0.0;
         effects.non_gaussian_strength = 0.0;
+        // Per point on the GPU too (`GridPoint`): they scale with N0.
+        effects.harmonic_amplitudes_n = [0.0; 4];
         Oscillator {
             omega_rad_per_s: 0.0,
             period_s: 0.0,
