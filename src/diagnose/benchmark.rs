@@ -219,6 +219,9 @@ pub fn run_benchmark(
         let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
         let (truth, conditions) = random_truth(seed, &planned.hidden, &settings.load_shares)?;
         let dir = settings.out.join(format!("set-{i:03}"));
+        // The truth beside (not inside) the data, for whoever checks a verdict.
+        create_dir(&dir)?;
+        write_atomically(&dir.join("truth-model.toml"), |w| w.write_all(truth.to_toml_string().as_bytes()))?;
         let set = if planned.phase_only {
             phase_only_set(&truth, &conditions, shape, seed, engine)?
         } else {

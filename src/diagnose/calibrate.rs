@@ -155,19 +155,20 @@ fn simulated_law(
 /// One step of the indirect inference, in curve space: the model's law
 /// μ(v) is moved at the measured slipping speeds' deciles by what the
 /// measured fit and the fit on its own simulated records differ by there,
-/// and eq. 7 is refitted to the moved curve (so the step cannot wander off
-/// along the directions in which a, b, c and d trade off).
+/// and a, b, d are refitted to the moved curve at the model's own Stribeck
+/// rate c (linear least squares, so the step is continuous and cannot
+/// wander off along the directions in which a, b, c and d trade off; c
+/// itself comes from the measured records' fit).
 fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) {
     let current = FrictionLaw::of(model);
     let anchors = SlipSamples {
         speed: measured.anchors_m_per_s.to_vec(),
         mu: measured.anchors_m_per_s.iter().map(|&v| current.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
     };
-    if let Some(law) = anchors.fit() {
+    if let Some(law) = anchors.fit_at(current.c).filter(|l| l.plausible()) {
         let f = &mut model.friction;
         f.a = law.a.max(0.0);
         f.b = law.b.max(-f.a);
-        f.c = law.c;
         f.d = law.d;
     }
     let f = &mut model.friction;
@@ -233,6 +234,10 @@ pub(crate) struct FrictionLaw {
     pub(crate) anchors_m_per_s: [f64; 10],
 }
 
+/// The largest |d| a fitted law may have, s²/m²: d v² then reaches 0.3 at
+/// 0.3 m/s, beyond any steel-on-steel law we know of (the paper's 0.105).
+const MAX_D_S2_PER_M2: f64 = 3.0;
+
 impl FrictionLaw {
     /// The model's law (no anchors).
     fn of(model: &Model) -> FrictionLaw {
@@ -250,7 +255,12 @@ impl FrictionLaw {
     /// steel-on-steel law. Beyond these the four terms only trade off
     /// against each other within the noise.
     fn plausible(&self) -> bool {
-        self.a >= 0.0 && self.a + self.b >= 0.0 && self.b.abs() <= 1.0 && self.d.abs() <= 10.0
+        let top = self.anchors_m_per_s[9].max(0.05);
+        self.a >= 0.0
+            && self.a + self.b >= 0.0
+            && self.b.abs() <= 1.0
+            && self.d.abs() <= MAX_D_S2_PER_M2
+            && (1..=8).all(|k| self.mu(0.25 * top * f64::from(k)) >= 0.0)
     }
 }
 
@@ -291,25 +301,42 @@ impl SlipSamples {
 
     /// Least squares at a given `c`: linear in (a, b, d) with basis
     /// (1, 1/(1 + c s), s²); at `c = 0` the Stribeck term is part of `a`
-    /// (reported as b = 0). Not constrained: as a statistic of simulated
-    /// records it must be the same function as on the measured ones.
+    /// (reported as b = 0). Where |d| comes out beyond [`MAX_D_S2_PER_M2`]
+    /// (a, b and d trading off along a direction the speeds cannot resolve)
+    /// d is held at that bound and a, b refitted. Otherwise not constrained:
+    /// as a statistic of simulated records it must be the same function as on
+    /// the measured ones.
     fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
         let n = self.mu.len();
-        let p = if c == 0.0 { 2 } else { 3 };
-        let basis = |i: usize, row: &mut [f64]| {
-            let s = self.speed[i];
-            row[0] = 1.0;
-            row[1] = s * s;
-            if p == 3 {
-                row[2] = 1.0 / (1.0 + c * s);
-            }
+        let stribeck = c != 0.0;
+        let solve = |fixed_d: Option<f64>| -> Option<(f64, f64, f64, f64, usize)> {
+            let p = 1 + usize::from(stribeck) + usize::from(fixed_d.is_none());
+            let basis = |i: usize, row: &mut [f64]| {
+                let s = self.speed[i];
+                row[0] = 1.0;
+                let mut j = 1;
+                if fixed_d.is_none() {
+                    row[j] = s * s;
+                    j += 1;
+                }
+                if stribeck {
+                    row[j] = 1.0 / (1.0 + c * s);
+                }
+            };
+            let y = |i: usize| self.mu[i] - fixed_d.map_or(0.0, |d| d * self.speed[i] * self.speed[i]);
+            let (coef, rss) = least_squares(n, p, basis, y)?;
+            let d = fixed_d.unwrap_or_else(|| coef[1]);
+            let b = if stribeck { coef[p - 1] } else { 0.0 };
+            Some((coef[0], b, d, rss, p))
         };
-        let (coef, rss) = least_squares(n, p, basis, |i| self.mu[i])?;
-        let b = if p == 3 { coef[2] } else { 0.0 };
+        let (mut a, mut b, mut d, mut rss, mut p) = solve(None)?;
+        if d.abs() > MAX_D_S2_PER_M2 {
+            (a, b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
+        }
         let mut sorted = self.speed.clone();
         sorted.sort_by(f64::total_cmp);
         let anchors_m_per_s = std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
-        Some(FrictionLaw { a: coef[0], b, c, d: coef[1], sigma: (rss / (n - p).max(1) as f64).sqrt(), anchors_m_per_s })
+        Some(FrictionLaw { a, b, c, d, sigma: (rss.max(0.0) / (n - p).max(1) as f64).sqrt(), anchors_m_per_s })
     }
 
     /// The law with the smallest residual: over [`law_c_grid`], then by

@@ -71,11 +71,15 @@ struct Trial {
     gap_fit: f64,
 }
 
-/// Evaluates one set of parameter values; `None` when they give no valid model.
+/// Evaluates one set of parameter values on top of `base` (whose friction
+/// law is the starting point of `law_steps` steps of its recalibration);
+/// `None` when they give no valid model.
+#[allow(clippy::too_many_arguments)]
 fn evaluate(
     variant: &Variant,
     values: &[f64],
     base: &Model,
+    law_steps: usize,
     slope: f64,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
@@ -85,7 +89,7 @@ fn evaluate(
     if trial.validate().is_err() {
         return Ok(None);
     }
-    let (model, scores, _) = calibrate_and_score(&trial, data, settings, engine, Some(slope), 1)?;
+    let (model, scores, _) = calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps)?;
     let gap_fit = gap_of(&scores, false);
     if std::env::var_os("STICKSLIP_DEBUG").is_some() {
         debug_trial(variant, values, &model, &scores, gap_fit);
@@ -96,7 +100,11 @@ fn evaluate(
 /// Fits one variant on top of `base` by a coordinate search on the fitting
 /// gap: from the data-driven start, each parameter in turn is stepped up or
 /// down while that helps (at most [`STEPS_PER_PARAM`] trials each), then the
-/// first parameter once more at half its step.
+/// first parameter once more at half its step. The friction law is carried
+/// from the best trial to the next (two recalibration steps at the start,
+/// one per trial after), so over a search it converges to the law the data
+/// imply *with* this effect instead of staying near the baseline's, which
+/// the effect itself may have distorted.
 fn fit_variant(
     variant: &Variant,
     base: &Model,
@@ -105,7 +113,7 @@ fn fit_variant(
     settings: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<Option<Trial>> {
-    let Some(mut best) = evaluate(variant, &variant.start(), base, slope, data, settings, engine)? else {
+    let Some(mut best) = evaluate(variant, &variant.start(), base, 2, slope, data, settings, engine)? else {
         return Ok(None);
     };
     let try_move = |best: &mut Trial, i: usize, k: f64| -> Result<bool> {
@@ -114,7 +122,7 @@ fn fit_variant(
         if values[i] == best.values[i] {
             return Ok(false);
         }
-        match evaluate(variant, &values, base, slope, data, settings, engine)? {
+        match evaluate(variant, &values, &best.model, 1, slope, data, settings, engine)? {
             Some(t) if t.gap_fit < best.gap_fit => {
                 *best = t;
                 Ok(true)
