@@ -270,7 +270,11 @@ pub trait Backend: Send + Sync {
 /// The `--backend` choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendChoice {
-    /// A hardware GPU, else a software Vulkan adapter (lavapipe), else the CPU.
+    /// A hardware GPU, else the CPU reference. A software Vulkan adapter
+    /// (lavapipe) is not taken: it runs the WGSL kernel on the same CPU cores
+    /// more slowly than the f64 reference does (main job on the 2-core
+    /// machine, `benches/RESULTS.md`), so it is only used when asked for
+    /// with `--backend gpu`.
     Auto,
     /// A GPU adapter (hardware or software); an error when there is none.
     Gpu,
@@ -314,7 +318,11 @@ impl Engine {
                     let description = match ctx.adapter_class() {
                         gpu::AdapterClass::Hardware => format!("GPU: {}", ctx.describe()),
                         gpu::AdapterClass::Software => {
-                            format!("GPU: no hardware GPU found; using the software Vulkan adapter {}", ctx.describe())
+                            return Ok(Engine::cpu(&format!(
+                                "no hardware GPU; the only adapter is the software {}, which is slower than this \
+                                 integrator on the same cores (--backend gpu uses it anyway)",
+                                ctx.describe()
+                            )));
                         }
                     };
                     Ok(Engine::gpu_described(ctx, options, description))
