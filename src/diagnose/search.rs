@@ -40,6 +40,11 @@ pub(crate) const MIN_LEADING_SHARE: f64 = 0.3;
 /// Each further effect must close at least this share of it.
 pub(crate) const MIN_FURTHER_SHARE: f64 = 0.05;
 
+/// The mean Huber loss of z-scores under pure noise with the spread known
+/// (about 0.98, see [`crate::diagnose::score::HUBER_K`]): the lowest gap a
+/// model can be expected to reach.
+const HUBER_FLOOR: f64 = 0.98;
+
 /// Trials per parameter in the coordinate search.
 const STEPS_PER_PARAM: usize = 3;
 
@@ -269,6 +274,12 @@ pub(crate) fn select(
     let (mut model, mut scores) = (baseline.clone(), baseline_scores.to_vec());
     while steps.len() < MAX_EFFECTS {
         let (g_fit, g_key) = (gap_of(&scores, false), key_of(&scores));
+        // No effect can pass the gate below when the key gap is already
+        // within its noise of the floor that even the true model only
+        // reaches in expectation: skip the search.
+        if g_key - HUBER_FLOOR <= noise_heldout {
+            break;
+        }
         let named: Vec<Effect> = steps.iter().map(|s| s.candidate.effect).collect();
         let candidates = round(&model, &scores, &named, slope, data, settings, engine, progress)?;
         if steps.is_empty() {
