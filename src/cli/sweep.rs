@@ -8,7 +8,7 @@ use clap::Args;
 
 use super::{BackendArg, ModelArgs, progress_bar};
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
-use crate::engine::{Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
+use crate::engine::{Engine, GpuOptions, Job, Model, Oscillator, RunPlan};
 use crate::io::{OutputSet, excerpt, owned};
 use crate::sweep::{self, Grid, RunIdentity, Shard, SweepSettings, write_output_set};
 
@@ -155,17 +155,8 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     }
     let conditions = &all_conditions[shard.points(all_conditions.len())];
     if !conditions.is_empty() {
-        let points: Vec<Point> = conditions.iter().map(|&c| Point::steady(&model, c)).collect();
-        let job = Job {
-            model: &model,
-            points: &points,
-            realisations: settings.realisations,
-            first_realisation: 0,
-            seed: settings.seed,
-            plan: settings.plan,
-            record: Record::Sums,
-        };
-        job.validate()?;
+        let points = sweep::steady_points(&model, conditions);
+        sweep::sweep_job(&model, &points, &settings).validate()?;
     }
     let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
     let engine = Engine::open(args.backend.into(), GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;

@@ -87,6 +87,24 @@ impl SweepSettings {
     }
 }
 
+/// Every condition's point, started from its frictionless steady state.
+pub fn steady_points(model: &Model, conditions: &[Condition]) -> Vec<Point> {
+    conditions.iter().map(|&c| Point::steady(model, c)).collect()
+}
+
+/// The job a sweep runs on `points` (sums and histograms, realisations from 0).
+pub fn sweep_job<'a>(model: &'a Model, points: &'a [Point], settings: &SweepSettings) -> Job<'a> {
+    Job {
+        model,
+        points,
+        realisations: settings.realisations,
+        first_realisation: 0,
+        seed: settings.seed,
+        plan: settings.plan,
+        record: Record::Sums,
+    }
+}
+
 /// Runs every grid point on `engine` and reduces it. `progress(done, total)`
 /// reports work. Every point starts from its frictionless steady state.
 pub fn run_sweep(
@@ -97,17 +115,8 @@ pub fn run_sweep(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<SweepResult> {
     settings.validate()?;
-    let points: Vec<Point> = conditions.iter().map(|&c| Point::steady(model, c)).collect();
-    let job = Job {
-        model,
-        points: &points,
-        realisations: settings.realisations,
-        first_realisation: 0,
-        seed: settings.seed,
-        plan: settings.plan,
-        record: Record::Sums,
-    };
-    let accumulators = engine.sums(&job, progress)?;
+    let points = steady_points(model, conditions);
+    let accumulators = engine.sums(&sweep_job(model, &points, settings), progress)?;
     Ok(SweepResult { conditions: conditions.to_vec(), accumulators })
 }
 
