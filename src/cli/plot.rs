@@ -1,0 +1,115 @@
+//! `stickslip plot`: redraws a sweep's or a diagnosis's figures from its
+//! output directory, without simulating.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+
+use crate::diagnose::measure::read_measurement_set;
+use crate::diagnose::report::{ChartData, write_charts};
+use crate::sweep::plot::{PlotOptions, SizePreset, measured_points, write_sweep_plots_with};
+use crate::sweep::read_accumulators;
+
+#[derive(Args, Debug)]
+pub(crate) struct PlotArgs {
+    /// A sweep or merge output directory (read from its verified accumulators.json) or a diagnosis
+    /// output directory (read from its scores.csv and report.json).
+    pub(crate) dir: PathBuf,
+    /// Where the figures go (created if needed); by default they replace the ones in DIR.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// A measurement set (a directory with manifest.json) whose statistics are drawn over Figures 8 and 9:
+    /// summary rows as mean ± standard error, records as their per-period peaks.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) measured: Option<PathBuf>,
+    /// What the measured data are called in the legends.
+    #[arg(long, default_value = "measured", value_name = "TEXT")]
+    pub(crate) measured_label: String,
+    /// Figure size: screen (1000 px), single or double journal column at 300 dpi, or a 16:9 slide.
+    #[arg(long, value_enum, default_value = "screen")]
+    pub(crate) size: SizeArg,
+    /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
+    #[arg(long, default_value_t = 7.0, allow_negative_numbers = true)]
+    pub(crate) fig8_frequency: f64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum SizeArg {
+    /// 1000 px wide, for a screen.
+    Screen,
+    /// One journal column (3.5 in at 300 dpi).
+    Single,
+    /// Two journal columns (7.2 in at 300 dpi).
+    Double,
+    /// A 16:9 slide (1920 × 1080).
+    Slide,
+}
+
+impl From<SizeArg> for SizePreset {
+    fn from(s: SizeArg) -> Self {
+        match s {
+            SizeArg::Screen => SizePreset::Screen,
+            SizeArg::Single => SizePreset::Single,
+            SizeArg::Double => SizePreset::Double,
+            SizeArg::Slide => SizePreset::Slide,
+        }
+    }
+}
+
+pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
+    if !args.fig8_frequency.is_finite() {
+        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
+    }
+    let out = args.out.clone().unwrap_or_else(|| args.dir.clone());
+    let files = if args.dir.join("accumulators.json").is_file() {
+        let (_, result) = read_accumulators(&args.dir)?;
+        let measured = match &args.measured {
+            Some(dir) => {
+                let points = measured_points(&read_measurement_set(dir)?);
+                if points.is_empty() {
+                    anyhow::bail!("invalid --measured {}: the set has no peak statistics to draw", dir.display());
+                }
+                for p in &points {
+                    let on_grid = result.conditions.iter().any(|c| {
+                        (c.excitation_frequency_hz - p.excitation_frequency_hz).abs()
+                            <= 1e-6 * p.excitation_frequency_hz
+                            && (c.normal_force_n - p.normal_force_n).abs() <= 0.01 * p.normal_force_n.abs().max(1e-9)
+                    });
+                    if !on_grid {
+                        super::info(&format!(
+                            "note: the measured condition {} Hz, {} N is not a grid point: drawn in Figure 9, not in Figure 8",
+                            p.excitation_frequency_hz, p.normal_force_n
+                        ));
+                    }
+                }
+                points
+            }
+            None => Vec::new(),
+        };
+        crate::io::create_dir(&out)?;
+        let opts = PlotOptions {
+            fig8_frequency_hz: args.fig8_frequency,
+            size: args.size.into(),
+            measured: &measured,
+            measured_label: &args.measured_label,
+        };
+        write_sweep_plots_with(&out, &result, &opts)?
+    } else if args.dir.join("report.json").is_file() {
+        if args.measured.is_some() {
+            anyhow::bail!("invalid --measured: a diagnosis already compares with its measurement set");
+        }
+        let data = ChartData::read(&args.dir)?;
+        crate::io::create_dir(&out)?;
+        write_charts(&out, &data)?
+    } else {
+        anyhow::bail!(
+            "{}: neither a sweep output directory (accumulators.json) nor a diagnosis output directory (report.json)",
+            args.dir.display()
+        );
+    };
+    let names: Vec<String> =
+        files.iter().filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned())).collect();
+    println!("wrote {} to {}", names.join(", "), out.display());
+    Ok(())
+}
