@@ -248,8 +248,17 @@ pub mod owned {
         "fig8.svg",
     ];
     /// `diagnose`.
-    pub const DIAGNOSIS: &[&str] =
-        &["report.json", "report.html", "baseline-model.toml", "fitted-model.toml", "gap.png", "gap.svg"];
+    pub const DIAGNOSIS: &[&str] = &[
+        "report.json",
+        "report.html",
+        "baseline-model.toml",
+        "fitted-model.toml",
+        "scores.csv",
+        "gap.png",
+        "gap.svg",
+        "comparison.png",
+        "comparison.svg",
+    ];
     /// `simulate`.
     pub const SIMULATION: &[&str] = &["manifest.json", "model.toml", "run-*.csv"];
 }

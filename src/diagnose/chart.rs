@@ -1,77 +1,404 @@
-//! The report's chart: the worst observables' |z| under the calibrated
-//! baseline and under the fitted model.
+//! The report's charts, drawn from the per-unit scores (which `diagnose`
+//! also writes as `scores.csv`, so `stickslip plot` can redraw them):
+//! - `gap`: the worst observables' |z| under the calibrated baseline and
+//!   under the fitted model, one labelled row each;
+//! - `comparison`: the mean peak amplitude per condition, measured against
+//!   the baseline and the fitted model, in mm, with the simulator's spread.
 
 use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use crate::diagnose::Diagnosis;
-use crate::diagnose::score::Score;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::figure::{FONT, colour, legend_box, plot_error, render};
+use crate::sweep::plot::{decade_tick, tick};
 
-fn gap_chart<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, d: &Diagnosis) -> Result<()>
+/// One scored (condition, observable) unit: the measured value and what the
+/// baseline and the fitted model simulate, in the observable's unit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScoreRow {
+    pub excitation_frequency_hz: f64,
+    pub normal_force_n: f64,
+    pub observable: String,
+    pub heldout: bool,
+    pub measured: f64,
+    pub baseline_simulated: f64,
+    pub baseline_z: f64,
+    pub fitted_simulated: Option<f64>,
+    pub fitted_z: Option<f64>,
+}
+
+impl ScoreRow {
+    /// The spread of measured − simulated (|difference| / |z|), in the
+    /// observable's unit; `None` where z is 0.
+    pub fn spread(&self) -> Option<f64> {
+        let s = (self.measured - self.baseline_simulated).abs() / self.baseline_z.abs();
+        (self.baseline_z != 0.0 && s.is_finite()).then_some(s)
+    }
+
+    fn fitted_spread(&self) -> Option<f64> {
+        let (sim, z) = (self.fitted_simulated?, self.fitted_z?);
+        let s = (self.measured - sim).abs() / z.abs();
+        (z != 0.0 && s.is_finite()).then_some(s).or_else(|| self.spread())
+    }
+
+    fn label(&self) -> String {
+        format!(
+            "{} at {} Hz, {} N{}",
+            self.observable,
+            tick((self.excitation_frequency_hz * 100.0).round() / 100.0),
+            tick((self.normal_force_n * 100.0).round() / 100.0),
+            if self.heldout { " (held out)" } else { "" }
+        )
+    }
+}
+
+/// What the charts draw: the verdict's name and every scored unit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChartData {
+    pub verdict: String,
+    pub rows: Vec<ScoreRow>,
+}
+
+impl ChartData {
+    pub fn from_diagnosis(d: &Diagnosis) -> ChartData {
+        let rows = d
+            .baseline_scores
+            .iter()
+            .map(|s| {
+                let fitted = d.fitted_scores.iter().find(|f| {
+                    f.observable == s.observable
+                        && f.excitation_frequency_hz == s.excitation_frequency_hz
+                        && f.normal_force_n == s.normal_force_n
+                        && f.heldout == s.heldout
+                });
+                ScoreRow {
+                    excitation_frequency_hz: s.excitation_frequency_hz,
+                    normal_force_n: s.normal_force_n,
+                    observable: s.observable.name().to_string(),
+                    heldout: s.heldout,
+                    measured: s.measured,
+                    baseline_simulated: s.simulated,
+                    baseline_z: s.z,
+                    fitted_simulated: fitted.map(|f| f.simulated),
+                    fitted_z: fitted.map(|f| f.z),
+                }
+            })
+            .collect();
+        ChartData { verdict: d.verdict_names(), rows }
+    }
+
+    /// Writes the rows as `scores.csv`.
+    pub fn write_csv(&self, path: &Path) -> Result<()> {
+        crate::io::write_atomically(path, |w| {
+            let mut csv = csv::Writer::from_writer(w);
+            for row in &self.rows {
+                csv.serialize(row).map_err(std::io::Error::other)?;
+            }
+            csv.flush()
+        })
+    }
+
+    /// Reads `DIR/scores.csv` and the verdict of `DIR/report.json`.
+    pub fn read(dir: &Path) -> Result<ChartData> {
+        let path = dir.join("scores.csv");
+        let refuse = |line: Option<u64>, message: String| Error::Measurement { file: path.clone(), line, message };
+        let bytes = crate::io::read_bounded(&path, 256 << 20).map_err(|e| {
+            refuse(
+                None,
+                format!("cannot read it ({e}); a diagnosis written before scores.csv existed cannot be redrawn"),
+            )
+        })?;
+        let mut rows = Vec::new();
+        for (i, row) in csv::Reader::from_reader(bytes.as_slice()).deserialize().enumerate() {
+            rows.push(row.map_err(|e| refuse(Some(i as u64 + 2), e.to_string()))?);
+        }
+        let report_path = dir.join("report.json");
+        let report: serde_json::Value = crate::io::read_bounded(&report_path, 256 << 20)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .unwrap_or_default();
+        let verdict = report
+            .pointer("/verdict/effects")
+            .and_then(|e| e.as_array())
+            .filter(|e| !e.is_empty())
+            .map(|e| e.iter().filter_map(|x| x.get("effect")?.as_str()).collect::<Vec<_>>().join(" + "))
+            .or_else(|| report.pointer("/verdict/effect").and_then(|e| e.as_str()).map(str::to_string))
+            .unwrap_or_else(|| "?".into());
+        Ok(ChartData { verdict, rows })
+    }
+
+    /// The worst units under the baseline, largest |z| first (at most `n`).
+    fn worst(&self, n: usize) -> Vec<&ScoreRow> {
+        let mut worst: Vec<&ScoreRow> = self.rows.iter().filter(|r| r.baseline_z.is_finite()).collect();
+        worst.sort_by(|a, b| b.baseline_z.abs().total_cmp(&a.baseline_z.abs()));
+        worst.truncate(n);
+        worst
+    }
+
+    /// The peak-mean units, one per condition (the first scored), by frequency then force.
+    fn peak_means(&self) -> Vec<&ScoreRow> {
+        let mut rows: Vec<&ScoreRow> = Vec::new();
+        for r in self.rows.iter().filter(|r| r.observable == "peak_mean_m" && r.measured.is_finite()) {
+            if !rows
+                .iter()
+                .any(|q| q.excitation_frequency_hz == r.excitation_frequency_hz && q.normal_force_n == r.normal_force_n)
+            {
+                rows.push(r);
+            }
+        }
+        rows.sort_by(|a, b| {
+            a.excitation_frequency_hz
+                .total_cmp(&b.excitation_frequency_hz)
+                .then(a.normal_force_n.total_cmp(&b.normal_force_n))
+        });
+        rows.truncate(MAX_COMPARISON_CONDITIONS);
+        rows
+    }
+}
+
+/// Rows of the gap chart.
+const GAP_ROWS: usize = 12;
+/// Conditions of the comparison chart.
+const MAX_COMPARISON_CONDITIONS: usize = 24;
+/// The chart's width, px.
+const WIDTH: u32 = 1000;
+
+/// Approximate width of `text` at `size` px of DejaVu Sans.
+fn text_width(text: &str, size: u32) -> u32 {
+    (text.chars().count() as f64 * f64::from(size) * 0.56).ceil() as u32
+}
+
+/// Empty rows above the bars, where the legend goes.
+const LEGEND_ROWS: f64 = 2.0;
+
+fn gap_height(d: &ChartData) -> u32 {
+    110 + (40.0 * (d.worst(GAP_ROWS).len().max(1) as f64 + LEGEND_ROWS)) as u32
+}
+
+/// Horizontal bars, one row per unit, its label in full on the left; |z| on
+/// a log axis; the dashed line at |z| = 3 is where a departure starts.
+fn gap_chart<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, d: &ChartData) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("gap", e);
-    let mut worst: Vec<&Score> = d.baseline_scores.iter().collect();
-    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    worst.truncate(12);
-    let fitted_z = |s: &Score| {
-        d.fitted_scores
-            .iter()
-            .find(|f| {
-                f.observable == s.observable
-                    && f.excitation_frequency_hz == s.excitation_frequency_hz
-                    && f.normal_force_n == s.normal_force_n
-                    && f.heldout == s.heldout
-            })
-            .map_or(0.0, |f| f.z.abs())
-    };
-    let top = worst.iter().map(|s| s.z.abs()).fold(3.5, f64::max) * 1.1;
+    let worst = d.worst(GAP_ROWS);
+    let labels: Vec<String> = worst.iter().map(|r| r.label()).collect();
+    let label_area = labels.iter().map(|l| text_width(l, 13)).max().unwrap_or(100).clamp(100, WIDTH / 2) + 16;
     let n = worst.len().max(1);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("|z| of the worst observables: baseline vs fitted ({})", d.verdict_name()), (FONT, 20))
-        .margin(12)
-        .x_label_area_size(150)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..n as f64, (0.1..top).log_scale())
-        .map_err(e)?;
-    let labels: Vec<String> = worst
+    let z_max = worst
         .iter()
-        .map(|s| format!("{} @ {:.2} Hz, {:.2} N", s.observable, s.excitation_frequency_hz, s.normal_force_n))
-        .collect();
+        .flat_map(|r| [r.baseline_z.abs(), r.fitted_z.map_or(0.0, f64::abs)])
+        .filter(|z| z.is_finite())
+        .fold(3.0, f64::max);
+    let hi = 10f64.powf((z_max * 1.5).log10().ceil());
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("|z| of the worst observables: calibrated baseline vs fitted ({})", d.verdict), (FONT, 18))
+        .margin(12)
+        .margin_right(24)
+        .x_label_area_size(44)
+        .y_label_area_size(label_area)
+        .build_cartesian_2d((0.1..hi).log_scale(), 0.0..n as f64 + LEGEND_ROWS)
+        .map_err(e)?;
+    let to_row = |y: f64| n as f64 - 0.5 - y;
     chart
         .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(n)
-        .x_label_formatter(&|x| labels.get(x.floor() as usize).cloned().unwrap_or_default())
-        .x_label_style((FONT, 11).into_font().transform(FontTransform::Rotate90))
-        .y_desc("|z| (simulator's replicate spreads)")
-        .label_style((FONT, 12))
+        .disable_y_mesh()
+        .y_labels(2 * (n + LEGEND_ROWS as usize) + 1)
+        .y_label_formatter(&|y| {
+            let i = to_row(*y).round();
+            if (to_row(*y) - i).abs() < 1e-6 && i >= 0.0 {
+                labels.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .x_label_formatter(&|x| {
+            let t = decade_tick(*x);
+            if t.is_empty() { t } else { tick(*x) }
+        })
+        .x_desc("|z| = |measured − simulated| / simulator's spread (log scale)")
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
         .draw()
         .map_err(e)?;
+    let bar = |i: usize, z: f64, upper: bool| {
+        let top = n as f64 - i as f64 - if upper { 0.1 } else { 0.5 };
+        [(0.1, top - 0.4), (z.abs().clamp(0.1, hi), top)]
+    };
     chart
-        .draw_series(worst.iter().enumerate().map(|(i, s)| {
-            Rectangle::new([(i as f64 + 0.1, 0.1), (i as f64 + 0.48, s.z.abs().max(0.1))], colour(1).filled())
-        }))
+        .draw_series(
+            worst.iter().enumerate().map(|(i, r)| Rectangle::new(bar(i, r.baseline_z, true), colour(1).filled())),
+        )
         .map_err(e)?
-        .label("baseline")
+        .label("calibrated baseline")
         .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour(1).filled()));
     chart
-        .draw_series(worst.iter().enumerate().map(|(i, s)| {
-            Rectangle::new([(i as f64 + 0.52, 0.1), (i as f64 + 0.9, fitted_z(s).max(0.1))], colour(0).filled())
-        }))
+        .draw_series(
+            worst
+                .iter()
+                .enumerate()
+                .filter_map(|(i, r)| Some(Rectangle::new(bar(i, r.fitted_z?, false), colour(0).filled()))),
+        )
         .map_err(e)?
-        .label("fitted")
+        .label(format!("fitted ({})", d.verdict))
         .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour(0).filled()));
-    chart.draw_series(LineSeries::new(vec![(0.0, 3.0), (n as f64, 3.0)], BLACK.stroke_width(1))).map_err(e)?;
+    chart
+        .draw_series(DashedLineSeries::new(
+            vec![(3.0, 0.0), (3.0, n as f64 + LEGEND_ROWS)],
+            6,
+            4,
+            BLACK.stroke_width(1),
+        ))
+        .map_err(e)?
+        .label("|z| = 3: beyond it, a departure from the data")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], BLACK.stroke_width(1)));
     legend_box(&mut chart, 13, SeriesLabelPosition::UpperRight, "gap")
 }
 
-/// Writes `gap.png` and `gap.svg`: the worst observables' |z| before and after.
+/// Measured, baseline and fitted mean peak per condition (mm); the bars on
+/// the simulated values are ± the simulator's spread of the difference.
+fn comparison_chart<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, d: &ChartData) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("comparison", e);
+    let rows = d.peak_means();
+    let n = rows.len().max(1);
+    let mm = |v: f64| v * 1e3;
+    let mut values = Vec::new();
+    for r in &rows {
+        let s = r.spread().unwrap_or(0.0);
+        values.extend([mm(r.measured), mm(r.baseline_simulated - s), mm(r.baseline_simulated + s)]);
+        if let Some(f) = r.fitted_simulated {
+            let s = r.fitted_spread().unwrap_or(0.0);
+            values.extend([mm(f - s), mm(f + s)]);
+        }
+    }
+    let values: Vec<f64> = values.into_iter().filter(|v| v.is_finite()).collect();
+    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let (lo, hi) = if lo < hi {
+        let pad = 0.08 * (hi - lo);
+        (lo - pad, hi + pad)
+    } else if lo.is_finite() {
+        (lo - 0.5, lo + 0.5)
+    } else {
+        (0.0, 1.0)
+    };
+    let labels: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            format!(
+                "{} Hz, {} N",
+                tick((r.excitation_frequency_hz * 100.0).round() / 100.0),
+                tick((r.normal_force_n * 100.0).round() / 100.0)
+            )
+        })
+        .collect();
+    let rotate = n > 6;
+    let x_area = if rotate { labels.iter().map(|l| text_width(l, 12)).max().unwrap_or(60) + 40 } else { 50 };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("Mean peak amplitude per condition: measured, baseline and fitted ({})", d.verdict),
+            (FONT, 18),
+        )
+        .margin(12)
+        .margin_right(24)
+        .x_label_area_size(x_area)
+        .y_label_area_size(70)
+        .build_cartesian_2d(-0.5..n as f64 - 0.5, lo..hi)
+        .map_err(e)?;
+    let label_style = if rotate {
+        (FONT, 12).into_font().transform(FontTransform::Rotate90).into_text_style(&root)
+    } else {
+        (FONT, 13).into_font().into_text_style(&root)
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n + 1)
+        .x_label_formatter(&|x| {
+            let i = x.round();
+            if (x - i).abs() < 1e-6 && i >= 0.0 {
+                labels.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .y_label_formatter(&|y| tick(*y))
+        .y_labels(8)
+        .light_line_style(BLACK.mix(0.04))
+        .x_label_style(label_style)
+        .y_label_style((FONT, 13))
+        .y_desc("mean peak amplitude (mm)")
+        .axis_desc_style((FONT, 14))
+        .draw()
+        .map_err(e)?;
+    let black = BLACK;
+    chart
+        .draw_series(
+            rows.iter().enumerate().map(|(i, r)| Circle::new((i as f64 - 0.22, mm(r.measured)), 6, black.filled())),
+        )
+        .map_err(e)?
+        .label("measured")
+        .legend(move |(x, y)| Circle::new((x + 7, y), 6, black.filled()));
+    let red = colour(1);
+    let blue = colour(0);
+    let square =
+        |x: f64, v: f64, c: RGBColor| EmptyElement::at((x, mm(v))) + Rectangle::new([(-5, -5), (5, 5)], c.filled());
+    chart.draw_series(rows.iter().enumerate().map(|(i, r)| square(i as f64, r.baseline_simulated, red))).map_err(e)?;
+    chart
+        .draw_series(
+            rows.iter().enumerate().filter_map(|(i, r)| Some(square(i as f64 + 0.22, r.fitted_simulated?, blue))),
+        )
+        .map_err(e)?;
+    chart
+        .draw_series(rows.iter().enumerate().map(|(i, r)| {
+            let s = r.spread().unwrap_or(0.0);
+            let v = r.baseline_simulated;
+            ErrorBar::new_vertical(i as f64, mm(v - s), mm(v), mm(v + s), red.stroke_width(2), 10)
+        }))
+        .map_err(e)?
+        .label("calibrated baseline ± spread")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], red.filled()));
+    chart
+        .draw_series(rows.iter().enumerate().filter_map(|(i, r)| {
+            let v = r.fitted_simulated?;
+            let s = r.fitted_spread().unwrap_or(0.0);
+            Some(ErrorBar::new_vertical(i as f64 + 0.22, mm(v - s), mm(v), mm(v + s), blue.stroke_width(2), 10))
+        }))
+        .map_err(e)?
+        .label(format!("fitted ({}) ± spread", d.verdict))
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], blue.filled()));
+    legend_box(&mut chart, 13, SeriesLabelPosition::UpperRight, "comparison")
+}
+
+fn comparison_height(d: &ChartData) -> u32 {
+    let rotate = d.peak_means().len() > 6;
+    if rotate { 620 } else { 500 }
+}
+
+/// Writes `gap.png`/`gap.svg` and, when the set has mean peaks,
+/// `comparison.png`/`comparison.svg`; returns the files.
+pub fn write_charts(dir: &Path, d: &ChartData) -> Result<Vec<PathBuf>> {
+    let mut files = render(dir, "gap", (WIDTH, gap_height(d)), &|r| gap_chart(r, d), &|r| gap_chart(r, d))?;
+    if !d.peak_means().is_empty() {
+        files.extend(render(dir, "comparison", (WIDTH, comparison_height(d)), &|r| comparison_chart(r, d), &|r| {
+            comparison_chart(r, d)
+        })?);
+    }
+    Ok(files)
+}
+
+/// Writes the charts of a diagnosis and its `scores.csv`.
 pub(crate) fn write_gap_chart(dir: &Path, d: &Diagnosis) -> Result<Vec<PathBuf>> {
-    render(dir, "gap", (1000, 700), &|r| gap_chart(r, d), &|r| gap_chart(r, d))
+    let data = ChartData::from_diagnosis(d);
+    data.write_csv(&dir.join("scores.csv"))?;
+    let mut files = write_charts(dir, &data)?;
+    files.push(dir.join("scores.csv"));
+    Ok(files)
 }

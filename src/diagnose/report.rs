@@ -261,9 +261,32 @@ fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
+pub use crate::diagnose::chart::{ChartData, ScoreRow, write_charts};
+
+/// How a diagnosis was run, for the HTML report's header (report.json keeps
+/// its keys; these are the command line's facts).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunInfo {
+    /// The seed of the simulated replicates.
+    pub seed: Option<u64>,
+    /// The backend line (`engine.description()`).
+    pub backend: Option<String>,
+}
+
 /// Writes `report.json`, `baseline-model.toml`, `fitted-model.toml`,
-/// `report.html` and `gap.png`/`gap.svg` into `out`; returns the report.
+/// `report.html`, `scores.csv` and the charts into `out`; returns the report.
 pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed_s: f64) -> Result<Report> {
+    write_diagnosis_with(out, diagnosis, source, elapsed_s, &RunInfo::default())
+}
+
+/// [`write_diagnosis`], with the run's seed and backend in the HTML report.
+pub fn write_diagnosis_with(
+    out: &Path,
+    diagnosis: &Diagnosis,
+    source: &Path,
+    elapsed_s: f64,
+    run: &RunInfo,
+) -> Result<Report> {
     // The set is built beside `out` and swapped in whole; a set the caller
     // prepared (the command line, before computing) is written straight into.
     let set = OutputSet::prepare(out, "output directory", owned::DIAGNOSIS, &[source])?;
@@ -289,38 +312,131 @@ pub fn write_diagnosis(out: &Path, diagnosis: &Diagnosis, source: &Path, elapsed
         )?;
         w.write_all(diagnosis.fitted.to_toml_string().as_bytes())
     })?;
-    chart::write_gap_chart(out, diagnosis)?;
-    let html = html(diagnosis, &report);
+    let files = chart::write_gap_chart(out, diagnosis)?;
+    let has_comparison = files.iter().any(|f| f.file_name().is_some_and(|n| n == "comparison.png"));
+    let html = html(diagnosis, &report, run, has_comparison);
     write_atomically(&out.join("report.html"), |w| w.write_all(html.as_bytes()))?;
     set.commit()?;
     Ok(report)
 }
 
-fn html(d: &Diagnosis, report: &Report) -> String {
+/// A fitted parameter's unit and meaning, by its name.
+pub fn parameter_meaning(name: &str) -> &'static str {
+    match name {
+        "scale" => "–, a factor on the harmonics' amplitudes (1 = as estimated from the data)",
+        "strength" => "–, the strength of the effect's shape (skew, tail weight or slope; 0 = off)",
+        "load_exponent" => "–, how the strength grows with load: × (N0 / reference)^exponent",
+        "length_m" => "m, the slip distance over which friction builds up",
+        "time_constant_s" => "s, the memory time of friction",
+        "correlation_time_s" => "s, how long the friction noise stays correlated",
+        "coloured_share" => "–, the share (0–1) of the noise variance that is correlated",
+        "excess" => "–, how much the static friction coefficient exceeds the sliding one",
+        "release_length_m" => "m, the slip over which the static excess fades",
+        "dwell_time_s" => "s, how long the block must stick for the static excess to grow",
+        "strength_per_n" => "1/N, the change of the friction coefficient per newton of normal force",
+        "exponent" => "–, the power of the load dependence",
+        "rate_per_s" => "1/s, the relative change of the normal force per second",
+        _ => "",
+    }
+}
+
+/// A number with about four significant digits and no e-notation for
+/// ordinary magnitudes.
+fn sig(v: f64) -> String {
+    if !v.is_finite() {
+        return "–".into();
+    }
+    let a = v.abs();
+    if a == 0.0 {
+        return "0".into();
+    }
+    if !(1e-4..1e6).contains(&a) {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).clamp(0, 8) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
+/// A value of `observable` in a readable unit: lengths in mm, their squares
+/// in mm², angles in degrees, forces in N.
+pub fn readable(observable: &str, v: f64) -> String {
+    let ends = |suffix: &str| observable.ends_with(suffix);
+    if ends("_m2") {
+        format!("{} mm²", sig(v * 1e6))
+    } else if ends("_m") {
+        format!("{} mm", sig(v * 1e3))
+    } else if ends("_deg2") {
+        format!("{} deg²", sig(v))
+    } else if ends("_deg") {
+        format!("{}°", sig(v))
+    } else if ends("_n_per_s") {
+        format!("{} N/s", sig(v))
+    } else if ends("_n2") {
+        format!("{} N²", sig(v))
+    } else if ends("_n") {
+        format!("{} N", sig(v))
+    } else if ends("_per_s") {
+        format!("{} 1/s", sig(v))
+    } else {
+        sig(v)
+    }
+}
+
+fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> String {
     let gap = &report.gap;
     let num = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
+    let params = |p: &BTreeMap<String, f64>| {
+        p.iter()
+            .map(|(k, v)| {
+                let unit = parameter_meaning(k);
+                if unit.is_empty() {
+                    format!("{} = {}", escape(k), sig(*v))
+                } else {
+                    format!("{} = {} <span class=\"note\">({})</span>", escape(k), sig(*v), escape(unit))
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("<br>")
+    };
     let mut s = String::new();
     s.push_str("<!doctype html><html><head><meta charset=\"utf-8\"><title>stickslip diagnosis</title><style>");
-    s.push_str("body{font-family:sans-serif;max-width:960px;margin:2em auto;color:#222}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.4em}");
+    s.push_str("body{font-family:'DejaVu Sans',sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right;vertical-align:top}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.4em}.note{color:#555;font-size:0.9em}.meta{color:#555;font-size:0.9em;border-bottom:1px solid #ddd;padding-bottom:0.6em}img{max-width:100%;height:auto}");
     s.push_str("</style></head><body><h1>Diagnosis of the sim-to-real gap</h1>");
+    let elapsed = if report.elapsed_s >= 120.0 {
+        format!("{:.1} min", report.elapsed_s / 60.0)
+    } else {
+        format!("{:.1} s", report.elapsed_s)
+    };
+    s.push_str(&format!(
+        "<p class=\"meta\">stickslip {} · measurement set <code>{}</code> · seed {} · backend {} · run time {}</p>",
+        env!("CARGO_PKG_VERSION"),
+        escape(&report.source),
+        run.seed.map_or("(not recorded)".to_string(), |x| x.to_string()),
+        escape(run.backend.as_deref().unwrap_or("(not recorded)")),
+        elapsed
+    ));
     s.push_str(&format!(
         "<p class=\"verdict\">Verdict: <b>{}</b> (confidence {:.2})</p>",
         escape(&d.verdict_names()),
         d.confidence
     ));
-    if !d.effects.is_empty() {
-        s.push_str("<table><tr><th>effect</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>parameters</th></tr>");
+    if d.effects.is_empty() {
+        s.push_str("<p>The calibrated baseline model explains the data: no unmodelled effect lowered the gap on the held-out units by more than noise does.</p>");
+    } else {
+        s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
             s.push_str(&format!(
-                "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td><td style=\"text-align:left\">{}</td></tr>",
+                "<tr><td><b>{}</b></td><td style=\"text-align:left\">{}</td><td>{}</td><td>{:.2}</td><td>{:.0}%</td><td style=\"text-align:left\">{}</td></tr>",
                 escape(e.effect.name()),
+                escape(e.effect.meaning()),
                 escape(e.form),
                 e.confidence,
-                e.share,
-                escape(&e.parameters.iter().map(|(k, v)| format!("{k} = {v:.4e}")).collect::<Vec<_>>().join(", "))
+                100.0 * e.share,
+                params(&e.parameters)
             ));
         }
-        s.push_str("</table>");
+        s.push_str("</table><p class=\"note\">Confidence runs from 0 to 1. The share of the gap closed is the part of the baseline's gap above the noise floor that adding the effect removed. <code>fitted-model.toml</code> holds the effect with these values.</p>");
     }
     s.push_str(&format!(
         "<p>Left unexplained: {:.0}% of the baseline's gap above the noise floor. Held out of every fit: {}.</p>",
@@ -334,9 +450,13 @@ fn html(d: &Diagnosis, report: &Report) -> String {
         }
         s.push_str("</ul>");
     }
+    if has_comparison {
+        s.push_str("<h2>Measured against simulated, per condition</h2><img src=\"comparison.png\" alt=\"mean peak amplitude per condition: measured, calibrated baseline and fitted model, mm\">");
+        s.push_str("<p class=\"note\">Black: the measured mean peak amplitude. Red: what the calibrated baseline simulates; blue: the fitted model. The bars are ± one spread of the simulator (the standard deviation of measured − simulated that the z-scores divide by), so a measured point outside a bar is more than 1 spread away.</p>");
+    }
+    s.push_str("<h2>How large the gap is</h2>");
     s.push_str(&format!(
-        "<p>Gap metric: {}.</p><table><tr><th></th><th>baseline</th><th>after</th><th>shrink</th></tr><tr><td>fitting units</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>held-out units</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
-        escape(&gap.metric),
+        "<table><tr><th></th><th>baseline</th><th>after the verdict</th><th>shrink</th></tr><tr><td>fitting units</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>held-out units</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
         num(Some(gap.baseline)),
         num(Some(gap.after)),
         num(Some(gap.shrink)),
@@ -344,29 +464,47 @@ fn html(d: &Diagnosis, report: &Report) -> String {
         num(gap.heldout_after),
         num(gap.heldout_shrink),
     ));
-    s.push_str("<h2>Where the baseline departs from the data</h2><img src=\"gap.png\" alt=\"|z| per observable, baseline and fitted\" style=\"max-width:100%\">");
-    s.push_str("<table><tr><th>condition</th><th>observable</th><th>|z|</th><th>detail</th></tr>");
-    for loc in report.locations.iter().take(30) {
+    s.push_str("<p class=\"note\">The gap is the mean over every scored (condition, observable) of a loss of z, where z is measured − simulated in units of the simulator's own spread: z² up to |z| = 3 and growing linearly beyond, so a model that matches the data to within noise scores about 1. <b>Shrink</b> = (baseline − after) / baseline: 0.4 means the gap fell by 40%. The held-out units were left out of every fit, so their shrink is the honest test. <b>A negative shrink</b> means the model got worse there: the fitted effect matched the fitting units' noise or a feature that does not carry over to the held-out conditions (over-fitting), and such an effect is not named.</p>");
+    if gap.heldout_shrink.is_some_and(|h| h < 0.0) {
+        s.push_str("<p><b>Here the held-out shrink is negative:</b> on the held-out units the fitted model is worse than the calibrated baseline, so whatever it fitted does not generalise; read the verdict with that in mind.</p>");
+    }
+    s.push_str("<h2>Where the baseline departs from the data</h2><img src=\"gap.png\" alt=\"|z| of the worst observables, calibrated baseline and fitted\">");
+    s.push_str("<p class=\"note\">Each row is one observable at one condition, its |z| on a log scale under the calibrated baseline (red) and the fitted model (blue). The dashed line is |z| = 3: three spreads, past which a difference is unlikely to be noise; the table lists every such departure. All scores are in <a href=\"scores.csv\">scores.csv</a>.</p>");
+    s.push_str("<table><tr><th>condition</th><th>observable</th><th>|z|</th><th>part of the motion</th><th>measured</th><th>baseline simulates</th></tr>");
+    let mut departures: Vec<&Score> = d.baseline_scores.iter().filter(|s| s.z.abs() > 3.0).collect();
+    departures.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    for sc in departures.iter().take(30) {
+        let name = sc.observable.name();
         s.push_str(&format!(
-            "<tr><td>{} Hz, {:.3} N</td><td>{}</td><td>{:.1}</td><td style=\"text-align:left\">{}</td></tr>",
-            loc.excitation_frequency_hz,
-            loc.normal_force_n,
-            escape(loc.observable.name()),
-            loc.score,
-            escape(&loc.detail)
+            "<tr><td>{} Hz, {} N{}</td><td>{}</td><td>{:.1}</td><td style=\"text-align:left\">{}</td><td>{}</td><td>{}</td></tr>",
+            sig(sc.excitation_frequency_hz),
+            sig(sc.normal_force_n),
+            if sc.heldout { " (held out)" } else { "" },
+            escape(name),
+            sc.z.abs(),
+            escape(sc.observable.phase().describe()),
+            escape(&readable(name, sc.measured)),
+            escape(&readable(name, sc.simulated)),
+        ));
+    }
+    if departures.len() > 30 {
+        s.push_str(&format!(
+            "<tr><td colspan=\"6\">… and {} more (report.json lists them all)</td></tr>",
+            departures.len() - 30
         ));
     }
     s.push_str("</table><h2>Candidates of the first round (each refitted with the baseline's friction law)</h2><table><tr><th>effect</th><th>form</th><th>gap (fit)</th><th>gap (held-out)</th><th>shrink</th><th>held-out shrink</th><th>parameters</th></tr>");
     for c in &d.candidates {
         s.push_str(&format!(
-            "<tr><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            "<tr><td title=\"{}\">{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            escape(c.effect.meaning()),
             escape(c.effect.name()),
             escape(c.form),
             c.gap_fit,
             c.gap_heldout,
             c.shrink,
             c.heldout_shrink.map_or("–".into(), |h| format!("{h:.3}")),
-            escape(&c.parameters.iter().map(|(k, v)| format!("{k} = {v:.4e}")).collect::<Vec<_>>().join(", "))
+            params(&c.parameters)
         ));
     }
     s.push_str(&format!(

@@ -85,7 +85,31 @@ fn figure8_report_and_models_run() {
     }
     assert!(!report["gap"]["heldout_units"].as_str().unwrap().is_empty());
     assert!(report["locations"].is_array());
-    assert!(std::fs::read_to_string(out.join("report.html")).unwrap().contains("Verdict"));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("Verdict"));
+    // The report explains itself: version, seed, backend, run time; the
+    // measured-vs-simulated chart; what a negative shrink means; readable units.
+    for needle in [
+        concat!("stickslip ", env!("CARGO_PKG_VERSION")),
+        "seed 20251122",
+        " · backend ",
+        "run time",
+        "comparison.png",
+        "negative shrink",
+        "|z| = 3",
+        " mm",
+    ] {
+        assert!(html.contains(needle), "report.html lacks `{needle}`");
+    }
+    assert!(!html.contains("e-3,") && !html.contains("e-3<"), "raw metres in e-notation in report.html");
+    for chart in ["gap.png", "comparison.png", "scores.csv"] {
+        assert!(out.join(chart).is_file(), "{chart} written");
+    }
+    // `plot` redraws the charts from the output directory alone.
+    let redrawn = dir.join("redrawn");
+    let (ok, _, err) = stickslip(&["plot", out.to_str().unwrap(), "--out", redrawn.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(redrawn.join("gap.png").is_file() && redrawn.join("comparison.svg").is_file());
     for model in ["baseline-model.toml", "fitted-model.toml"] {
         let sweep = dir.join(format!("sweep-{model}"));
         let (ok, _, err) = stickslip(&[

@@ -46,6 +46,39 @@ pub enum Effect {
 }
 
 impl Effect {
+    /// What the effect is, in words a report's reader understands.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            Effect::NormalForceHarmonics => {
+                "The normal force is not steady: it swings at multiples of the excitation frequency \
+             (misalignment at 1×, uneven wear at 2×, bumps higher), as in the paper's Figure 4."
+            }
+            Effect::NonGaussianFriction => {
+                "The random part of the friction coefficient is not Gaussian: it is skewed or has heavy tails, \
+             as the paper's Figure 6 shows at high load."
+            }
+            Effect::FrictionHysteresis => {
+                "Friction has memory: after the block starts to slide it builds up over a short distance (or \
+             time) instead of following the steady friction law at once."
+            }
+            Effect::ColouredFrictionNoise => {
+                "The friction noise is correlated in time (coloured): a high coefficient tends to stay high for \
+             a while, as with asperities in contact for longer than one sample."
+            }
+            Effect::Stiction => {
+                "Static friction exceeds sliding friction: the block needs an extra push to break away, and the \
+             excess fades as it starts to slide."
+            }
+            Effect::LoadDependentFriction => {
+                "The friction coefficient itself changes with the normal force (contact pressure), instead of \
+             being the same law at every load."
+            }
+            Effect::NormalForceDrift => {
+                "The normal force drifts during a run (wear, heating), instead of holding its setting."
+            }
+        }
+    }
+
     /// Every effect, in the order of `model.md`'s table.
     pub const ALL: [Effect; 7] = [
         Effect::NormalForceHarmonics,
