@@ -3,18 +3,16 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
-use clap::Args;
-use indicatif::ProgressBar;
-
-use super::{BackendArg, progress_bar};
+use super::{BackendArg, Progress, open_engine};
 use crate::diagnose::benchmark::{BenchmarkSettings, run_benchmark as run_benchmark_sets};
 use crate::diagnose::measure::read_measurement_set;
-use crate::diagnose::report::write_diagnosis;
+use crate::diagnose::report::{RunInfo, write_diagnosis_with};
 use crate::diagnose::synthetic::SetShape;
 use crate::diagnose::{DiagnoseSettings, diagnose_set};
-use crate::engine::{Effect, Engine, GpuOptions, Job};
+use crate::engine::{Effect, GpuOptions, Job};
 use crate::io::{OutputSet, owned};
+use anyhow::Result;
+use clap::Args;
 
 #[derive(Args, Debug)]
 pub(crate) struct DiagnoseArgs {
@@ -23,8 +21,10 @@ pub(crate) struct DiagnoseArgs {
     /// Output directory (report.json, report.html, baseline-model.toml, fitted-model.toml).
     #[arg(long)]
     pub(crate) out: PathBuf,
+    /// Where to simulate: a hardware GPU if there is one (else the CPU reference), a GPU, or the CPU reference.
     #[arg(long, value_enum, default_value = "auto")]
     pub(crate) backend: BackendArg,
+    /// Random seed of the simulated replicates and ensembles (the report is reproducible from it).
     #[arg(long, default_value_t = 20_251_122)]
     pub(crate) seed: u64,
     /// Simulated replicate records per condition.
@@ -37,38 +37,42 @@ pub(crate) struct DiagnoseArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct BenchmarkArgs {
-    /// Where the synthetic sets and their diagnoses go.
+    /// Where the synthetic sets and their diagnoses go (a directory per set, and its diagnosis).
     #[arg(long, default_value = "out/benchmark-diagnosis")]
     pub(crate) out: PathBuf,
-    /// Null sets (no effect), from the whole eq. 7 family.
+    /// Number of null sets (no withheld effect; the friction law drawn from the whole eq. 7 family).
     #[arg(long, default_value_t = 20)]
     pub(crate) nulls: u32,
-    /// Two-effect sets.
+    /// Number of sets with two withheld effects at once.
     #[arg(long, default_value_t = 6)]
     pub(crate) pairs: u32,
-    /// Phase-only summary sets (null and load-dependent friction alternately).
+    /// Number of summary-only sets that carry the response phase (null and load-dependent friction alternately).
     #[arg(long, default_value_t = 2)]
     pub(crate) phase_only: u32,
-    /// Withheld effect forms used (1, 2; neither is a form the candidates fit).
+    /// Which functional forms of each withheld effect generate sets (comma list of 1 and 2; neither is a
+    /// form the diagnosis fits).
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub(crate) forms: Vec<u32>,
-    /// Strength levels (0 moderate, 1 strong).
+    /// Which strength levels of each withheld effect generate sets (comma list: 0 moderate, 1 strong).
     #[arg(long, value_delimiter = ',', default_value = "0,1")]
     pub(crate) levels: Vec<u32>,
-    /// Only these effects (comma list of names); all seven by default.
+    /// Withhold only these effects (comma list of effect names); all seven by default.
     #[arg(long, value_delimiter = ',')]
     pub(crate) effects: Vec<String>,
-    /// Runs per condition and record length (s).
+    /// Time-series records (run files) per condition in each synthetic set.
     #[arg(long, default_value_t = 1)]
     pub(crate) runs_per_condition: u32,
+    /// Length of each synthetic record, s (5 to 600).
     #[arg(long, default_value_t = 20.0)]
     pub(crate) duration: f64,
     /// Normal-force levels as shares of Den Hartog's no-stop threshold
     /// (comma list; below 1 the noiseless block never stops).
     #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::synthetic::LOAD_SHARES)]
     pub(crate) load_shares: Vec<f64>,
+    /// Random seed of the synthetic sets (each diagnosis derives its own from it).
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
+    /// Where to simulate: a hardware GPU if there is one (else the CPU reference), a GPU, or the CPU reference.
     #[arg(long, value_enum, default_value = "auto")]
     pub(crate) backend: BackendArg,
     /// Simulated replicate records per condition in each diagnosis.
@@ -103,8 +107,7 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     }
     let set = read_measurement_set(&args.dir)?;
     let out = OutputSet::prepare(&args.out, "--out", owned::DIAGNOSIS, &[args.dir.as_path()])?;
-    let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
-    eprintln!("backend: {}", engine.description());
+    let engine = open_engine(args.backend, GpuOptions::default())?;
     let settings = DiagnoseSettings {
         seed: args.seed,
         replicates: args.replicates,
@@ -112,12 +115,12 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
         ..DiagnoseSettings::default()
     };
     let started = Instant::now();
-    let spinner = ProgressBar::new_spinner();
-    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
-    let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| spinner.set_message(step.to_string()))?;
-    spinner.finish_and_clear();
+    let progress = Progress::steps("diagnose");
+    let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| progress.step(step))?;
+    progress.finish();
     let elapsed = started.elapsed().as_secs_f64();
-    let report = write_diagnosis(out.dir(), &diagnosis, &args.dir, elapsed)?;
+    let run = RunInfo { seed: Some(args.seed), backend: Some(engine.description().to_string()) };
+    let report = write_diagnosis_with(out.dir(), &diagnosis, &args.dir, elapsed, &run)?;
     out.commit()?;
     println!(
         "verdict: {} (confidence {:.2}){}; gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
@@ -178,8 +181,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     if args.load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
     }
-    let engine = Engine::open(args.backend.into(), GpuOptions::default())?;
-    eprintln!("backend: {}", engine.description());
+    let engine = open_engine(args.backend, GpuOptions::default())?;
     let settings = BenchmarkSettings {
         out: args.out,
         nulls: args.nulls,
@@ -198,17 +200,15 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         replicates: args.replicates,
     };
     let sets = settings.plan().len();
-    let bar = progress_bar(sets as u64, "diagnosing");
+    let progress = Progress::bar("benchmark-diagnosis");
+    let mut done = 0;
+    progress.position(0, sets as u64);
     let (_, text) = run_benchmark_sets(&settings, &engine, &mut |line| {
-        // A hidden bar (output not a terminal) drops println: print directly.
-        if bar.is_hidden() {
-            eprintln!("{line}");
-        } else {
-            bar.println(line);
-        }
-        bar.inc(1);
+        progress.println(line);
+        done += 1;
+        progress.position(done, sets as u64);
     })?;
-    bar.finish_and_clear();
+    progress.finish();
     print!("{text}");
     Ok(())
 }

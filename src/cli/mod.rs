@@ -1,29 +1,62 @@
 //! The command line: a thin layer that parses flags, opens the engine,
 //! reports progress and turns library errors into messages (`anyhow` is used
 //! here and nowhere else). One submodule per command family.
+//!
+//! **Output policy, the same for every command.** stdout carries the result:
+//! the one-line summary of what was written (or the benchmark's table, the
+//! adapter `check-gpu` found, a completion script, the man page), so that it
+//! can be piped or captured. stderr carries everything about the run: the
+//! `backend:`/`adapter:` lines, progress, warnings and errors. `--quiet`
+//! silences stderr's progress and informational lines; errors are always
+//! printed, and stdout is unchanged (redirect it to drop it). When stderr is
+//! a terminal progress is a bar or spinner; otherwise (a log file, Slurm,
+//! a pipe) it is plain lines, each step as it starts and a heartbeat at
+//! least every [`HEARTBEAT`].
 
 mod diagnose;
+mod plot;
 mod simulate;
 mod sweep;
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+use std::time::{Duration, Instant};
 
 use anyhow::Result;
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::engine::{BackendChoice, Model};
+use crate::engine::gpu::{AdapterClass, GpuContext};
+use crate::engine::{BackendChoice, BackendKind, Engine, GpuOptions, Model};
 
 #[derive(Parser, Debug)]
 #[command(
     name = "stickslip",
     version,
-    about = "Ensembles of a stochastic stick-slip friction oscillator on the GPU, checked against an exact CPU reference"
+    about = "Ensembles of a stochastic stick-slip friction oscillator on the GPU, checked against an exact CPU reference",
+    after_help = "Results go to stdout, progress and the backend/adapter lines to stderr (plain lines when stderr \
+                  is not a terminal). Exit status: 0 success, 1 refused input or failed run, 2 usage error."
 )]
 struct Cli {
+    #[command(flatten)]
+    global: Global,
     #[command(subcommand)]
     command: Command,
+}
+
+/// Flags every command takes.
+#[derive(Args, Debug, Clone, Copy, Default)]
+struct Global {
+    /// Print no progress or informational lines on stderr (errors still are; stdout is unchanged).
+    #[arg(long, short = 'q', global = true)]
+    quiet: bool,
+    /// Let `--backend gpu` run on a software Vulkan adapter (Mesa's lavapipe/llvmpipe), which runs the
+    /// kernel on the CPU cores; without it such an adapter is refused.
+    #[arg(long, global = true)]
+    allow_software_gpu: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -34,10 +67,43 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Combine the outputs of `sweep --shard K/N` runs into what the unsharded run writes.
     Merge(sweep::MergeArgs),
+    /// Redraw the figures of a sweep or diagnosis output directory without re-simulating.
+    Plot(plot::PlotArgs),
     /// Diagnose the gap between a measurement set and the model: where, which effect, how far it shrinks.
     Diagnose(diagnose::DiagnoseArgs),
-    /// Benchmark the diagnosis blind on synthetic sets with a withheld effect.
+    /// Run the diagnosis blind on synthetic measurement sets, each with a withheld effect (or none),
+    /// and score how often it names the right one.
     BenchmarkDiagnosis(diagnose::BenchmarkArgs),
+    /// Driver preflight: print the GPU adapter `--backend gpu` would take; exit 1 when there is none,
+    /// or only a software one (unless --allow-software-gpu).
+    CheckGpu,
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
+    #[command(hide = true)]
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) to stdout: `stickslip man > stickslip.1`.
+    #[command(hide = true)]
+    Man,
+}
+
+static GLOBAL: OnceLock<Global> = OnceLock::new();
+
+fn global() -> Global {
+    GLOBAL.get().copied().unwrap_or_default()
+}
+
+/// Whether `--quiet` was given.
+pub(crate) fn quiet() -> bool {
+    global().quiet
+}
+
+/// An informational line on stderr (dropped under `--quiet`).
+pub(crate) fn info(line: &str) {
+    if !quiet() {
+        eprintln!("{line}");
+    }
 }
 
 #[derive(Args, Debug)]
@@ -61,8 +127,11 @@ impl ModelArgs {
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub(crate) enum BackendArg {
+    /// A hardware GPU if there is one, else the f64 CPU reference.
     Auto,
+    /// A GPU adapter, or fail (a software one only with --allow-software-gpu).
     Gpu,
+    /// The f64 CPU reference integrator on all cores.
     Cpu,
 }
 
@@ -91,12 +160,20 @@ pub fn main() -> ExitCode {
     // mask, and one thread takes the signals and cleans up.
     crate::io::install_interrupt_cleanup();
     let cli = Cli::parse();
+    let _ = GLOBAL.set(cli.global);
     let result = match cli.command {
         Command::Simulate(args) => simulate::simulate(args),
         Command::Sweep(args) => sweep::run_sweep(args),
         Command::Merge(args) => sweep::merge(args),
+        Command::Plot(args) => plot::run_plot(args),
         Command::Diagnose(args) => diagnose::run_diagnose(args),
         Command::BenchmarkDiagnosis(args) => diagnose::run_benchmark(args),
+        Command::CheckGpu => check_gpu(),
+        Command::Completions { shell } => {
+            clap_complete::generate(shell, &mut Cli::command(), "stickslip", &mut std::io::stdout());
+            Ok(())
+        }
+        Command::Man => man_page(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -105,6 +182,93 @@ pub fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The man page: the top-level page with every visible subcommand's flags
+/// appended as sections.
+fn man_page() -> Result<()> {
+    let cmd = Cli::command();
+    let mut out = Vec::new();
+    let man = clap_mangen::Man::new(cmd.clone());
+    man.render_title(&mut out)?;
+    man.render_name_section(&mut out)?;
+    man.render_synopsis_section(&mut out)?;
+    man.render_description_section(&mut out)?;
+    man.render_options_section(&mut out)?;
+    man.render_subcommands_section(&mut out)?;
+    for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()) {
+        let name = format!("stickslip-{}", sub.get_name());
+        // A one-shot command: leaking the two names is harmless.
+        let title: &'static str = Box::leak(name.clone().into_boxed_str());
+        let bin: &'static str = Box::leak(format!("stickslip {}", sub.get_name()).into_boxed_str());
+        let sub = sub.clone().name(title).bin_name(bin);
+        let page = clap_mangen::Man::new(sub);
+        let mut section = Vec::new();
+        page.render_synopsis_section(&mut section)?;
+        page.render_options_section(&mut section)?;
+        let text = String::from_utf8_lossy(&section)
+            .replace(".SH SYNOPSIS", &format!(".SH \"{}\"", name.to_uppercase()))
+            .replace(".SH OPTIONS", ".SS Options");
+        out.extend_from_slice(text.as_bytes());
+    }
+    man.render_version_section(&mut out)?;
+    std::io::Write::write_all(&mut std::io::stdout(), &out)?;
+    Ok(())
+}
+
+/// Whether a software adapter may run `--backend gpu`.
+pub(crate) fn allow_software_gpu() -> bool {
+    global().allow_software_gpu
+}
+
+/// The refusal of a software adapter under `--backend gpu`.
+fn software_refusal(ctx: &GpuContext) -> anyhow::Error {
+    anyhow::anyhow!(
+        "--backend gpu: the only GPU adapter is the software {}, which runs the kernel on the CPU cores; \
+         pass --allow-software-gpu to use it anyway, or --backend cpu for the f64 reference (faster on the \
+         same cores); on a GPU node, the GPU's Vulkan driver (ICD) is missing",
+        ctx.describe()
+    )
+}
+
+/// Opens the `--backend` choice and states it on stderr: the backend line and
+/// the adapter kind (hardware GPU, software GPU, or none). `--backend gpu`
+/// refuses a software adapter unless `--allow-software-gpu` is given.
+pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<Engine> {
+    let (engine, kind) = match backend {
+        BackendArg::Gpu => {
+            let ctx = GpuContext::new(true)?;
+            let kind = match ctx.adapter_class() {
+                AdapterClass::Hardware => "hardware GPU",
+                AdapterClass::Software if allow_software_gpu() => "software GPU (allowed by --allow-software-gpu)",
+                AdapterClass::Software => return Err(software_refusal(&ctx)),
+            };
+            (Engine::gpu(ctx, options), kind)
+        }
+        other => {
+            let engine = Engine::open(other.into(), options)?;
+            // Auto takes a GPU only when it is hardware (a software adapter
+            // falls back to the CPU reference, and says so).
+            let kind = match engine.kind() {
+                BackendKind::Gpu => "hardware GPU",
+                BackendKind::Cpu => "none (CPU reference)",
+            };
+            (engine, kind)
+        }
+    };
+    info(&format!("backend: {}", engine.description()));
+    info(&format!("adapter: {kind}"));
+    Ok(engine)
+}
+
+fn check_gpu() -> Result<()> {
+    let ctx = GpuContext::new(true)?;
+    match ctx.adapter_class() {
+        AdapterClass::Hardware => println!("hardware GPU: {}", ctx.describe()),
+        AdapterClass::Software if allow_software_gpu() => println!("software GPU: {}", ctx.describe()),
+        AdapterClass::Software => return Err(software_refusal(&ctx)),
+    }
+    Ok(())
 }
 
 /// An error and its causes on one line, each cause only when its text is
@@ -121,13 +285,190 @@ fn message(e: &anyhow::Error) -> String {
     text
 }
 
-pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(what.to_string());
-    bar
+/// How often plain-text progress prints a line when nothing else was printed.
+pub(crate) const HEARTBEAT: Duration = Duration::from_secs(30);
+
+struct PlainState {
+    started: Instant,
+    last_print: Instant,
+    step: String,
+    fraction: Option<(u64, u64)>,
+}
+
+impl PlainState {
+    fn line(&self, what: &str) -> String {
+        let elapsed = self.started.elapsed().as_secs();
+        let mut line = format!("{what}: [{elapsed:>4} s]");
+        if let Some((done, total)) = self.fraction {
+            let pct = if total > 0 { 100.0 * done as f64 / total as f64 } else { 0.0 };
+            line.push_str(&format!(" {pct:5.1}%"));
+        }
+        if !self.step.is_empty() {
+            line.push(' ');
+            line.push_str(&self.step);
+        }
+        line
+    }
+}
+
+/// Progress of one command on stderr: an indicatif bar or spinner on a
+/// terminal; plain lines otherwise (a log file), each new step at once and a
+/// heartbeat every [`HEARTBEAT`] without one; nothing under `--quiet`.
+pub(crate) struct Progress {
+    what: String,
+    bar: Option<ProgressBar>,
+    plain: Option<Arc<Mutex<PlainState>>>,
+    stop: Arc<AtomicBool>,
+    heartbeat: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Progress {
+    /// A bar with a percentage (`position` reports done of total).
+    pub(crate) fn bar(what: &str) -> Progress {
+        Progress::new(what, true)
+    }
+
+    /// A spinner with the current step (`step` reports it).
+    pub(crate) fn steps(what: &str) -> Progress {
+        Progress::new(what, false)
+    }
+
+    fn new(what: &str, with_bar: bool) -> Progress {
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut p = Progress { what: what.to_string(), bar: None, plain: None, stop: stop.clone(), heartbeat: None };
+        if quiet() {
+            return p;
+        }
+        if std::io::stderr().is_terminal() {
+            let bar = if with_bar {
+                let bar = ProgressBar::new(1);
+                bar.set_style(
+                    ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
+                        .expect("valid template")
+                        .progress_chars("=> "),
+                );
+                bar
+            } else {
+                let bar = ProgressBar::new_spinner();
+                bar.enable_steady_tick(Duration::from_millis(200));
+                bar
+            };
+            bar.set_message(what.to_string());
+            p.bar = Some(bar);
+        } else {
+            let now = Instant::now();
+            let state = Arc::new(Mutex::new(PlainState {
+                started: now,
+                last_print: now,
+                step: String::new(),
+                fraction: with_bar.then_some((0, 1)),
+            }));
+            p.plain = Some(state.clone());
+            let what = what.to_string();
+            p.heartbeat = Some(std::thread::spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    std::thread::sleep(Duration::from_millis(250));
+                    let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
+                    if s.last_print.elapsed() >= HEARTBEAT && !stop.load(Ordering::Relaxed) {
+                        eprintln!("{}", s.line(&what));
+                        s.last_print = Instant::now();
+                    }
+                }
+            }));
+        }
+        p
+    }
+
+    /// `done` of `total` units of work.
+    pub(crate) fn position(&self, done: u64, total: u64) {
+        if let Some(bar) = &self.bar {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+        if let Some(state) = &self.plain {
+            let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
+            s.fraction = Some((done, total));
+        }
+    }
+
+    /// A new step: shown on the spinner, printed as a line in a log.
+    pub(crate) fn step(&self, step: &str) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!("{}: {step}", self.what));
+        }
+        if let Some(state) = &self.plain {
+            let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
+            s.step = step.to_string();
+            eprintln!("{}", s.line(&self.what));
+            s.last_print = Instant::now();
+        }
+    }
+
+    /// A line that stays (a result as it comes), above the bar on a terminal.
+    pub(crate) fn println(&self, line: &str) {
+        if let Some(bar) = &self.bar {
+            bar.println(line);
+        } else if self.plain.is_some() {
+            eprintln!("{line}");
+            if let Some(state) = &self.plain {
+                state.lock().unwrap_or_else(|e| e.into_inner()).last_print = Instant::now();
+            }
+        }
+    }
+
+    /// Ends the progress display (a final line in a log).
+    pub(crate) fn finish(mut self) {
+        self.stop_heartbeat();
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+        if let Some(state) = &self.plain {
+            let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
+            s.step = "done".into();
+            eprintln!("{}", s.line(&self.what));
+        }
+    }
+
+    fn stop_heartbeat(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(h) = self.heartbeat.take() {
+            let _ = h.join();
+        }
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.stop_heartbeat();
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cli_definition_is_valid() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn cli_every_flag_has_help() {
+        fn walk(cmd: &clap::Command, path: &str) {
+            for arg in cmd.get_arguments() {
+                let id = arg.get_id().as_str();
+                if id == "help" || id == "version" {
+                    continue;
+                }
+                assert!(arg.get_help().is_some(), "{path} {id} has no help text");
+            }
+            for sub in cmd.get_subcommands() {
+                walk(sub, &format!("{path} {}", sub.get_name()));
+            }
+        }
+        walk(&Cli::command(), "stickslip");
+    }
 }

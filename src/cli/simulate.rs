@@ -34,6 +34,7 @@ pub(crate) struct SimulateArgs {
     /// Excitation periods discarded before recording.
     #[arg(long, default_value_t = 100)]
     pub(crate) warmup_cycles: u32,
+    /// Random seed of the noise (Philox key); realisation r of a seed is the same path as in `sweep`.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
     /// Output directory (created; run files and manifest.json go here).
@@ -122,6 +123,8 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     job.validate()?;
     let out = OutputSet::prepare(&args.out, "--out", owned::SIMULATION, &[])?;
     let engine = Engine::cpu("simulate runs on the reference");
+    super::info(&format!("backend: {}", engine.description()));
+    super::info("adapter: none (CPU reference)");
     let records = engine.records(&Job { record: Record::Sums, ..job }, 1.0 / args.sample_rate, args.duration)?;
     let mut runs = Vec::new();
     for (r, samples) in records.iter().enumerate() {

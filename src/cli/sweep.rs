@@ -6,9 +6,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 
-use super::{BackendArg, ModelArgs, progress_bar};
+use super::{BackendArg, ModelArgs, Progress, info, open_engine};
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
-use crate::engine::{Engine, GpuOptions, Job, Model, Oscillator, RunPlan};
+use crate::engine::{GpuOptions, Job, Model, Oscillator, RunPlan};
 use crate::io::{OutputSet, excerpt, owned};
 use crate::sweep::{self, Grid, RunIdentity, Shard, SweepSettings, write_output_set};
 
@@ -31,12 +31,13 @@ pub(crate) struct SweepArgs {
     /// Measured excitation periods per realisation (one peak each).
     #[arg(long, default_value_t = 100)]
     pub(crate) cycles: u32,
+    /// Random seed of the noise (Philox key); the same seed gives the same paths on either backend.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
     /// Output directory.
     #[arg(long, default_value = "out/sweep")]
     pub(crate) out: PathBuf,
-    /// Where to run: a GPU if there is one (else lavapipe, else the CPU), a GPU, or the CPU reference.
+    /// Where to run: a hardware GPU if there is one (else the CPU reference), a GPU, or the CPU reference.
     #[arg(long, value_enum, default_value = "auto")]
     pub(crate) backend: BackendArg,
     /// Integration steps per GPU dispatch (bounds each submission's run time).
@@ -159,25 +160,22 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
         sweep::sweep_job(&model, &points, &settings).validate()?;
     }
     let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
-    let engine = Engine::open(args.backend.into(), GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;
+    let engine = open_engine(args.backend, GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;
     let description = engine.description().to_string();
-    eprintln!("backend: {description}");
     if shard != Shard::WHOLE {
-        eprintln!(
+        info(&format!(
             "shard {}/{}: {} of {} grid points",
             shard.index,
             shard.count,
             conditions.len(),
             all_conditions.len()
-        );
+        ));
     }
     let started = Instant::now();
-    let bar = progress_bar(1, "sweep");
-    let result = sweep::run_sweep(&model, conditions, &settings, &engine, &mut |done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    })?;
-    bar.finish_and_clear();
+    let progress = Progress::bar("sweep");
+    let result =
+        sweep::run_sweep(&model, conditions, &settings, &engine, &mut |done, total| progress.position(done, total))?;
+    progress.finish();
     let run_s = started.elapsed().as_secs_f64();
     let identity = RunIdentity {
         model_toml: model.to_toml_string(),
@@ -193,7 +191,7 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
     write_output_set(out.dir(), &model, &identity, shard, &result, &description, timings, plots)?;
     out.commit()?;
-    eprintln!(
+    println!(
         "{} grid points × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
         conditions.len(),
         settings.realisations,
@@ -217,7 +215,7 @@ pub(crate) fn merge(args: MergeArgs) -> Result<()> {
     let plots = Some(args.fig8_frequency);
     write_output_set(out.dir(), &model, &identity, Shard::WHOLE, &result, &description, timings, plots)?;
     out.commit()?;
-    eprintln!(
+    println!(
         "merged {} shards ({} grid points) into {}",
         args.shards.len(),
         result.conditions.len(),

@@ -185,18 +185,22 @@ fn same_bytes(a: &Path, b: &Path, file: &str) {
 }
 
 /// Shards merged equal the unsharded run byte for byte; plots are written.
+/// The GPU shards run on whatever adapter there is, lavapipe included (CI
+/// has no GPU): `--allow-software-gpu` lets `--backend gpu` take it.
 #[test]
 fn shards_merge_into_the_unsharded_run() {
     let dir = scratch("shards");
     let whole = dir.join("whole");
-    let (ok, err) = stickslip(&sweep_args(whole.to_str().unwrap(), &["--backend", "gpu"]));
+    let (ok, err) = stickslip(&sweep_args(whole.to_str().unwrap(), &["--backend", "gpu", "--allow-software-gpu"]));
     assert!(ok, "{err}");
     let mut shard_dirs = Vec::new();
     for k in [2, 0, 1] {
         let d = dir.join(format!("shard-{k}"));
         let shard = format!("{k}/3");
-        let (ok, err) =
-            stickslip(&sweep_args(d.to_str().unwrap(), &["--backend", "gpu", "--shard", &shard, "--no-plots"]));
+        let (ok, err) = stickslip(&sweep_args(
+            d.to_str().unwrap(),
+            &["--backend", "gpu", "--allow-software-gpu", "--shard", &shard, "--no-plots"],
+        ));
         assert!(ok, "{err}");
         shard_dirs.push(d);
     }
@@ -229,7 +233,7 @@ fn shards_merge_into_the_unsharded_run() {
     let other = dir.join("other-seed");
     let (ok, err) = stickslip(&sweep_args(
         other.to_str().unwrap(),
-        &["--backend", "gpu", "--shard", "1/3", "--no-plots", "--seed", "10"],
+        &["--backend", "gpu", "--allow-software-gpu", "--shard", "1/3", "--no-plots", "--seed", "10"],
     ));
     assert!(ok, "{err}");
     let (ok, err) = stickslip(&[
@@ -244,7 +248,7 @@ fn shards_merge_into_the_unsharded_run() {
     let other_model = dir.join("other-model");
     let (ok, err) = stickslip(&sweep_args(
         other_model.to_str().unwrap(),
-        &["--backend", "gpu", "--shard", "1/3", "--no-plots", "--set", "friction.a=0.4"],
+        &["--backend", "gpu", "--allow-software-gpu", "--shard", "1/3", "--no-plots", "--set", "friction.a=0.4"],
     ));
     assert!(ok, "{err}");
     let (ok, err) = stickslip(&[
@@ -281,5 +285,164 @@ fn cpu_sweep_is_identical_whatever_the_thread_count() {
     }
     same_bytes(&outs[0], &outs[1], "sweep.csv");
     same_bytes(&outs[0], &outs[1], "histograms.csv");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs stickslip and returns (success, stdout, stderr).
+fn stickslip_out(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_stickslip")).args(args).output().expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `--backend gpu` refuses a software adapter unless `--allow-software-gpu`
+/// is given, and every run states the adapter kind. Which case this
+/// machine shows depends on its adapter; both are checked against the
+/// library's own classification, so neither is skipped.
+#[test]
+fn gpu_backend_refuses_a_software_adapter_unless_allowed() {
+    use stickslip::engine::gpu::{AdapterClass, GpuContext};
+    let dir = scratch("software-gpu");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let tiny = ["--frequencies", "7", "--normal-forces", "16.39", "--realisations", "2", "--cycles", "3"];
+    let mut plain = vec!["sweep", "--backend", "gpu", "--no-plots", "--warmup-cycles", "2", "--out", out_s];
+    plain.extend_from_slice(&tiny);
+    let class = GpuContext::new(true).map(|c| c.adapter_class());
+    let (ok, _, err) = stickslip_out(&plain);
+    match class {
+        Ok(AdapterClass::Software) => {
+            assert!(!ok && err.contains("--allow-software-gpu"), "software adapter accepted silently: {err}");
+            assert!(!out.exists(), "the refused run wrote {out_s}");
+            let (ok, _, err) = stickslip_out(&[plain.as_slice(), &["--allow-software-gpu"]].concat());
+            assert!(ok && err.contains("adapter: software GPU"), "{err}");
+            let (ok, _, err) = stickslip_out(&["check-gpu"]);
+            assert!(!ok && err.contains("--allow-software-gpu"), "{err}");
+        }
+        Ok(AdapterClass::Hardware) => {
+            assert!(ok && err.contains("adapter: hardware GPU"), "{err}");
+        }
+        Err(e) => assert!(!ok, "no adapter ({e}), yet --backend gpu ran: {err}"),
+    }
+    let (ok, _, err) = stickslip_out(
+        &["sweep", "--backend", "cpu", "--no-plots", "--out", dir.join("cpu").to_str().unwrap()]
+            .into_iter()
+            .chain(tiny)
+            .collect::<Vec<_>>(),
+    );
+    assert!(ok && err.contains("adapter: none (CPU reference)"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// One output policy: results on stdout, progress and the backend on
+/// stderr (plain lines when it is not a terminal), nothing there with -q.
+#[test]
+fn cli_results_go_to_stdout_and_quiet_silences_stderr() {
+    let dir = scratch("streams");
+    let args = |out: &std::path::Path| {
+        vec![
+            "sweep".to_string(),
+            "--backend".into(),
+            "cpu".into(),
+            "--no-plots".into(),
+            "--frequencies".into(),
+            "7".into(),
+            "--normal-forces".into(),
+            "16.39".into(),
+            "--realisations".into(),
+            "2".into(),
+            "--cycles".into(),
+            "3".into(),
+            "--warmup-cycles".into(),
+            "2".into(),
+            "--out".into(),
+            out.to_str().unwrap().to_string(),
+        ]
+    };
+    let loud = args(&dir.join("loud"));
+    let (ok, stdout, stderr) = stickslip_out(&loud.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("wrote") && !stderr.contains("wrote"), "stdout: {stdout}\nstderr: {stderr}");
+    assert!(stderr.contains("backend: CPU") && stderr.contains("adapter: "), "{stderr}");
+    assert!(stderr.contains("sweep: [") && stderr.contains("done"), "no plain progress lines: {stderr}");
+    let mut quiet = args(&dir.join("quiet"));
+    quiet.insert(0, "--quiet".into());
+    let (ok, stdout, stderr) = stickslip_out(&quiet.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok && stderr.is_empty(), "--quiet printed: {stderr}");
+    assert!(stdout.contains("wrote"), "{stdout}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Completions and the man page come from the clap definitions.
+#[test]
+fn cli_completions_and_man_page() {
+    let (ok, stdout, err) = stickslip_out(&["completions", "bash"]);
+    assert!(ok && stdout.contains("_stickslip") && stdout.contains("--allow-software-gpu"), "{err}");
+    let (ok, stdout, err) = stickslip_out(&["completions", "zsh"]);
+    assert!(ok && stdout.contains("#compdef stickslip"), "{err}");
+    let (ok, stdout, err) = stickslip_out(&["man"]);
+    assert!(ok && stdout.contains(".TH stickslip") && stdout.contains(".SH \"STICKSLIP-SWEEP\""), "{err}\n{stdout}");
+    assert!(stdout.contains("Random seed"), "the man page lacks --seed's help");
+}
+
+/// `plot` redraws a sweep without simulating, with the measured Figure 8
+/// statistics drawn over it, at a journal size; and a diagnosis's charts.
+#[test]
+fn plot_redraws_a_sweep_with_the_measured_overlay() {
+    let dir = scratch("plot");
+    let sweep = dir.join("sweep");
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/figure8");
+    let (ok, _, err) = stickslip_out(&[
+        "sweep",
+        "--backend",
+        "cpu",
+        "--no-plots",
+        "--frequencies",
+        "6,7,8",
+        "--normal-forces",
+        "7.519,16.39",
+        "--realisations",
+        "4",
+        "--cycles",
+        "20",
+        "--warmup-cycles",
+        "5",
+        "--out",
+        sweep.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(!sweep.join("fig9a.png").exists());
+    let figs = dir.join("figs");
+    let (ok, stdout, err) = stickslip_out(&[
+        "plot",
+        sweep.to_str().unwrap(),
+        "--measured",
+        figure8.to_str().unwrap(),
+        "--size",
+        "single",
+        "--out",
+        figs.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("wrote") && err.contains("11.5 N is not a grid point"), "{stdout}\n{err}");
+    for f in ["fig9a", "fig9b", "fig9c", "fig8"] {
+        let png = std::fs::read(figs.join(format!("{f}.png"))).unwrap_or_else(|_| panic!("{f}.png written"));
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        // single column at 300 dpi: 1050 px wide (the PNG header's width field)
+        assert_eq!(u32::from_be_bytes(png[16..20].try_into().unwrap()), 1050, "{f}.png width");
+        let svg = std::fs::read_to_string(figs.join(format!("{f}.svg"))).unwrap();
+        // fig9c: the Figure 8 set has no phase to draw
+        assert!(svg.contains("<text") && (f == "fig9c" || svg.contains("measured")), "{f}.svg has no measured overlay");
+    }
+    let svg = std::fs::read_to_string(figs.join("fig9b.svg")).unwrap();
+    assert!(svg.contains("10⁻"), "fig9b's decades are not labelled 10ⁿ");
+    assert!(!svg.contains(".0\n</text>"), "a tick reads like 200.0");
+    // Neither a sweep nor a diagnosis: refused by name, nothing written.
+    let (ok, _, err) = stickslip_out(&["plot", figure8.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]);
+    assert!(!ok && err.contains("neither a sweep"), "{err}");
+    assert!(!dir.join("x").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

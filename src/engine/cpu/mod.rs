@@ -22,6 +22,21 @@ use oscillator::{Path, Sampler, phase_of};
 /// memory at once when only sums are kept).
 pub const PATHS_PER_CHUNK: usize = 1 << 14;
 
+/// Progress reports a run aims for: a run smaller than this many full
+/// chunks is cut into smaller ones (never below [`MIN_PATHS_PER_CHUNK`]), so
+/// that a log shows it move. The reduction runs in task order, so the chunk
+/// size does not change a bit of the result.
+const PROGRESS_REPORTS: usize = 32;
+
+/// Fewest realisations per chunk: each chunk ends at a barrier, so smaller
+/// ones would leave cores idle.
+const MIN_PATHS_PER_CHUNK: usize = 256;
+
+/// Realisations per chunk for a run of `total_paths`.
+fn paths_per_chunk(total_paths: usize) -> usize {
+    (total_paths / PROGRESS_REPORTS).clamp(MIN_PATHS_PER_CHUNK, PATHS_PER_CHUNK)
+}
+
 /// The f64 reference integrator on all of rayon's threads.
 pub struct CpuBackend;
 
@@ -39,10 +54,11 @@ impl Backend for CpuBackend {
         let task = |i: usize| (i / n, job.first_realisation + (i % n) as u32);
         let total = job.work();
         let per_path = job.plan.total_cycles();
+        let chunk = paths_per_chunk(total_paths);
         let mut output = Output::default();
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
-            for start in (0..total_paths).step_by(PATHS_PER_CHUNK) {
-                let end = (start + PATHS_PER_CHUNK).min(total_paths);
+            for start in (0..total_paths).step_by(chunk) {
+                let end = (start + chunk).min(total_paths);
                 let records: Vec<Vec<Sample>> = (start..end)
                     .into_par_iter()
                     .map(|i| {
@@ -72,8 +88,8 @@ impl Backend for CpuBackend {
         }
         output.sums = job.points.iter().map(|p| PointAccumulator::new(p.range)).collect();
         let mut done = 0u64;
-        for start in (0..total_paths).step_by(PATHS_PER_CHUNK) {
-            let end = (start + PATHS_PER_CHUNK).min(total_paths);
+        for start in (0..total_paths).step_by(chunk) {
+            let end = (start + chunk).min(total_paths);
             let paths: Vec<PathResult> = (start..end)
                 .into_par_iter()
                 .map(|i| {
