@@ -76,6 +76,17 @@ impl MotionPhase {
 }
 
 impl Observable {
+    /// Whether it is a statistic of the response itself (the peak amplitude's
+    /// mean and variance, the phase's mean and variance): what a fitted
+    /// model is for predicting, as opposed to the friction and normal-force
+    /// features that attribute a gap to an effect.
+    pub fn is_response(self) -> bool {
+        matches!(
+            self,
+            Observable::PeakMeanM | Observable::PeakVarM2 | Observable::PhaseMeanDeg | Observable::PhaseVarDeg2
+        )
+    }
+
     /// Every observable, in the order of a record's features.
     pub const ALL: [Observable; 28] = [
         Observable::PeakCount,

@@ -7,7 +7,10 @@
 //! an effect cannot win by shifting the baseline. Effects are added by
 //! forward selection: the one that lowers the held-out gap most is kept if
 //! it lowers both the held-out and the fitting gaps by more than their
-//! noise; the next is searched on top of it, and so on.
+//! noise; the next is searched on top of it, and so on. An effect that
+//! makes the response itself (peak amplitude, phase) worse where the fit
+//! did not look, beyond that loss's noise, is not kept however much it
+//! improves the features: it traded the prediction for the attribution.
 
 use std::collections::BTreeMap;
 
@@ -163,6 +166,40 @@ pub(crate) fn gap_noise(k: usize) -> f64 {
     3.0 * (2.0 / k.max(1) as f64).sqrt() + 0.5
 }
 
+/// Mean Huber loss of z over the response observables
+/// ([`crate::diagnose::observable::Observable::is_response`]) of the
+/// held-out units where there are any (else the fitting ones), and how many
+/// there are.
+fn response_gap(scores: &[Score], has_heldout: bool) -> (f64, usize) {
+    let losses: Vec<f64> = scores
+        .iter()
+        .filter(|s| s.heldout == has_heldout && s.observable.is_response())
+        .map(|s| crate::diagnose::score::huber(s.z))
+        .collect();
+    let k = losses.len();
+    (if k == 0 { 0.0 } else { losses.iter().sum::<f64>() / k as f64 }, k)
+}
+
+/// Whether `candidate` keeps the response where the fit did not look: its
+/// response loss there rises above `current`'s by no more than three times
+/// the noise of that rise. A set without response observables passes.
+///
+/// The noise: each z² is (bias + noise)² over a spread estimated from
+/// `replicates` simulated records, so a mean R of k of them varies by about
+/// sqrt((2 + 4R)/k) with the spread known, and by a further
+/// sqrt(2/(replicates − 1))·R/sqrt(k) from the spread's estimate; the two
+/// models' replicates are drawn anew, so the variances of both count.
+fn keeps_the_response(current: &[Score], candidate: &[Score], has_heldout: bool, replicates: u32) -> bool {
+    let (before, k) = response_gap(current, has_heldout);
+    let (after, _) = response_gap(candidate, has_heldout);
+    if k == 0 {
+        return true;
+    }
+    let spread_rel_var = 2.0 / f64::from(replicates.max(2) - 1);
+    let variance = 2.0 * (spread_rel_var * before * before + 2.0 + 4.0 * before) / k as f64;
+    after - before <= 3.0 * variance.sqrt()
+}
+
 /// The best candidate for each screened effect on top of `base`.
 #[allow(clippy::too_many_arguments)]
 fn round(
@@ -286,7 +323,27 @@ pub(crate) fn select(
             first_round = candidates.clone();
         }
         let key = |c: &Candidate| if has_heldout { c.gap_heldout } else { c.gap_fit };
-        let Some(best) = candidates.first() else { break };
+        if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+            for c in &candidates {
+                let (before, k) = response_gap(&scores, has_heldout);
+                eprintln!(
+                    "round {}: {} key {:.2} (from {g_key:.2}) fit {:.2} response {before:.2} -> {:.2} over {k} (noise {:.2})",
+                    steps.len(),
+                    c.effect,
+                    key(c),
+                    c.gap_fit,
+                    response_gap(&c.scores, has_heldout).0,
+                    gap_noise(k)
+                );
+            }
+        }
+        // The best candidate that does not worsen the response where the
+        // fit did not look (see the module's documentation).
+        let Some(best) =
+            candidates.iter().find(|c| keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates))
+        else {
+            break;
+        };
         let explainable = (key_of(baseline_scores) - NULL_HUBER).max(1e-9);
         let min_share = if steps.is_empty() { MIN_LEADING_SHARE } else { MIN_FURTHER_SHARE };
         if !(g_key - key(best) > noise_heldout
@@ -295,7 +352,15 @@ pub(crate) fn select(
         {
             break;
         }
-        let runner_up = candidates.get(1).map(key).unwrap_or(g_key);
+        // The best rival among those that keep the response too.
+        let runner_up = candidates
+            .iter()
+            .filter(|c| {
+                c.effect != best.effect && keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates)
+            })
+            .map(key)
+            .next()
+            .unwrap_or(g_key);
         model = best.model.clone();
         scores = best.scores.clone();
         steps.push(Step { candidate: best.clone(), before: (g_fit, g_key), after_key: key(best), runner_up });
