@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 use serde_json::{Value, json};
 
 use stickslip::diagnose::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
-use stickslip::diagnose::report::write_diagnosis;
+use stickslip::diagnose::report::{RunInfo, write_diagnosis_with};
 use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;
 use stickslip::engine::{BackendChoice, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
@@ -492,7 +492,9 @@ fn run_diagnose(
         let elapsed = started.elapsed().as_secs_f64();
         let report = match prepared {
             Some(set) => {
-                let report = write_diagnosis(set.dir(), &diagnosis, Path::new(&dir), elapsed).map_err(py_err)?;
+                let run = RunInfo { seed: Some(seed), backend: Some(engine.description().to_string()) };
+                let report =
+                    write_diagnosis_with(set.dir(), &diagnosis, Path::new(&dir), elapsed, &run).map_err(py_err)?;
                 set.commit().map_err(py_err)?;
                 report
             }
