@@ -41,6 +41,13 @@ pub struct Score {
     pub z: f64,
     /// Whether the unit was left out of every fit.
     pub heldout: bool,
+    /// The unit (index into the diagnosis's units) it scores.
+    #[serde(skip)]
+    pub unit: usize,
+    /// What z divides measured − simulated by, in the observable's unit: the
+    /// spread of their difference under the model scored.
+    #[serde(skip)]
+    pub scale: f64,
 }
 
 /// Mean Huber loss of z over the fitting (or held-out) scores; 0 for none.
@@ -104,14 +111,17 @@ pub(crate) fn score(
                 }
                 let (simulated, deviation, spread) = compare(observable, m, &sim);
                 let spread = spread.max(1e-9 * simulated.abs() + 1e-300);
+                let scale = spread * (1.0 + 1.0 / sim.len() as f64).sqrt();
                 scores.push(Score {
                     excitation_frequency_hz: u.condition.excitation_frequency_hz,
                     normal_force_n: u.condition.normal_force_n,
                     observable,
                     measured: m,
                     simulated,
-                    z: deviation / (spread * (1.0 + 1.0 / sim.len() as f64).sqrt()),
+                    z: deviation / scale,
                     heldout: u.heldout,
+                    unit: i,
+                    scale,
                 });
             }
         }
@@ -135,14 +145,17 @@ pub(crate) fn score(
             }
             let (simulated, deviation, spread) = compare(observable, m, &values);
             let spread = spread.max(1e-6 * simulated.abs()).max(1e-12);
+            let scale = spread * (1.0 / n_meas + 1.0 / values.len() as f64).sqrt();
             scores.push(Score {
                 excitation_frequency_hz: u.condition.excitation_frequency_hz,
                 normal_force_n: u.condition.normal_force_n,
                 observable,
                 measured: m,
                 simulated,
-                z: deviation / (spread * (1.0 / n_meas + 1.0 / values.len() as f64).sqrt()),
+                z: deviation / scale,
                 heldout: u.heldout,
+                unit: i,
+                scale,
             });
         }
     }

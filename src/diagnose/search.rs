@@ -166,15 +166,31 @@ pub(crate) fn gap_noise(k: usize) -> f64 {
     3.0 * (2.0 / k.max(1) as f64).sqrt() + 0.5
 }
 
+/// The calibrated baseline's scale of every response score, by (unit,
+/// observable): the fixed yardstick of [`keeps_the_response`].
+type Yardstick = BTreeMap<(usize, crate::diagnose::observable::Observable), f64>;
+
+fn yardstick(baseline_scores: &[Score]) -> Yardstick {
+    baseline_scores.iter().filter(|s| s.observable.is_response()).map(|s| ((s.unit, s.observable), s.scale)).collect()
+}
+
 /// Mean Huber loss of z over the response observables
 /// ([`crate::diagnose::observable::Observable::is_response`]) of the
-/// held-out units where there are any (else the fitting ones), and how many
-/// there are.
-fn response_gap(scores: &[Score], has_heldout: bool) -> (f64, usize) {
+/// held-out units where there are any (else the fitting ones), each z
+/// measured in the calibrated baseline's scale, and how many there are.
+///
+/// The fixed scale matters: divided by its own replicates' spread, a model
+/// that widens every distribution (a strongly coloured friction noise, say)
+/// looks closer to the data everywhere while its mean and variance move
+/// away from them.
+fn response_gap(scores: &[Score], has_heldout: bool, yardstick: &Yardstick) -> (f64, usize) {
     let losses: Vec<f64> = scores
         .iter()
         .filter(|s| s.heldout == has_heldout && s.observable.is_response())
-        .map(|s| crate::diagnose::score::huber(s.z))
+        .map(|s| {
+            let scale = yardstick.get(&(s.unit, s.observable)).copied().unwrap_or(s.scale);
+            crate::diagnose::score::huber(s.z * s.scale / scale)
+        })
         .collect();
     let k = losses.len();
     (if k == 0 { 0.0 } else { losses.iter().sum::<f64>() / k as f64 }, k)
@@ -189,9 +205,15 @@ fn response_gap(scores: &[Score], has_heldout: bool) -> (f64, usize) {
 /// sqrt((2 + 4R)/k) with the spread known, and by a further
 /// sqrt(2/(replicates − 1))·R/sqrt(k) from the spread's estimate; the two
 /// models' replicates are drawn anew, so the variances of both count.
-fn keeps_the_response(current: &[Score], candidate: &[Score], has_heldout: bool, replicates: u32) -> bool {
-    let (before, k) = response_gap(current, has_heldout);
-    let (after, _) = response_gap(candidate, has_heldout);
+fn keeps_the_response(
+    current: &[Score],
+    candidate: &[Score],
+    has_heldout: bool,
+    replicates: u32,
+    yardstick: &Yardstick,
+) -> bool {
+    let (before, k) = response_gap(current, has_heldout, yardstick);
+    let (after, _) = response_gap(candidate, has_heldout, yardstick);
     if k == 0 {
         return true;
     }
@@ -306,6 +328,7 @@ pub(crate) fn select(
     let noise_fit = gap_noise(count_of(baseline_scores, false));
     let noise_heldout = gap_noise(count_of(baseline_scores, has_heldout));
     let key_of = |scores: &[Score]| gap_of(scores, has_heldout);
+    let ruler = yardstick(baseline_scores);
     let mut steps: Vec<Step> = Vec::new();
     let mut first_round = Vec::new();
     let (mut model, mut scores) = (baseline.clone(), baseline_scores.to_vec());
@@ -325,22 +348,23 @@ pub(crate) fn select(
         let key = |c: &Candidate| if has_heldout { c.gap_heldout } else { c.gap_fit };
         if std::env::var_os("STICKSLIP_DEBUG").is_some() {
             for c in &candidates {
-                let (before, k) = response_gap(&scores, has_heldout);
+                let (before, k) = response_gap(&scores, has_heldout, &ruler);
                 eprintln!(
                     "round {}: {} key {:.2} (from {g_key:.2}) fit {:.2} response {before:.2} -> {:.2} over {k} (noise {:.2})",
                     steps.len(),
                     c.effect,
                     key(c),
                     c.gap_fit,
-                    response_gap(&c.scores, has_heldout).0,
+                    response_gap(&c.scores, has_heldout, &ruler).0,
                     gap_noise(k)
                 );
             }
         }
         // The best candidate that does not worsen the response where the
         // fit did not look (see the module's documentation).
-        let Some(best) =
-            candidates.iter().find(|c| keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates))
+        let Some(best) = candidates
+            .iter()
+            .find(|c| keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates, &ruler))
         else {
             break;
         };
@@ -356,7 +380,8 @@ pub(crate) fn select(
         let runner_up = candidates
             .iter()
             .filter(|c| {
-                c.effect != best.effect && keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates)
+                c.effect != best.effect
+                    && keeps_the_response(&scores, &c.scores, has_heldout, settings.replicates, &ruler)
             })
             .map(key)
             .next()
