@@ -431,6 +431,10 @@ def run_stickslip(binary, wl, backend, R, W, M, S, seed, out_dir, timing=True):
            "--seed", str(seed), "--out", out_dir]
     for s in wl["sets"] + [f"solver.steps_per_period={S}"]:
         cmd += ["--set", s]
+    if backend == "gpu":
+        # The kernel is timed on whatever adapter there is: lavapipe, where
+        # there is no GPU, is refused without this flag.
+        cmd.append("--allow-software-gpu")
     for attempt in range(30):
         if os.path.exists(binary):
             if timing:
