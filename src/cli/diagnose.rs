@@ -78,6 +78,10 @@ pub(crate) struct BenchmarkArgs {
     /// Simulated replicate records per condition in each diagnosis.
     #[arg(long, default_value_t = 8)]
     pub(crate) replicates: u32,
+    /// Run only these sets of the plan (comma list of the indices the full run prints, e.g. 4,8);
+    /// each keeps the data and seed it has in the full run, so one verdict can be re-checked alone.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) sets: Vec<usize>,
 }
 
 /// Fewest simulated replicates per condition: a spread needs two.
@@ -181,7 +185,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     if args.load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
     }
-    let engine = open_engine(args.backend, GpuOptions::default())?;
+    let backend = args.backend;
     let settings = BenchmarkSettings {
         out: args.out,
         nulls: args.nulls,
@@ -198,8 +202,15 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         load_shares: args.load_shares,
         seed: args.seed,
         replicates: args.replicates,
+        sets: args.sets,
     };
-    let sets = settings.plan().len();
+    let planned: Vec<usize> = settings.plan().into_iter().map(|(i, _)| i).collect();
+    if let Some(i) = settings.sets.iter().find(|i| !planned.contains(i)) {
+        let all = BenchmarkSettings { sets: Vec::new(), ..settings.clone() }.plan().len();
+        anyhow::bail!("invalid --sets: {i}; this plan has sets 0 to {}", all.saturating_sub(1));
+    }
+    let engine = open_engine(backend, GpuOptions::default())?;
+    let sets = planned.len();
     let progress = Progress::bar("benchmark-diagnosis");
     let mut done = 0;
     progress.position(0, sets as u64);

@@ -45,14 +45,20 @@ pub struct BenchmarkSettings {
     pub seed: u64,
     /// Simulated replicate records per condition in each diagnosis.
     pub replicates: u32,
+    /// Only these sets of the plan, by index (all when empty).
+    pub sets: Vec<usize>,
 }
 
 impl BenchmarkSettings {
-    /// The sets this benchmark runs.
-    pub fn plan(&self) -> Vec<PlannedSet> {
+    /// The sets this benchmark runs, each with its index in the plan (which
+    /// names its directory and seeds its data): `sets` picks some without
+    /// changing what each one is.
+    pub fn plan(&self) -> Vec<(usize, PlannedSet)> {
         benchmark_plan(self.nulls, &self.forms, &self.levels, self.pairs, self.phase_only)
             .into_iter()
             .filter(|p| self.effects.is_empty() || p.hidden.iter().all(|h| self.effects.contains(&h.effect)))
+            .enumerate()
+            .filter(|(i, _)| self.sets.is_empty() || self.sets.contains(i))
             .collect()
     }
 }
@@ -215,7 +221,7 @@ pub fn run_benchmark(
     let shape = settings.shape;
     let mut rows = Vec::new();
     let started = Instant::now();
-    for (i, planned) in plan.iter().enumerate() {
+    for &(i, ref planned) in &plan {
         let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
         let (truth, conditions) = random_truth(seed, &planned.hidden, &settings.load_shares)?;
         let dir = settings.out.join(format!("set-{i:03}"));

@@ -128,12 +128,34 @@ fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
     v
 }
 
+/// The load levels to hold out: at each frequency, the interior levels of
+/// that frequency's own loads taken alternately, so that every held-out
+/// condition lies between two fitted loads at its frequency (the fit is
+/// asked to interpolate in load, and in the sliding speeds that load sets,
+/// not to extrapolate past the fastest or slowest motion it saw). Where the
+/// loads form a grid shared by every frequency this is the grid's interior
+/// alternates; where no frequency has three loads of its own, the interior
+/// alternates of all loads.
+fn held_out_loads(conditions: &[Condition], loads: &[f64], frequencies: &[f64]) -> Vec<f64> {
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1.0);
+    let mut held: Vec<f64> = frequencies
+        .iter()
+        .flat_map(|&f| {
+            let at_f =
+                levels(conditions.iter().filter(|c| near(c.excitation_frequency_hz, f)).map(|c| c.normal_force_n));
+            interior_alternates(&at_f)
+        })
+        .collect();
+    held = levels(held.into_iter());
+    if held.is_empty() { interior_alternates(loads) } else { held }
+}
+
 /// Chooses the split for conditions with these (frequency, load) pairs.
 fn choose_hold_out(conditions: &[Condition], runs_per_condition: &[usize]) -> HoldOut {
     let loads = levels(conditions.iter().map(|c| c.normal_force_n));
     let frequencies = levels(conditions.iter().map(|c| c.excitation_frequency_hz));
     if loads.len() >= 3 {
-        HoldOut::LoadLevels(interior_alternates(&loads))
+        HoldOut::LoadLevels(held_out_loads(conditions, &loads, &frequencies))
     } else if frequencies.len() >= 3 {
         HoldOut::Frequencies(interior_alternates(&frequencies))
     } else if !runs_per_condition.is_empty() && runs_per_condition.iter().all(|&r| r >= 2) {
@@ -328,5 +350,36 @@ impl<'a> Data<'a> {
             None => 1.0,
         };
         Condition { normal_force_n: measured / factor, ..u.condition }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(pairs: &[(f64, f64)]) -> Vec<Condition> {
+        pairs.iter().map(|&(f, n)| Condition { excitation_frequency_hz: f, normal_force_n: n }).collect()
+    }
+
+    /// A load grid shared by every frequency: its interior levels, taken
+    /// alternately, are held out at every frequency.
+    #[test]
+    fn a_shared_load_grid_holds_out_its_interior_levels() {
+        let c: Vec<(f64, f64)> =
+            [5.0, 6.0, 7.0].iter().flat_map(|&f| [10.0, 20.0, 30.0, 40.0, 50.0].map(|n| (f, n))).collect();
+        assert_eq!(choose_hold_out(&grid(&c), &[1; 15]), HoldOut::LoadLevels(vec![20.0, 40.0]));
+    }
+
+    /// Loads that differ by frequency (each a share of that frequency's own
+    /// threshold): the middle load at each frequency is held out, never two
+    /// loads of one frequency that leave its fastest motion unfitted.
+    #[test]
+    fn loads_that_differ_by_frequency_are_held_out_within_each_frequency() {
+        let c = grid(&[(8.0, 20.4), (8.0, 33.2), (8.0, 45.9), (10.0, 26.3), (10.0, 42.8), (10.0, 59.2)]);
+        assert_eq!(choose_hold_out(&c, &[1; 6]), HoldOut::LoadLevels(vec![33.2, 42.8]));
+        // No frequency with three loads of its own: the interior alternates
+        // of all the loads.
+        let c = grid(&[(8.0, 10.0), (9.0, 20.0), (10.0, 30.0), (11.0, 40.0)]);
+        assert_eq!(choose_hold_out(&c, &[1; 4]), HoldOut::LoadLevels(vec![20.0]));
     }
 }

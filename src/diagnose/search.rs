@@ -57,8 +57,12 @@ fn debug_trial(variant: &Variant, values: &[f64], trial: &Model, scores: &[Score
     w.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
     let top: Vec<String> =
         w.iter().take(5).map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z)).collect();
+    let mut h: Vec<&Score> = scores.iter().filter(|s| s.heldout).collect();
+    h.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    let top_heldout: Vec<String> =
+        h.iter().take(5).map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z)).collect();
     eprintln!(
-        "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {g:.2} ho {:.2} | {}",
+        "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {g:.2} ho {:.2} | {} || held out: {}",
         variant.effect,
         variant.form,
         trial.friction.a,
@@ -67,7 +71,8 @@ fn debug_trial(variant: &Variant, values: &[f64], trial: &Model, scores: &[Score
         trial.friction.d,
         trial.friction.sigma,
         gap_of(scores, true),
-        top.join("; ")
+        top.join("; "),
+        top_heldout.join("; ")
     );
 }
 

@@ -320,7 +320,7 @@ impl Engine {
                         gpu::AdapterClass::Software => {
                             return Ok(Engine::cpu(&format!(
                                 "no hardware GPU; the only adapter is the software {}, which is slower than this \
-                                 integrator on the same cores (--backend gpu uses it anyway)",
+                                 integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway)",
                                 ctx.describe()
                             )));
                         }
