@@ -164,6 +164,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
     let anchors = SlipSamples {
         speed: measured.anchors_m_per_s.to_vec(),
         mu: measured.anchors_m_per_s.iter().map(|&v| current.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
+        record: vec![0; measured.anchors_m_per_s.len()],
     };
     if let Some(law) = anchors.fit_at(current.c).filter(|l| l.plausible()) {
         let f = &mut model.friction;
@@ -172,8 +173,8 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
         f.d = law.d;
     }
     let f = &mut model.friction;
-    let variance = f.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
-    f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt();
+    let variance = f.sigma.powi(2) + measured.within_sigma.powi(2) - simulated.within_sigma.powi(2);
+    f.sigma = variance.max((0.1 * measured.within_sigma).powi(2)).sqrt();
 }
 
 pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
@@ -209,7 +210,7 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
         m.friction.b = law.b.max(-m.friction.a);
         m.friction.c = law.c;
         m.friction.d = law.d;
-        m.friction.sigma = law.sigma;
+        m.friction.sigma = law.within_sigma;
     }
     m.validate()?;
     Ok(m)
@@ -229,6 +230,10 @@ pub(crate) struct FrictionLaw {
     pub(crate) d: f64,
     /// Residual standard deviation of μ, –.
     pub(crate) sigma: f64,
+    /// The same within records: each record's mean residual removed, so a
+    /// friction level that differs between records (with the load, over a
+    /// drift) is not counted as noise, –. This is what σ_μ is matched by.
+    pub(crate) within_sigma: f64,
     /// The slipping speeds' 5%, 15%, …, 95% quantiles, m/s: where the law
     /// is known.
     pub(crate) anchors_m_per_s: [f64; 10],
@@ -242,7 +247,7 @@ impl FrictionLaw {
     /// The model's law (no anchors).
     fn of(model: &Model) -> FrictionLaw {
         let f = &model.friction;
-        FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
+        FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, within_sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
     }
 
     /// μ at speed `v`, m/s.
@@ -277,26 +282,28 @@ fn law_c_grid() -> impl Iterator<Item = f64> {
 
 /// The slipping samples of some records: speed |v| (m/s) and μ = |F|/N,
 /// where |v| is above 5% of its record's largest, the friction opposes the
-/// motion and N > 0.
+/// motion and N > 0, and which record each came from.
 struct SlipSamples {
     speed: Vec<f64>,
     mu: Vec<f64>,
+    record: Vec<usize>,
 }
 
 impl SlipSamples {
     fn of(runs: &[&Run]) -> Option<SlipSamples> {
-        let (mut speed, mut mu) = (Vec::new(), Vec::new());
-        for r in runs {
+        let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, r) in runs.iter().enumerate() {
             let (Some(v), Some(f), Some(n)) = (&r.v_m_per_s, &r.friction_force, &r.normal_force) else { continue };
             let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             for i in 0..v.len().min(f.len()).min(n.len()) {
                 if v[i].abs() > 0.05 * vmax && f[i] * v[i] < 0.0 && n[i] > 0.0 {
                     speed.push(v[i].abs());
                     mu.push(f[i].abs() / n[i]);
+                    record.push(k);
                 }
             }
         }
-        (mu.len() >= 50).then_some(SlipSamples { speed, mu })
+        (mu.len() >= 50).then_some(SlipSamples { speed, mu, record })
     }
 
     /// Least squares at a given `c`: linear in (a, b, d) with basis
@@ -336,7 +343,25 @@ impl SlipSamples {
         let mut sorted = self.speed.clone();
         sorted.sort_by(f64::total_cmp);
         let anchors_m_per_s = std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
-        Some(FrictionLaw { a, b, c, d, sigma: (rss.max(0.0) / (n - p).max(1) as f64).sqrt(), anchors_m_per_s })
+        let sigma = (rss.max(0.0) / (n - p).max(1) as f64).sqrt();
+        let within_sigma = self.within_sigma(|s| a + b / (1.0 + c * s) + d * s * s, p);
+        Some(FrictionLaw { a, b, c, d, sigma, within_sigma, anchors_m_per_s })
+    }
+
+    /// The residual standard deviation around `law` within records: each
+    /// record's mean residual removed (`p` parameters and one mean per
+    /// record spent).
+    fn within_sigma(&self, law: impl Fn(f64) -> f64, p: usize) -> f64 {
+        let records = self.record.iter().max().map_or(0, |&k| k + 1);
+        let (mut sum, mut count) = (vec![0.0; records], vec![0usize; records]);
+        let residual: Vec<f64> = self.speed.iter().zip(&self.mu).map(|(&s, &mu)| mu - law(s)).collect();
+        for (&k, &r) in self.record.iter().zip(&residual) {
+            sum[k] += r;
+            count[k] += 1;
+        }
+        let ss: f64 = self.record.iter().zip(&residual).map(|(&k, &r)| (r - sum[k] / count[k] as f64).powi(2)).sum();
+        let used = count.iter().filter(|&&c| c > 0).count();
+        (ss / (self.mu.len().saturating_sub(p + used)).max(1) as f64).sqrt()
     }
 
     /// The law with the smallest residual: over [`law_c_grid`], then by
@@ -421,12 +446,12 @@ mod tests {
     #[test]
     fn friction_law_fit_recovers_a_known_law() {
         let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
-        let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, anchors_m_per_s: [0.0; 10] };
+        let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, within_sigma: 0.04, anchors_m_per_s: [0.0; 10] };
         let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)]).unwrap();
         let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
         assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
-        let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, anchors_m_per_s: [0.0; 10] };
+        let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, within_sigma: 0.019, anchors_m_per_s: [0.0; 10] };
         let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)]).unwrap();
         let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
