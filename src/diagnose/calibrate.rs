@@ -107,7 +107,9 @@ fn solve_friction_level(
 /// ([`fit_friction_law`]) is run on the measured records and on the model's
 /// simulated replicate records (which carry the data's measurement noise),
 /// and `a`, `b`, `d` are moved by the difference, `c` by the ratio and σ_μ²
-/// by the difference of the residual variances. The fit's numbers are then
+/// by the difference of the residual variances within records (each
+/// record's mean residual removed, so a friction level that changes with
+/// the load or over time is left to the effect that makes it). The fit's numbers are then
 /// those of the data whatever else the model carries (`law_steps` steps, 0
 /// for the baseline's [`LAW_STEPS`], each from the fitting units'
 /// replicates alone), so an effect that
@@ -433,6 +435,17 @@ mod tests {
             })
             .collect();
         Run::from_samples(&samples, 1.0, 1e-3, 10.0)
+    }
+
+    /// Two records whose friction levels differ (as with load-dependent
+    /// friction): the pooled residual carries the difference, the
+    /// within-record one that σ_μ is matched by does not.
+    #[test]
+    fn within_record_noise_leaves_out_level_differences_between_records() {
+        let (low, high) = (record(0.22, 0.1, 20.0, 0.03, 5), record(0.28, 0.1, 20.0, 0.03, 6));
+        let law = fit_friction_law(&[&low, &high]).unwrap();
+        assert!(law.sigma > 0.035, "{law:?}: the pooled residual should carry the 0.06 level step");
+        assert!((law.within_sigma / 0.03 - 1.0).abs() < 0.03, "{law:?}");
     }
 
     /// The law's value at speed `v` (m/s).

@@ -20,7 +20,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::score::{Score, count_of, gap_of};
 use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
 use crate::engine::{Effect, Engine, Model};
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// An effect is fitted only when its signature stands this many noise units
 /// above pure noise in the current model's scores (see
@@ -102,7 +102,18 @@ fn evaluate(
     if trial.validate().is_err() {
         return Ok(None);
     }
-    let (model, scores, _) = calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps)?;
+    // A trial whose parameters drive the oscillator out of range (friction
+    // turned negative, say) is not a model of the data: it is passed over
+    // like an invalid one instead of ending the diagnosis.
+    let (model, scores, _) = match calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps) {
+        Err(Error::Diverged { point, message }) => {
+            if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+                eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
+            }
+            return Ok(None);
+        }
+        other => other?,
+    };
     let gap_fit = gap_of(&scores, false);
     if std::env::var_os("STICKSLIP_DEBUG").is_some() {
         debug_trial(variant, values, &model, &scores, gap_fit);
