@@ -249,7 +249,15 @@ impl FrictionLaw {
     /// The model's law (no anchors).
     fn of(model: &Model) -> FrictionLaw {
         let f = &model.friction;
-        FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, within_sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
+        FrictionLaw {
+            a: f.a,
+            b: f.b,
+            c: f.c,
+            d: f.d,
+            sigma: f.sigma,
+            within_sigma: f.sigma,
+            anchors_m_per_s: [0.0; 10],
+        }
     }
 
     /// μ at speed `v`, m/s.
@@ -459,12 +467,28 @@ mod tests {
     #[test]
     fn friction_law_fit_recovers_a_known_law() {
         let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
-        let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, within_sigma: 0.04, anchors_m_per_s: [0.0; 10] };
+        let truth = FrictionLaw {
+            a: 0.25,
+            b: 0.1,
+            c: 20.0,
+            d: 0.0,
+            sigma: 0.04,
+            within_sigma: 0.04,
+            anchors_m_per_s: [0.0; 10],
+        };
         let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)]).unwrap();
         let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
         assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
-        let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, within_sigma: 0.019, anchors_m_per_s: [0.0; 10] };
+        let truth = FrictionLaw {
+            a: 0.19,
+            b: 0.075,
+            c: 13.5,
+            d: 0.105,
+            sigma: 0.019,
+            within_sigma: 0.019,
+            anchors_m_per_s: [0.0; 10],
+        };
         let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)]).unwrap();
         let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
