@@ -468,9 +468,9 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 ctx.by_load(Observable::FrictionMuMean).iter().map(|&(n, m, s)| (n, m - s)).collect();
             let from_peaks: Vec<(f64, f64)> =
                 ctx.by_load(Observable::PeakMeanM).iter().map(|&(n, m, s)| (n, (s - m) / m.abs().max(1e-12))).collect();
-            let a = ctx.model.friction.a.max(0.02);
+            let mu_at_rest = (ctx.model.friction.a + ctx.model.friction.b).max(0.02);
             let start = slope(&from_mu)
-                .or_else(|| slope(&from_peaks).map(|s| s * a))
+                .or_else(|| slope(&from_peaks).map(|s| s * mu_at_rest))
                 .filter(|s| s.is_finite() && s.abs() > 1e-5)
                 .unwrap_or(0.005);
             let reference = mean_n0;
@@ -492,8 +492,15 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 Variant {
                     effect,
                     form: "power",
-                    // Slope a·k/Nref at the reference: k from the same slope.
-                    params: vec![Param::log("exponent", (start * reference / a).clamp(-3.0, 3.0), 1.5, -5.0, 5.0)],
+                    // Slope μ₀·k/Nref at the reference (μ₀ = a + b, the level at
+                    // rest that the form scales): k from the same slope.
+                    params: vec![Param::log(
+                        "exponent",
+                        (start * reference / mu_at_rest).clamp(-3.0, 3.0),
+                        1.5,
+                        -5.0,
+                        5.0,
+                    )],
                     apply: Box::new(move |m, p| {
                         let mut m = m.clone();
                         m.effects.load_dependent_friction = Some(LoadDependentFriction {

@@ -171,7 +171,7 @@ impl Oscillator {
             effects: EffectParams::new(
                 &model.effects,
                 condition.normal_force_n,
-                model.friction.a,
+                model.friction.a + model.friction.b,
                 model.noise.interval_s,
             ),
             // Without noise there is nothing to hold: no boundaries split the steps.

@@ -52,9 +52,10 @@ fn bump_mean(p: f64) -> f64 {
 }
 
 impl EffectParams {
-    /// Flattens `effects` for a point with mean normal force `n0` (N), base
-    /// friction level `a` and noise hold interval `interval_s` (s).
-    pub fn new(effects: &Effects, n0: f64, a: f64, interval_s: f64) -> EffectParams {
+    /// Flattens `effects` for a point with mean normal force `n0` (N), the
+    /// friction law's level at rest `mu_at_rest` (a + b, –) and noise hold
+    /// interval `interval_s` (s).
+    pub fn new(effects: &Effects, n0: f64, mu_at_rest: f64, interval_s: f64) -> EffectParams {
         let mut p =
             EffectParams { harmonic_shape: 2.0, colour_hold_intervals: 1, colour_share: 1.0, ..Default::default() };
         if let Some(h) = &effects.normal_force_harmonics {
@@ -96,7 +97,7 @@ impl EffectParams {
             let r = l.reference_force_n;
             p.friction_offset = match l.form {
                 LoadForm::Linear => l.strength * (n0 - r),
-                LoadForm::Power => a * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
+                LoadForm::Power => mu_at_rest.max(0.0) * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
                 LoadForm::Saturating => l.strength * r * (1.0 - (-(n0 - r) / r).exp()),
                 LoadForm::Exponential => l.strength * r * (((n0 - r) / r).exp() - 1.0),
             };

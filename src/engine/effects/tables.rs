@@ -211,7 +211,8 @@ impl Form for StictionForm {
 #[serde(deny_unknown_fields)]
 pub struct LoadDependentFriction {
     /// Offset Δa added to `a`: `linear` k (N0 − Nref) with k in 1/N;
-    /// `power` a ((N0/Nref)^k − 1); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
+    /// `power` μ₀ ((N0/Nref)^k − 1) with μ₀ = a + b the law's level at rest
+    /// (so it scales with the friction however a and b share it); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
     /// `exponential` k Nref (e^((N0 − Nref)/Nref) − 1).
     #[serde(default)]
     pub form: LoadForm,
