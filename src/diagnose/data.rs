@@ -120,11 +120,16 @@ fn interior_alternates(levels: &[f64]) -> Vec<f64> {
     levels.iter().enumerate().filter(|(i, _)| i % 2 == 1 && *i + 1 < levels.len()).map(|(_, v)| *v).collect()
 }
 
-/// Distinct values, sorted, compared at 1e-6.
+/// Whether two nominal levels (N or Hz) are the same one: equal to 1e-6.
+fn same_level(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-6 * b.abs().max(1.0)
+}
+
+/// Distinct values, sorted, compared by [`same_level`].
 fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
     let mut v: Vec<f64> = values.collect();
     v.sort_by(f64::total_cmp);
-    v.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * b.abs().max(1.0));
+    v.dedup_by(|a, b| same_level(*a, *b));
     v
 }
 
@@ -137,12 +142,12 @@ fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
 /// alternates; where no frequency has three loads of its own, the interior
 /// alternates of all loads.
 fn held_out_loads(conditions: &[Condition], loads: &[f64], frequencies: &[f64]) -> Vec<f64> {
-    let near = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1.0);
     let mut held: Vec<f64> = frequencies
         .iter()
         .flat_map(|&f| {
-            let at_f =
-                levels(conditions.iter().filter(|c| near(c.excitation_frequency_hz, f)).map(|c| c.normal_force_n));
+            let at_f = levels(
+                conditions.iter().filter(|c| same_level(c.excitation_frequency_hz, f)).map(|c| c.normal_force_n),
+            );
             interior_alternates(&at_f)
         })
         .collect();
@@ -170,7 +175,7 @@ fn choose_hold_out(conditions: &[Condition], runs_per_condition: &[usize]) -> Ho
 impl HoldOut {
     /// Whether a condition (the `index`-th of its kind) is held out.
     fn holds(&self, c: Condition, index: usize) -> bool {
-        let near = |list: &[f64], x: f64| list.iter().any(|v| (v - x).abs() <= 1e-6 * x.abs().max(1.0));
+        let near = |list: &[f64], x: f64| list.iter().any(|&v| same_level(v, x));
         match self {
             HoldOut::LoadLevels(v) => near(v, c.normal_force_n),
             HoldOut::Frequencies(v) => near(v, c.excitation_frequency_hz),
