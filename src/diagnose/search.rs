@@ -53,14 +53,16 @@ const STEPS_PER_PARAM: usize = 3;
 
 /// Prints one trial's gap and worst observables (`STICKSLIP_DEBUG=1`).
 fn debug_trial(variant: &Variant, values: &[f64], trial: &Model, scores: &[Score], g: f64) {
-    let mut w: Vec<&Score> = scores.iter().filter(|s| !s.heldout).collect();
-    w.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    let top: Vec<String> =
-        w.iter().take(5).map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z)).collect();
-    let mut h: Vec<&Score> = scores.iter().filter(|s| s.heldout).collect();
-    h.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    let top_heldout: Vec<String> =
-        h.iter().take(5).map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z)).collect();
+    // The five largest |z| of the fitting (or held-out) units.
+    let top = |heldout: bool| -> String {
+        let mut w: Vec<&Score> = scores.iter().filter(|s| s.heldout == heldout).collect();
+        w.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+        w.iter()
+            .take(5)
+            .map(|s| format!("{}@{:.1}N {:+.1}", s.observable, s.normal_force_n, s.z))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
     eprintln!(
         "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {g:.2} ho {:.2} | {} || held out: {}",
         variant.effect,
@@ -71,8 +73,8 @@ fn debug_trial(variant: &Variant, values: &[f64], trial: &Model, scores: &[Score
         trial.friction.d,
         trial.friction.sigma,
         gap_of(scores, true),
-        top.join("; "),
-        top_heldout.join("; ")
+        top(false),
+        top(true)
     );
 }
 
