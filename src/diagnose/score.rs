@@ -48,6 +48,12 @@ pub struct Score {
     /// spread of their difference under the model scored.
     #[serde(skip)]
     pub scale: f64,
+    /// The share of `scale²` that is the variance of the simulated mean
+    /// (the rest is the measured value's): `(1/R) / (1/n + 1/R)` for R
+    /// simulated and n measured values, –. What the simulated side adds to
+    /// the noise of a comparison between two models on the same data.
+    #[serde(skip)]
+    pub simulated_share: f64,
 }
 
 /// Mean Huber loss of z over the fitting (or held-out) scores; 0 for none.
@@ -122,6 +128,7 @@ pub(crate) fn score(
                     heldout: u.heldout,
                     unit: i,
                     scale,
+                    simulated_share: 1.0 / (sim.len() as f64 + 1.0),
                 });
             }
         }
@@ -156,6 +163,7 @@ pub(crate) fn score(
                 heldout: u.heldout,
                 unit: i,
                 scale,
+                simulated_share: n_meas / (n_meas + values.len() as f64),
             });
         }
     }
