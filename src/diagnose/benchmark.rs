@@ -319,7 +319,9 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     let nulls: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.truth.is_empty() && !r.phase_only).collect();
     let phase: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.phase_only).collect();
     let count = |v: &[&BenchmarkRow], f: &dyn Fn(&BenchmarkRow) -> bool| v.iter().filter(|r| f(r)).count();
-    let pct = |a: usize, b: usize| if b == 0 { f64::NAN } else { 100.0 * a as f64 / b as f64 };
+    let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
+    // A share of no sets is not a number: it reads "n/a".
+    let percent = |a: usize, b: usize| if b == 0 { "n/a".to_string() } else { format!("{:.1}%", pct(a, b)) };
     let name = |e: Option<Effect>| e.map_or("none", Effect::name);
     let shape = settings.shape;
     let mut text = String::new();
@@ -351,23 +353,23 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     }
     let single_right = count(&singles, &|r| r.leading_right());
     text.push_str(&format!(
-        "single-effect sets, top-1: {single_right}/{} = {:.1}% (target >= 90%)\n",
+        "single-effect sets, top-1: {single_right}/{} = {} (target >= 90%)\n",
         singles.len(),
-        pct(single_right, singles.len())
+        percent(single_right, singles.len())
     ));
     let (both, lead) = (count(&pairs, &|r| r.all_right()), count(&pairs, &|r| r.leading_right()));
     text.push_str(&format!(
-        "two-effect sets: both named and no third {both}/{} = {:.1}% (target >= 80%); leading right {lead}/{} = {:.1}% (target >= 90%)\n",
+        "two-effect sets: both named and no third {both}/{} = {} (target >= 80%); leading right {lead}/{} = {} (target >= 90%)\n",
         pairs.len(),
-        pct(both, pairs.len()),
+        percent(both, pairs.len()),
         pairs.len(),
-        pct(lead, pairs.len())
+        percent(lead, pairs.len())
     ));
     let (fp, within) = (count(&nulls, &|r| !r.verdict.is_empty()), count(&nulls, &|r| r.baseline_within_noise));
     text.push_str(&format!(
-        "null sets: false positives {fp}/{} = {:.1}% (target <= 5%); calibrated baseline's gap within its noise threshold on {within}/{}\n",
+        "null sets: false positives {fp}/{} = {} (target <= 5%); calibrated baseline's gap within its noise threshold on {within}/{}\n",
         nulls.len(),
-        pct(fp, nulls.len()),
+        percent(fp, nulls.len()),
         nulls.len()
     ));
     let phase_right = count(&phase, &|r| r.all_right());
@@ -388,9 +390,9 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     let named: Vec<&BenchmarkRow> = rows.iter().filter(|r| !r.verdict.is_empty() && r.confidence >= 0.9).collect();
     let named_right = count(&named, &|r| r.truth.contains(&r.verdict[0]));
     text.push_str(&format!(
-        "effects named at confidence >= 0.9: {named_right}/{} right = {:.1}% (target >= 90%)\n",
+        "effects named at confidence >= 0.9: {named_right}/{} right = {} (target >= 90%)\n",
         named.len(),
-        pct(named_right, named.len())
+        percent(named_right, named.len())
     ));
     let moving: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.moves_statistics && r.truth_shrink.is_some()).collect();
     let truth_shrinks: Vec<f64> = moving.iter().filter_map(|r| r.truth_shrink).collect();
