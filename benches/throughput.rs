@@ -4,7 +4,9 @@
 //! several ensemble sizes so the scaling with work shows.
 //!
 //! Workload: the default paper rig at 7 Hz and 16.39 N (noise on, ~3%
-//! sticking), 256 steps per period, 20 cycles per realisation.
+//! sticking), 256 steps per period (the default before it became 64, kept
+//! so the rates stay comparable with `benches/RESULTS.md`), 20 cycles per
+//! realisation.
 //!
 //!     cargo bench --bench throughput
 
@@ -21,7 +23,7 @@ fn steps(realisations: u32, model: &Model) -> u64 {
 
 fn throughput(c: &mut Criterion, group: &str, engine: &Engine, sizes: [u32; 3]) {
     eprintln!("{group}: {}", engine.description());
-    let model = Model::default();
+    let model = Model::paper_rig(&["solver.steps_per_period=256".into()]).expect("the paper rig");
     let points = [Point::steady(&model, CONDITION)];
     let mut group = c.benchmark_group(group);
     group.sample_size(10);

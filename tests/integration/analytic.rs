@@ -176,6 +176,34 @@ fn cpu_step_convergence() {
     assert!(change < 1e-6, "halving the step changed the mean peak by {change:e}");
 }
 
+/// The default step (`[solver] steps_per_period`, chosen by measurement,
+/// not habit) is converged where the main job's grid is hardest, next to
+/// resonance (10 Hz, 4 N: the largest and fastest motion): on the same
+/// noise, four times as many steps change the mean peak by less than
+/// 1e-4 relative, a twenty-fifth of the main job's standard error of a
+/// mean peak there (6400 peaks of relative spread ≈ 0.2: ≈ 2.5e-3).
+#[test]
+fn default_step_is_converged_next_to_resonance() {
+    let default = Model::default();
+    let steps = default.solver.steps_per_period;
+    let mean_peak = |steps: u32| {
+        let m = Model::paper_rig(&[format!("solver.steps_per_period={steps}")]).unwrap();
+        let cond = Condition { excitation_frequency_hz: 10.0, normal_force_n: 4.0 };
+        let (x, v) = m.linear_steady_state_at_zero(10.0);
+        let plan = RunPlan { warmup_cycles: 50, measured_cycles: 50 };
+        let paths = common::paths(common::cpu(), &m, cond, InitialState { x_m: x, v_m_per_s: v }, 1, 16, plan);
+        let all: Vec<f64> = paths.iter().flat_map(|p| p.peaks_m.clone()).collect();
+        all.iter().sum::<f64>() / all.len() as f64
+    };
+    let (coarse, fine) = (mean_peak(steps), mean_peak(4 * steps));
+    let change = (fine / coarse - 1.0).abs();
+    println!(
+        "mean peak at 10 Hz, 4 N: {steps} steps {coarse:e}, {} steps {fine:e}: relative change {change:.2e}",
+        4 * steps
+    );
+    assert!(change < 1e-4, "four times the default step count changed the mean peak by {change:e}");
+}
+
 /// The embedded default reproduces Figure 8(d)'s measured mean peak,
 /// 3.854 mm at 7 Hz and 16.39 N, within 2%.
 #[test]
