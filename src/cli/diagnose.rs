@@ -69,6 +69,12 @@ pub(crate) struct BenchmarkArgs {
     /// (comma list; below 1 the noiseless block never stops).
     #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::synthetic::LOAD_SHARES)]
     pub(crate) load_shares: Vec<f64>,
+    /// Excitation frequencies as ratios of each set's natural frequency
+    /// (comma list, 0.2 to 3, at most 8; e.g. 0.6,0.7,0.8,0.9,1.1,1.2 with
+    /// three load shares and --duration 50 makes the 18-run sets of 3 loads ×
+    /// 6 frequencies).
+    #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::synthetic::FREQUENCY_RATIOS)]
+    pub(crate) frequency_ratios: Vec<f64>,
     /// Random seed of the synthetic sets (each diagnosis derives its own from it).
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
@@ -182,6 +188,15 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&args.replicates) {
         anyhow::bail!("invalid --replicates: {}; it must be {MIN_REPLICATES} to {MAX_REPLICATES}", args.replicates);
     }
+    if args.frequency_ratios.is_empty()
+        || args.frequency_ratios.len() > 8
+        || args.frequency_ratios.iter().any(|r| !(r.is_finite() && (0.2..=3.0).contains(r)))
+    {
+        anyhow::bail!(
+            "invalid --frequency-ratios {:?}: 1 to 8 ratios of the natural frequency, each 0.2 to 3",
+            args.frequency_ratios
+        );
+    }
     if args.load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
     }
@@ -200,6 +215,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
             ..SetShape::default()
         },
         load_shares: args.load_shares,
+        frequency_ratios: args.frequency_ratios,
         seed: args.seed,
         replicates: args.replicates,
         sets: args.sets,

@@ -41,6 +41,8 @@ pub struct BenchmarkSettings {
     pub shape: SetShape,
     /// Normal-force levels as shares of Den Hartog's no-stop threshold.
     pub load_shares: Vec<f64>,
+    /// Excitation frequencies as ratios of the rig's natural frequency, –.
+    pub frequency_ratios: Vec<f64>,
     /// Seed of the sets (and, mixed, of the diagnoses).
     pub seed: u64,
     /// Simulated replicate records per condition in each diagnosis.
@@ -223,7 +225,8 @@ pub fn run_benchmark(
     let started = Instant::now();
     for &(i, ref planned) in &plan {
         let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-        let (truth, conditions) = random_truth(seed, &planned.hidden, &settings.load_shares)?;
+        let (truth, conditions) =
+            random_truth(seed, &planned.hidden, &settings.frequency_ratios, &settings.load_shares)?;
         let dir = settings.out.join(format!("set-{i:03}"));
         // The truth beside (not inside) the data, for whoever checks a verdict.
         create_dir(&dir)?;
@@ -326,7 +329,7 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     let shape = settings.shape;
     let mut text = String::new();
     text.push_str(&format!(
-        "blind benchmark of the diagnosis: {} sets ({} single-effect, {} two-effect, {} phase-only, {} null), {} run(s) x {} s per condition, 2 frequencies x loads at {:?} of the no-stop threshold, baselines from the whole eq. 7 family, effects in forms no candidate has; {}\n",
+        "blind benchmark of the diagnosis: {} sets ({} single-effect, {} two-effect, {} phase-only, {} null), {} run(s) x {} s per condition, {} frequencies x loads at {:?} of the no-stop threshold, baselines from the whole eq. 7 family, effects in forms no candidate has; {}\n",
         rows.len(),
         singles.len(),
         pairs.len(),
@@ -334,6 +337,7 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         nulls.len(),
         shape.runs_per_condition,
         shape.duration_s,
+        settings.frequency_ratios.len(),
         settings.load_shares,
         engine.description()
     ));

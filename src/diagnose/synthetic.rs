@@ -53,6 +53,10 @@ fn uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
 /// no-stop threshold (see the module's documentation).
 pub const LOAD_SHARES: [f64; 3] = [0.4, 0.65, 0.9];
 
+/// Excitation frequencies of the benchmark's sets, as ratios η of the
+/// rig's natural frequency (–).
+pub const FREQUENCY_RATIOS: [f64; 2] = [0.65, 0.8];
+
 /// One effect hidden in a set: which, in which withheld form (1 or 2, see
 /// [`WITHHELD_FORMS`]) and at which strength (0 moderate, 1 strong).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,9 +81,15 @@ pub const WITHHELD_FORMS: [(Effect, &str, &str); 7] = [
 ];
 
 /// A random rig and friction law from the whole eq. 7 family with the
-/// `hidden` effects, at two frequencies × the normal forces that are
-/// `load_shares` of the no-stop threshold.
-pub fn random_truth(seed: u64, hidden: &[Hidden], load_shares: &[f64]) -> Result<(Model, Vec<Condition>)> {
+/// `hidden` effects, at the frequencies `frequency_ratios` × the rig's
+/// natural frequency, each × the normal forces that are `load_shares` of
+/// the no-stop threshold there.
+pub fn random_truth(
+    seed: u64,
+    hidden: &[Hidden],
+    frequency_ratios: &[f64],
+    load_shares: &[f64],
+) -> Result<(Model, Vec<Condition>)> {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut m = Model::default();
     m.rig.mass_kg = uniform(&mut rng, 0.6, 1.6);
@@ -96,7 +106,7 @@ pub fn random_truth(seed: u64, hidden: &[Hidden], load_shares: &[f64]) -> Result
     let k = m.stiffness_n_per_m();
     let mu = m.friction.a + 0.5 * m.friction.b.max(0.0);
     let mut conditions = Vec::new();
-    for eta in [0.65, 0.8] {
+    for &eta in frequency_ratios {
         let threshold = DenHartog::stop_threshold(eta);
         for &share in load_shares {
             let n0 = share * threshold * k * m.excitation.amplitude_m / mu;

@@ -83,6 +83,7 @@ fn bad_input_is_named_and_nothing_is_written() {
     refused(&["simulate", "--out", out_s, "--sample-rate", "0"], &out, "--sample-rate");
     refused(&["benchmark-diagnosis", "--out", out_s, "--load-shares", "0.5,-1"], &out, "--load-shares");
     refused(&["benchmark-diagnosis", "--out", out_s, "--effects", "stickiness"], &out, "stickiness");
+    refused(&["benchmark-diagnosis", "--out", out_s, "--frequency-ratios", "0.7,NaN"], &out, "--frequency-ratios");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
