@@ -157,19 +157,25 @@ fn den_hartog_threshold_separates_stops() {
     }
 }
 
+/// The mean peak of the paper rig at `steps` steps per period, on the CPU
+/// reference from the linear steady state: `realisations` paths of seed
+/// `seed` under `plan`, m.
+fn paper_rig_mean_peak(steps: u32, cond: Condition, plan: RunPlan, seed: u64, realisations: u32) -> f64 {
+    let m = Model::paper_rig(&[format!("solver.steps_per_period={steps}")]).unwrap();
+    let (x, v) = m.linear_steady_state_at_zero(cond.excitation_frequency_hz);
+    let initial = InitialState { x_m: x, v_m_per_s: v };
+    let paths = common::paths(common::cpu(), &m, cond, initial, seed, realisations, plan);
+    let all: Vec<f64> = paths.iter().flat_map(|p| p.peaks_m.clone()).collect();
+    all.iter().sum::<f64>() / all.len() as f64
+}
+
 /// Halving the step changes the mean peak of the noisy default model by
 /// less than 1e-6 relative.
 #[test]
 fn cpu_step_convergence() {
-    let mean_peak = |steps: u32| {
-        let m = Model::paper_rig(&[format!("solver.steps_per_period={steps}")]).unwrap();
-        let cond = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
-        let (x, v) = m.linear_steady_state_at_zero(7.0);
-        let plan = RunPlan { warmup_cycles: 20, measured_cycles: 50 };
-        let paths = common::paths(common::cpu(), &m, cond, InitialState { x_m: x, v_m_per_s: v }, 3, 32, plan);
-        let all: Vec<f64> = paths.iter().flat_map(|p| p.peaks_m.clone()).collect();
-        all.iter().sum::<f64>() / all.len() as f64
-    };
+    let cond = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+    let plan = RunPlan { warmup_cycles: 20, measured_cycles: 50 };
+    let mean_peak = |steps: u32| paper_rig_mean_peak(steps, cond, plan, 3, 32);
     let (coarse, fine) = (mean_peak(256), mean_peak(512));
     let change = (fine / coarse - 1.0).abs();
     println!("mean peak 256 steps {coarse:e}, 512 steps {fine:e}: relative change {change:.2e}");
@@ -184,17 +190,10 @@ fn cpu_step_convergence() {
 /// mean peak there (6400 peaks of relative spread ≈ 0.2: ≈ 2.5e-3).
 #[test]
 fn default_step_is_converged_next_to_resonance() {
-    let default = Model::default();
-    let steps = default.solver.steps_per_period;
-    let mean_peak = |steps: u32| {
-        let m = Model::paper_rig(&[format!("solver.steps_per_period={steps}")]).unwrap();
-        let cond = Condition { excitation_frequency_hz: 10.0, normal_force_n: 4.0 };
-        let (x, v) = m.linear_steady_state_at_zero(10.0);
-        let plan = RunPlan { warmup_cycles: 50, measured_cycles: 50 };
-        let paths = common::paths(common::cpu(), &m, cond, InitialState { x_m: x, v_m_per_s: v }, 1, 16, plan);
-        let all: Vec<f64> = paths.iter().flat_map(|p| p.peaks_m.clone()).collect();
-        all.iter().sum::<f64>() / all.len() as f64
-    };
+    let steps = Model::default().solver.steps_per_period;
+    let cond = Condition { excitation_frequency_hz: 10.0, normal_force_n: 4.0 };
+    let plan = RunPlan { warmup_cycles: 50, measured_cycles: 50 };
+    let mean_peak = |steps: u32| paper_rig_mean_peak(steps, cond, plan, 1, 16);
     let (coarse, fine) = (mean_peak(steps), mean_peak(4 * steps));
     let change = (fine / coarse - 1.0).abs();
     println!(
