@@ -188,7 +188,10 @@ pub(crate) fn gap_noise(k: usize) -> f64 {
 
 /// The calibrated baseline's scale of every response score, by (unit,
 /// observable): the fixed yardstick of [`keeps_the_response`].
-type Yardstick = BTreeMap<(usize, crate::diagnose::observable::Observable), f64>;
+type Yardstick = BTreeMap<ScoreKey, f64>;
+
+/// A score's (unit, observable).
+type ScoreKey = (usize, crate::diagnose::observable::Observable);
 
 fn yardstick(baseline_scores: &[Score]) -> Yardstick {
     baseline_scores.iter().filter(|s| s.observable.is_response()).map(|s| ((s.unit, s.observable), s.scale)).collect()
@@ -204,16 +207,28 @@ fn yardstick(baseline_scores: &[Score]) -> Yardstick {
 /// looks closer to the data everywhere while its mean and variance move
 /// away from them.
 fn response_gap(scores: &[Score], has_heldout: bool, yardstick: &Yardstick) -> (f64, usize) {
-    let losses: Vec<f64> = scores
+    let losses = response_losses(scores, has_heldout, yardstick);
+    let k = losses.len();
+    (if k == 0 { 0.0 } else { losses.iter().map(|(_, (loss, _))| loss).sum::<f64>() / k as f64 }, k)
+}
+
+/// The response scores of the held-out units where there are any (else
+/// the fitting ones), in the scores' order, each by (unit, observable) with
+/// its Huber loss in the baseline's yardstick and that loss's variance from
+/// the simulated mean alone (the score's [`Score::simulated_share`] of its
+/// scale², carried through the loss by its slope; see [`response_rise`]).
+fn response_losses(scores: &[Score], has_heldout: bool, yardstick: &Yardstick) -> Vec<(ScoreKey, (f64, f64))> {
+    scores
         .iter()
         .filter(|s| s.heldout == has_heldout && s.observable.is_response())
         .map(|s| {
-            let scale = yardstick.get(&(s.unit, s.observable)).copied().unwrap_or(s.scale);
-            crate::diagnose::score::huber(s.z * s.scale / scale)
+            let y = yardstick.get(&(s.unit, s.observable)).copied().unwrap_or(s.scale);
+            let u = s.z * s.scale / y;
+            let slope = (2.0 * u).clamp(-2.0 * HUBER_K, 2.0 * HUBER_K);
+            let variance = slope * slope * s.simulated_share * (s.scale / y).powi(2);
+            ((s.unit, s.observable), (crate::diagnose::score::huber(u), variance))
         })
-        .collect();
-    let k = losses.len();
-    (if k == 0 { 0.0 } else { losses.iter().sum::<f64>() / k as f64 }, k)
+        .collect()
 }
 
 /// Whether `candidate` keeps the response where the fit did not look: its
@@ -251,18 +266,8 @@ fn keeps_the_response(
 /// by its slope). Replicates share their seeds between models, so this
 /// overstates the noise, never understates it.
 fn response_rise(current: &[Score], candidate: &[Score], has_heldout: bool, yardstick: &Yardstick) -> (f64, f64) {
-    let in_yardstick = |s: &Score| {
-        let y = yardstick.get(&(s.unit, s.observable)).copied().unwrap_or(s.scale);
-        let u = s.z * s.scale / y;
-        let slope = (2.0 * u).clamp(-2.0 * HUBER_K, 2.0 * HUBER_K);
-        (crate::diagnose::score::huber(u), slope * slope * s.simulated_share * (s.scale / y).powi(2))
-    };
-    let picked = |scores: &[Score]| -> BTreeMap<(usize, crate::diagnose::observable::Observable), (f64, f64)> {
-        scores
-            .iter()
-            .filter(|s| s.heldout == has_heldout && s.observable.is_response())
-            .map(|s| ((s.unit, s.observable), in_yardstick(s)))
-            .collect()
+    let picked = |scores: &[Score]| -> BTreeMap<ScoreKey, (f64, f64)> {
+        response_losses(scores, has_heldout, yardstick).into_iter().collect()
     };
     let (before, after) = (picked(current), picked(candidate));
     let (mut rise, mut variance, mut k) = (0.0, 0.0, 0usize);
