@@ -7,6 +7,8 @@
 //! normal force. Without force channels, the friction level `a` is solved so
 //! that the simulated mean peaks match the measured ones.
 
+use rayon::prelude::*;
+
 use crate::diagnose::data::{Data, Unit};
 use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
@@ -167,6 +169,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
         speed: measured.anchors_m_per_s.to_vec(),
         mu: measured.anchors_m_per_s.iter().map(|&v| current.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
         record: vec![0; measured.anchors_m_per_s.len()],
+        anchors_m_per_s: speed_deciles(&measured.anchors_m_per_s),
     };
     if let Some(law) = anchors.fit_at(current.c).filter(|l| l.plausible()) {
         let f = &mut model.friction;
@@ -297,6 +300,18 @@ struct SlipSamples {
     speed: Vec<f64>,
     mu: Vec<f64>,
     record: Vec<usize>,
+    /// The speeds' 5%, 15%, …, 95% quantiles, m/s (sorted once: every law
+    /// fitted to these samples carries them).
+    anchors_m_per_s: [f64; 10],
+}
+
+/// The 5%, 15%, …, 95% quantiles of some speeds (m/s), each the sample
+/// at or below its rank.
+fn speed_deciles(speed: &[f64]) -> [f64; 10] {
+    let mut sorted = speed.to_vec();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let n = sorted.len();
+    std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize])
 }
 
 impl SlipSamples {
@@ -313,7 +328,11 @@ impl SlipSamples {
                 }
             }
         }
-        (mu.len() >= 50).then_some(SlipSamples { speed, mu, record })
+        if mu.len() < 50 {
+            return None;
+        }
+        let anchors_m_per_s = speed_deciles(&speed);
+        Some(SlipSamples { speed, mu, record, anchors_m_per_s })
     }
 
     /// Least squares at a given `c`: linear in (a, b, d) with basis
@@ -324,6 +343,13 @@ impl SlipSamples {
     /// as a statistic of simulated records it must be the same function as on
     /// the measured ones.
     fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
+        self.law_at(c, true)
+    }
+
+    /// [`Self::fit_at`], with the within-record σ left NaN unless
+    /// `within` (the search over `c` compares the overall σ alone, and the
+    /// within-record one costs another pass over the samples).
+    fn law_at(&self, c: f64, within: bool) -> Option<FrictionLaw> {
         let n = self.mu.len();
         let stribeck = c != 0.0;
         let solve = |fixed_d: Option<f64>| -> Option<(f64, f64, f64, f64, usize)> {
@@ -350,11 +376,9 @@ impl SlipSamples {
         if d.abs() > MAX_D_S2_PER_M2 {
             (a, b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
         }
-        let mut sorted = self.speed.clone();
-        sorted.sort_by(f64::total_cmp);
-        let anchors_m_per_s = std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
+        let anchors_m_per_s = self.anchors_m_per_s;
         let sigma = (rss.max(0.0) / (n - p).max(1) as f64).sqrt();
-        let within_sigma = self.within_sigma(|s| a + b / (1.0 + c * s) + d * s * s, p);
+        let within_sigma = if within { self.within_sigma(|s| a + b / (1.0 + c * s) + d * s * s, p) } else { f64::NAN };
         Some(FrictionLaw { a, b, c, d, sigma, within_sigma, anchors_m_per_s })
     }
 
@@ -378,7 +402,7 @@ impl SlipSamples {
     /// golden-section search in log c between the best point's neighbours.
     fn fit(&self) -> Option<FrictionLaw> {
         let grid: Vec<f64> = law_c_grid().collect();
-        let laws: Vec<Option<FrictionLaw>> = grid.iter().map(|&c| self.fit_at(c)).collect();
+        let laws: Vec<Option<FrictionLaw>> = grid.par_iter().map(|&c| self.law_at(c, false)).collect();
         let (best, law) = laws
             .iter()
             .enumerate()
@@ -386,13 +410,14 @@ impl SlipSamples {
             .filter(|(_, l)| l.plausible())
             .min_by(|x, y| x.1.sigma.total_cmp(&y.1.sigma))?;
         if best == 0 {
-            return Some(law);
+            return self.fit_at(law.c);
         }
         let lo = if best == 1 { grid[1] / 3.0 } else { grid[best - 1] };
         let hi = grid.get(best + 1).copied().unwrap_or(grid[best] * 3.0);
         let (mut lo, mut hi) = (lo.ln(), hi.ln());
         let golden = 0.5 * (5f64.sqrt() - 1.0);
-        let sigma_at = |x: f64| self.fit_at(x.exp()).filter(|l| l.plausible()).map_or(f64::INFINITY, |l| l.sigma);
+        let sigma_at =
+            |x: f64| self.law_at(x.exp(), false).filter(|l| l.plausible()).map_or(f64::INFINITY, |l| l.sigma);
         let (mut x1, mut x2) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
         let (mut f1, mut f2) = (sigma_at(x1), sigma_at(x2));
         for _ in 0..14 {
@@ -406,8 +431,8 @@ impl SlipSamples {
                 f2 = sigma_at(x2);
             }
         }
-        let refined = self.fit_at((0.5 * (lo + hi)).exp()).filter(|l| l.plausible());
-        Some(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law))
+        let refined = self.law_at((0.5 * (lo + hi)).exp(), false).filter(|l| l.plausible());
+        self.fit_at(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law).c)
     }
 }
 
