@@ -281,6 +281,7 @@ pub fn diagnose_set(
     progress(&format!("calibrating the baseline (held out: {})", data.hold_out.describe()));
     let (baseline, baseline_scores, slope) =
         calibrate::calibrate_and_score(&calibrate::initial_baseline(&data)?, &data, settings, engine, None, 0)?;
+    let (baseline, baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
     let has_heldout = data.has_heldout();
     let gaps = (gap_of(&baseline_scores, false), gap_of(&baseline_scores, true));
     let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;

@@ -16,7 +16,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::diagnose::calibrate::calibrate_and_score;
+use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::candidates::{Context, NULL_HUBER, Variant, signature_excess, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{HUBER_K, Score, count_of, gap_of};
@@ -347,6 +347,11 @@ fn round(
             }
         }
         let Some((t, form, parameters)) = best else { continue };
+        // The law carried to where this effect's data imply it, so the
+        // effect is compared (and the next round searched) from a law that
+        // has stopped moving.
+        let (model, scores) = converge_law(t.model, t.scores, data, settings, engine)?;
+        let t = Trial { gap_fit: gap_of(&scores, false), values: t.values, model, scores };
         let gap_heldout = gap_of(&t.scores, true);
         let mut worst: Vec<&Score> = t.scores.iter().collect();
         worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
