@@ -110,8 +110,8 @@ fn solve_friction_level(
 /// eq. 7: the same least-squares fit of `a + b/(1 + c|v|) + d v²`
 /// ([`fit_friction_law`]) is run on the measured records and on the model's
 /// simulated replicate records (which carry the data's measurement noise),
-/// and `a`, `b`, `d` are moved by the difference, `c` by the ratio and σ_μ²
-/// by the difference of the residual variances within records (each
+/// and `a`, `b`, `d` are moved by the difference (`c` stays the measured
+/// law's) and σ_μ² by the difference of the residual variances within records (each
 /// record's mean residual removed, so a friction level that changes with
 /// the load or over time is left to the effect that makes it). The fit's numbers are then
 /// those of the data whatever else the model carries (`law_steps` steps, 0
@@ -182,9 +182,12 @@ pub(crate) fn converge_law(
 /// measured law's Stribeck rate `c` (s/m). The measured law is the fit at
 /// that `c` too (it is where its residual is smallest), so both sides of
 /// the indirect inference are the same statistic, the linear fit at a
-/// fixed `c`; searching `c` again on every simulation would only add the
-/// noise of a poorly pinned `c` to the step (and cost ~27 fits instead
-/// of one).
+/// fixed `c`, one fit instead of the ~27 of a search over `c`. Its cost:
+/// where the model misfits the data's speed distribution (a drift of the
+/// normal force it lacks, in the benchmark), the simulated residual at that
+/// `c` stays above the measured one whatever σ_μ is, and the step drives
+/// σ_μ to its floor; searching `c` on both sides avoided that and did no
+/// better over the benchmark (`benches/RESULTS.md`).
 fn simulated_law(
     engine: &Engine,
     model: &Model,
