@@ -50,7 +50,9 @@ pub(crate) const MIN_FURTHER_SHARE: f64 = 0.05;
 /// model can be expected to reach.
 const HUBER_FLOOR: f64 = 0.98;
 
-/// Trials per parameter in the coordinate search.
+/// Moves per parameter in one direction in the coordinate search (of 1, 2,
+/// 4, … steps: up to 7 steps away), besides the first probe of the other
+/// direction and one move back from an overshoot.
 const STEPS_PER_PARAM: usize = 3;
 
 /// Prints one trial's gap and worst observables (`STICKSLIP_DEBUG=1`).
@@ -127,8 +129,8 @@ fn evaluate(
 
 /// Fits one variant on top of `base` by a coordinate search on the fitting
 /// gap: from the data-driven start, each parameter in turn is stepped up or
-/// down while that helps (at most [`STEPS_PER_PARAM`] trials each), then the
-/// first parameter once more at half its step. The friction law is carried
+/// down while that helps, by moves that double (at most [`STEPS_PER_PARAM`]
+/// in one direction), then the first parameter once more at half its step. The friction law is carried
 /// from the best trial to the next (two recalibration steps at the start,
 /// one per trial after), so over a search it converges to the law the data
 /// imply *with* this effect instead of staying near the baseline's, which
@@ -159,18 +161,24 @@ fn fit_variant(
         }
     };
     for i in 0..variant.params.len() {
-        let mut used = 0;
         let mut direction = 1.0;
         if !try_move(&mut best, i, direction)? {
-            used += 1;
             direction = -1.0;
             if !try_move(&mut best, i, direction)? {
                 continue;
             }
         }
-        used += 1;
-        while used < STEPS_PER_PARAM && try_move(&mut best, i, direction)? {
-            used += 1;
+        // Then moves of 2, 4, … steps while they help, and one of half the
+        // size that overshot: a start several steps off (a slope read from
+        // a misfit that the effect itself distorts) is reached in a few
+        // trials instead of being cut short while the gap still falls.
+        let mut size = 1.0;
+        for _ in 1..STEPS_PER_PARAM {
+            size *= 2.0;
+            if !try_move(&mut best, i, direction * size)? {
+                try_move(&mut best, i, direction * size / 2.0)?;
+                break;
+            }
         }
     }
     if !variant.params.is_empty() && !try_move(&mut best, 0, 0.5)? {
