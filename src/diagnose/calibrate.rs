@@ -111,8 +111,8 @@ fn solve_friction_level(
 /// ([`fit_friction_law`]) is run on the measured records and on the model's
 /// simulated replicate records (which carry the data's measurement noise),
 /// and `a`, `b`, `d` are moved by the difference (`c` stays the measured
-/// law's) and σ_μ² by the difference of the residual variances within records (each
-/// record's mean residual removed, so a friction level that changes with
+/// law's) and σ_μ² by the difference of the residual variances within
+/// records (each record's mean residual removed, so a friction level that changes with
 /// the load or over time is left to the effect that makes it). The fit's numbers are then
 /// those of the data whatever else the model carries (`law_steps` steps, 0
 /// for the baseline's [`LAW_STEPS`], each from the fitting units'

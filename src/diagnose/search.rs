@@ -130,11 +130,11 @@ fn evaluate(
 /// Fits one variant on top of `base` by a coordinate search on the fitting
 /// gap: from the data-driven start, each parameter in turn is stepped up or
 /// down while that helps, by moves that double (at most [`STEPS_PER_PARAM`]
-/// in one direction), then the first parameter once more at half its step. The friction law is carried
-/// from the best trial to the next (two recalibration steps at the start,
-/// one per trial after), so over a search it converges to the law the data
-/// imply *with* this effect instead of staying near the baseline's, which
-/// the effect itself may have distorted.
+/// in one direction), then the first parameter once more at half its step.
+/// The friction law is carried from the best trial to the next (two
+/// recalibration steps at the start, one per trial after), so over a search
+/// it converges to the law the data imply *with* this effect instead of
+/// staying near the baseline's, which the effect itself may have distorted.
 fn fit_variant(
     variant: &Variant,
     base: &Model,
