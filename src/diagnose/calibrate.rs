@@ -16,7 +16,7 @@ use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
-use crate::diagnose::score::{Score, gap_of, score};
+use crate::diagnose::score::{Scope, Score, gap_of, score};
 use crate::diagnose::simulate::{ensemble_path_stats, replicates_of};
 use crate::diagnose::{DiagnoseSettings, mean};
 use crate::engine::{Condition, Engine, Model};
@@ -121,7 +121,7 @@ fn solve_friction_level(
 /// it, a noise that is coloured or skewed) is judged with the law and noise
 /// level that the data imply *given that effect*, not the ones it distorted.
 /// Without friction channels `a` is solved from the response (mean peaks,
-/// GPU ensembles).
+/// GPU ensembles). The scores cover the units in `scope`.
 pub(crate) fn calibrate_and_score(
     model: &Model,
     data: &Data<'_>,
@@ -129,6 +129,7 @@ pub(crate) fn calibrate_and_score(
     engine: &Engine,
     slope: Option<f64>,
     law_steps: usize,
+    scope: Scope,
 ) -> Result<(Model, Vec<Score>, f64)> {
     if let Some(measured) = data.measured_law {
         let mut m = model.clone();
@@ -136,11 +137,11 @@ pub(crate) fn calibrate_and_score(
             let Some(simulated) = simulated_law(engine, &m, &measured, data, settings)? else { break };
             step_law(&mut m, &measured, &simulated);
         }
-        let scores = score(engine, &m, data, settings)?;
+        let scores = score(engine, &m, data, settings, scope)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
     }
     let (m, slope) = solve_friction_level(model, data, settings, engine, slope)?;
-    let scores = score(engine, &m, data, settings)?;
+    let scores = score(engine, &m, data, settings, scope)?;
     Ok((m, scores, slope))
 }
 
@@ -168,7 +169,7 @@ pub(crate) fn converge_law(
         return Ok((model, scores));
     }
     for _ in 0..POLISH_STEPS {
-        let (m, s, _) = calibrate_and_score(&model, data, settings, engine, None, 1)?;
+        let (m, s, _) = calibrate_and_score(&model, data, settings, engine, None, 1, Scope::All)?;
         if gap_of(&s, false) >= gap_of(&scores, false) {
             break;
         }

@@ -46,7 +46,7 @@ use crate::error::Result;
 use data::{Data, HoldOut, condition_key};
 use measure::{MeasurementSet, read_measurement_set};
 use observable::Observable;
-use score::{Score, gap_of};
+use score::{Scope, Score, gap_of};
 
 /// Settings of a diagnosis.
 #[derive(Clone, Copy, Debug)]
@@ -279,8 +279,15 @@ pub fn diagnose_set(
 ) -> Result<Diagnosis> {
     let data = Data::new(set)?;
     progress(&format!("calibrating the baseline (held out: {})", data.hold_out.describe()));
-    let (baseline, baseline_scores, slope) =
-        calibrate::calibrate_and_score(&calibrate::initial_baseline(&data)?, &data, settings, engine, None, 0)?;
+    let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(
+        &calibrate::initial_baseline(&data)?,
+        &data,
+        settings,
+        engine,
+        None,
+        0,
+        Scope::All,
+    )?;
     let (baseline, baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
     let has_heldout = data.has_heldout();
     let gaps = (gap_of(&baseline_scores, false), gap_of(&baseline_scores, true));

@@ -83,12 +83,48 @@ pub(crate) fn compare(observable: Observable, measured: f64, values: &[f64]) -> 
     }
 }
 
-/// Scores a model against the data: z per (unit, observable).
+/// Which measured units a score covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// Every unit.
+    All,
+    /// The fitting units' records, and every summary unit (a summary's
+    /// ensembles are one job, cheap beside the records): what a search's
+    /// trials are compared on ([`gap_of`] of the fitting scores). The
+    /// held-out records are added for the trial a search keeps
+    /// ([`add_heldout`]), with the same numbers as a score over all units.
+    Fitting,
+}
+
+/// Adds the held-out records' scores to scores of `model` made with
+/// [`Scope::Fitting`], in the order a score over all units has them, so the
+/// result is the same as that score's.
+pub(crate) fn add_heldout(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    mut scores: Vec<Score>,
+) -> Result<Vec<Score>> {
+    let heldout: Vec<usize> =
+        (0..data.units.len()).filter(|&i| data.units[i].summary.is_none() && data.units[i].heldout).collect();
+    if heldout.is_empty() {
+        return Ok(scores);
+    }
+    scores.extend(record_scores(engine, model, data, settings, &heldout)?);
+    // Summary units first, then records, each in unit order (a stable sort
+    // keeps each unit's observables in their order).
+    scores.sort_by_key(|s| (data.units[s.unit].summary.is_none(), s.unit));
+    Ok(scores)
+}
+
+/// Scores a model against the data's units in `scope`: z per (unit, observable).
 pub(crate) fn score(
     engine: &Engine,
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
+    scope: Scope,
 ) -> Result<Vec<Score>> {
     let mut scores = Vec::new();
     let summary_units: Vec<usize> = (0..data.units.len()).filter(|&i| data.units[i].summary.is_some()).collect();
@@ -134,7 +170,22 @@ pub(crate) fn score(
         }
     }
     // Time series: simulated replicate records through the same feature code.
-    let run_units: Vec<usize> = (0..data.units.len()).filter(|&i| data.units[i].summary.is_none()).collect();
+    let run_units: Vec<usize> = (0..data.units.len())
+        .filter(|&i| data.units[i].summary.is_none() && (scope == Scope::All || !data.units[i].heldout))
+        .collect();
+    scores.extend(record_scores(engine, model, data, settings, &run_units)?);
+    Ok(scores)
+}
+
+/// The scores of record units `run_units` (in that order).
+fn record_scores(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    run_units: &[usize],
+) -> Result<Vec<Score>> {
+    let mut scores = Vec::new();
     let simulated: Vec<Vec<RunFeatures>> = run_units
         .par_iter()
         .map(|&u| Ok(replicates(engine, model, data, settings, u)?.iter().map(run_features).collect()))

@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::candidates::{Context, NULL_HUBER, Variant, signature_excess, variants};
 use crate::diagnose::data::Data;
-use crate::diagnose::score::{HUBER_K, Score, count_of, gap_of};
+use crate::diagnose::score::{HUBER_K, Scope, Score, add_heldout, count_of, gap_of};
 use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::{Error, Result};
@@ -111,15 +111,16 @@ fn evaluate(
     // A trial whose parameters drive the oscillator out of range (friction
     // turned negative, say) is not a model of the data: it is passed over
     // like an invalid one instead of ending the diagnosis.
-    let (model, scores, _) = match calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps) {
-        Err(Error::Diverged { point, message }) => {
-            if std::env::var_os("STICKSLIP_DEBUG").is_some() {
-                eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
+    let (model, scores, _) =
+        match calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps, Scope::Fitting) {
+            Err(Error::Diverged { point, message }) => {
+                if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+                    eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
+                }
+                return Ok(None);
             }
-            return Ok(None);
-        }
-        other => other?,
-    };
+            other => other?,
+        };
     let gap_fit = gap_of(&scores, false);
     if std::env::var_os("STICKSLIP_DEBUG").is_some() {
         debug_trial(variant, values, &model, &scores, gap_fit);
@@ -184,6 +185,7 @@ fn fit_variant(
     if !variant.params.is_empty() && !try_move(&mut best, 0, 0.5)? {
         try_move(&mut best, 0, -0.5)?;
     }
+    best.scores = add_heldout(engine, &best.model, data, settings, best.scores)?;
     Ok(Some(best))
 }
 
