@@ -344,14 +344,22 @@ impl<'a> Path<'a> {
 
     /// Acceleration (m/s²) while slipping in direction `sign`, with the base
     /// at `cos_omega_t` of its amplitude, and the rate of the lagged friction
-    /// coefficient (1/s; 0 unless hysteresis `lag` is on).
+    /// coefficient (1/s; 0 unless hysteresis `lag` is on: `LAG` is
+    /// [`Path::lag`], a constant so that without it no stage computes it).
     #[inline(always)]
-    fn slip_rates(&self, cos_omega_t: f64, x_m: f64, v_m_per_s: f64, lagged_mu: f64, sign: f64) -> (f64, f64) {
+    fn slip_rates<const LAG: bool>(
+        &self,
+        cos_omega_t: f64,
+        x_m: f64,
+        v_m_per_s: f64,
+        lagged_mu: f64,
+        sign: f64,
+    ) -> (f64, f64) {
         let o = self.osc;
         let mu = self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
         let spring = self.spring_force(cos_omega_t, x_m);
         let acceleration = (spring - o.damping_n_s_per_m * v_m_per_s - sign * mu * self.normal_force_n) * self.inv_mass;
-        let lag_rate = if self.lag {
+        let lag_rate = if LAG {
             (self.steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / o.effects.hysteresis_lag_s
         } else {
             0.0
@@ -363,21 +371,43 @@ impl<'a> Path<'a> {
     /// is `start`) over `h` seconds; `half` rotates by `Ωh/2`.
     #[inline]
     fn rk4_slip(&self, start: Trig, x_m: f64, v_m_per_s: f64, h_s: f64, half: Trig, sign: f64) -> SlipStep {
+        // Compiled twice, with and without the lagged coefficient's state:
+        // the same arithmetic (its rate is exactly 0 without it), but the
+        // step most runs take has no division by the lag time in its
+        // dependency chain (the compiler evaluated it and threw it away).
+        if self.lag {
+            self.rk4_slip_with::<true>(start, x_m, v_m_per_s, h_s, half, sign)
+        } else {
+            self.rk4_slip_with::<false>(start, x_m, v_m_per_s, h_s, half, sign)
+        }
+    }
+
+    /// [`Path::rk4_slip`] with `LAG` = [`Path::lag`].
+    #[inline(always)]
+    fn rk4_slip_with<const LAG: bool>(
+        &self,
+        start: Trig,
+        x_m: f64,
+        v_m_per_s: f64,
+        h_s: f64,
+        half: Trig,
+        sign: f64,
+    ) -> SlipStep {
         let mid = start.rotated(half);
         let end = mid.rotated(half);
         let m0 = self.lagged_mu;
         let hh = 0.5 * h_s;
         let k1x = v_m_per_s;
-        let (k1v, k1m) = self.slip_rates(start.cos, x_m, v_m_per_s, m0, sign);
+        let (k1v, k1m) = self.slip_rates::<LAG>(start.cos, x_m, v_m_per_s, m0, sign);
         let k2x = v_m_per_s + hh * k1v;
         let x2 = x_m + hh * k1x;
-        let (k2v, k2m) = self.slip_rates(mid.cos, x2, k2x, m0 + hh * k1m, sign);
+        let (k2v, k2m) = self.slip_rates::<LAG>(mid.cos, x2, k2x, m0 + hh * k1m, sign);
         let k3x = v_m_per_s + hh * k2v;
         let x3 = x_m + hh * k2x;
-        let (k3v, k3m) = self.slip_rates(mid.cos, x3, k3x, m0 + hh * k2m, sign);
+        let (k3v, k3m) = self.slip_rates::<LAG>(mid.cos, x3, k3x, m0 + hh * k2m, sign);
         let k4x = v_m_per_s + h_s * k3v;
         let x4 = x_m + h_s * k3x;
-        let (k4v, k4m) = self.slip_rates(end.cos, x4, k4x, m0 + h_s * k3m, sign);
+        let (k4v, k4m) = self.slip_rates::<LAG>(end.cos, x4, k4x, m0 + h_s * k3m, sign);
         SlipStep {
             x_m: x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
             v_m_per_s: v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
