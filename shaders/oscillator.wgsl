@@ -407,6 +407,8 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             }
             if (path.mode == MODE_STICK) {
                 start_stick(period_start_s + t_a);
+            } else {
+                path.lagged_mu = static_coefficient();
             }
             path.slip_start_x_m = path.x_m;
             events += 1u;

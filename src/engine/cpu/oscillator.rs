@@ -615,6 +615,13 @@ impl<'a> Path<'a> {
                     self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(start) } else { Mode::Stick };
                     if self.mode == Mode::Stick {
                         self.start_stick(period_start_s + t_a);
+                    } else {
+                        // A slip from rest is a breakaway like one from a
+                        // stick: the lagged coefficient starts at the static
+                        // one the breakaway was judged by (carried over, it
+                        // held a block the test let go, which then could
+                        // not move and re-slipped up to the event limit).
+                        self.lagged_mu = self.static_coefficient();
                     }
                     self.slip_start_x_m = self.x_m;
                     events += 1;

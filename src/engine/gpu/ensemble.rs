@@ -104,7 +104,9 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
     let total_invocations = job.points.len() as u64 * rpp;
     let plan = job.plan;
     let total_cycles = plan.warmup_cycles + plan.measured_cycles;
-    let steps = u64::from(oscillators[0].steps_per_period);
+    // The most steps of any point (hysteresis `lag` raises them where its
+    // memory time is shorter than a step, by frequency).
+    let steps = oscillators.iter().map(|o| u64::from(o.steps_per_period)).max().unwrap_or(1);
     let binding_limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
     // Invocations per chunk: whole points, within the dispatch and binding limits.
     let max_invocations =
