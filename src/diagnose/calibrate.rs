@@ -198,8 +198,7 @@ fn simulated_law(
 ) -> Result<Option<FrictionLaw>> {
     let units: Vec<usize> =
         (0..data.units.len()).filter(|&i| !data.units[i].heldout && data.units[i].summary.is_none()).collect();
-    let fewer = DiagnoseSettings { replicates: settings.replicates.min(LAW_REPLICATES), ..*settings };
-    let runs: Vec<Run> = replicates_of(engine, model, data, &fewer, &units)?.into_iter().flatten().collect();
+    let runs: Vec<Run> = replicates_of(engine, model, data, settings, &units)?.into_iter().flatten().collect();
     let runs: Vec<&Run> = runs.iter().collect();
     Ok(SlipSamples::of(&runs).and_then(|samples| samples.fit_at(measured.c)))
 }
@@ -320,14 +319,6 @@ impl FrictionLaw {
             && (1..=8).all(|k| self.mu(0.25 * top * f64::from(k)) >= 0.0)
     }
 }
-
-/// Replicate records per fitting unit that a step of the law's indirect
-/// inference fits (the first of the ones a score simulates, on the same
-/// noise paths). The law is fitted to every slipping sample of them pooled
-/// over the units, tens of thousands even for short records, so its noise
-/// is far below what the measured side's one record per condition carries;
-/// half of the score's 8 halves the step's cost.
-const LAW_REPLICATES: u32 = 4;
 
 /// Steps of the friction law's indirect inference for the baseline (each
 /// simulates the fitting units' replicates once); a candidate's trial takes
