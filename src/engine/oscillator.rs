@@ -4,7 +4,7 @@
 //! [`Sample`]). Both backends share these types.
 
 use crate::engine::effects::{EffectParams, HysteresisForm};
-use crate::engine::model::{Condition, Model};
+use crate::engine::model::{Condition, Model, Solver};
 use crate::engine::reduce::PeakRange;
 use crate::error::{Error, Result};
 
@@ -166,7 +166,7 @@ impl Oscillator {
             friction_sigma: model.friction.sigma,
             normal_force_mean_n: condition.normal_force_n,
             normal_force_sigma_n: model.normal_force.sigma,
-            steps_per_period: Self::steps_resolving(model, period_s),
+            steps_per_period: Self::steps_resolving(model, condition)?,
             noise_interval_s: model.noise.interval_s,
             effects: EffectParams::new(
                 &model.effects,
@@ -185,16 +185,33 @@ impl Oscillator {
     /// lagged coefficient then grew without bound, 15 and more, instead of
     /// following the law) and inaccurate well before; at one step per τ_m it
     /// follows the exact decay within 2% per step. Unchanged for every
-    /// other model and for memory times longer than a step.
-    fn steps_resolving(model: &Model, period_s: f64) -> u32 {
+    /// other model and for memory times longer than a step. A memory time
+    /// that would need more than [`Solver::MAX_STEPS_PER_PERIOD`] steps is
+    /// refused, by name.
+    fn steps_resolving(model: &Model, condition: Condition) -> Result<u32> {
         let steps = model.solver.steps_per_period;
-        match &model.effects.friction_hysteresis {
-            Some(h) if h.form == HysteresisForm::Lag && h.time_constant_s > 0.0 => {
-                let needed = (period_s / h.time_constant_s).ceil().min(f64::from(u32::MAX));
-                steps.max(needed as u32)
-            }
-            _ => steps,
+        let Some(h) = model.effects.friction_hysteresis.as_ref().filter(|h| h.form == HysteresisForm::Lag) else {
+            return Ok(steps);
+        };
+        if h.time_constant_s <= 0.0 {
+            return Ok(steps);
         }
+        let period_s = 1.0 / condition.excitation_frequency_hz;
+        let needed = (period_s / h.time_constant_s).ceil();
+        if needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
+            return Err(Error::InvalidParameter {
+                key: "friction_hysteresis.time_constant_s".into(),
+                value: h.time_constant_s.to_string(),
+                message: format!(
+                    "a memory time of {:e} s needs {needed:e} steps per period at {} Hz to be integrated \
+                     stably; at most {} are allowed",
+                    h.time_constant_s,
+                    condition.excitation_frequency_hz,
+                    Solver::MAX_STEPS_PER_PERIOD
+                ),
+            });
+        }
+        Ok(steps.max(needed as u32))
     }
 
     /// The noise interval of a noiseless model: 2^31 − 1 periods, longer

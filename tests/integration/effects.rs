@@ -2,7 +2,7 @@
 //! path (CPU and GPU), with strength the CPU and GPU still agree path by path,
 //! and each does what its name says.
 
-use stickslip::engine::{Condition, InitialState, Model, PathResult, RunPlan, Sample};
+use stickslip::engine::{Condition, InitialState, Model, Oscillator, PathResult, RunPlan, Sample};
 
 use crate::common;
 
@@ -252,4 +252,13 @@ fn a_lag_shorter_than_a_step_follows_the_law() {
         .fold(0.0f64, f64::max);
     println!("lag 0.1 ms: largest |μ − μ(v)| while slipping {worst:.2e}");
     assert!(worst < 0.01, "the lagged coefficient left the law by {worst}");
+}
+
+/// A memory time that no allowed step count resolves is refused by name
+/// (it would need 1.4e11 steps per period at 7 Hz), not run for days.
+#[test]
+fn a_lag_too_short_to_integrate_is_refused_by_name() {
+    let m = model(&["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=1e-12"]);
+    let err = Oscillator::new(&m, COND).expect_err("refused").to_string();
+    assert!(err.contains("friction_hysteresis.time_constant_s") && err.contains("steps per period"), "{err}");
 }
