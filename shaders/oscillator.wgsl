@@ -109,6 +109,11 @@ fn draw_noise() {
             path.colour_state_1 = ar1(path.colour_state_1, effects.colour_rho_2, c01.y);
             path.colour_state_2 = ar1(path.colour_state_2, effects.colour_rho_3, c2);
             g = (path.colour_state + path.colour_state_1 + path.colour_state_2) * 0.5773502691896258;
+        } else if (effects.colour_form == COLOUR_FORM_FAST_SLOW) {
+            let c01 = pair_a(noise_block(key, realisation, STREAM_COLOUR, path.interval));
+            path.colour_state = ar1(path.colour_state, effects.colour_rho_1, c01.x);
+            path.colour_state_1 = ar1(path.colour_state_1, effects.colour_rho_2, c01.y);
+            g = sqrt(1.0 - effects.colour_share) * path.colour_state + sqrt(effects.colour_share) * path.colour_state_1;
         }
     }
     var xi_mu = g;

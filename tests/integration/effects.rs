@@ -10,7 +10,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 29] = [
+const ZERO: [&[&str]; 30] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -34,6 +34,11 @@ const ZERO: [&[&str]; 29] = [
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"hold\""],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"two_scale\""],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"multi_scale\""],
+    &[
+        "coloured_friction_noise.correlation_time_s=0.0",
+        "coloured_friction_noise.form=\"fast_slow\"",
+        "coloured_friction_noise.coloured_share=0.6",
+    ],
     &["stiction.excess=0.0"],
     &["stiction.excess=0.0", "stiction.form=\"noisy\""],
     &["stiction.excess=0.0", "stiction.form=\"decaying\""],
@@ -50,7 +55,7 @@ const ZERO: [&[&str]; 29] = [
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time).
-const ON: [&[&str]; 29] = [
+const ON: [&[&str]; 30] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -82,6 +87,11 @@ const ON: [&[&str]; 29] = [
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"hold\""],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"two_scale\""],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"multi_scale\""],
+    &[
+        "coloured_friction_noise.correlation_time_s=0.01",
+        "coloured_friction_noise.form=\"fast_slow\"",
+        "coloured_friction_noise.coloured_share=0.6",
+    ],
     &["stiction.excess=0.15"],
     &["stiction.excess=0.15", "stiction.form=\"noisy\""],
     &["stiction.excess=0.15", "stiction.form=\"decaying\""],

@@ -128,8 +128,8 @@ pub(crate) struct Path<'a> {
     normal_force_n: f64,
     /// x where the current slip began, m (displacement hysteresis, stiction release).
     slip_start_x_m: f64,
-    /// Coloured noise states: the AR(1) parts of `ar1`, `two_scale` and
-    /// `multi_scale`, –.
+    /// Coloured noise states: the AR(1) parts of `ar1`, `two_scale`,
+    /// `multi_scale` and `fast_slow`, –.
     colour_state: [f64; 3],
     /// Start of the current noise interval within its period, in periods.
     interval_phase: f64,
@@ -248,6 +248,12 @@ impl<'a> Path<'a> {
                     self.colour_state[k] = ar1(self.colour_state[k], e.colour_rhos[k], innovation);
                 }
                 self.colour_state.iter().sum::<f64>() * (1.0 / 3f64.sqrt())
+            }
+            ColourForm::FastSlow => {
+                let (fast, slow) = rng::pair_a(colour());
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rhos[0], fast);
+                self.colour_state[1] = ar1(self.colour_state[1], e.colour_rhos[1], slow);
+                (1.0 - e.colour_share).sqrt() * self.colour_state[0] + e.colour_share.sqrt() * self.colour_state[1]
             }
         };
         let xi_mu = if e.non_gaussian_strength == 0.0 {
@@ -840,6 +846,65 @@ mod tests {
         path.advance_segment(0.0, 1e-3, Trig { cos: 1.0, sin: 0.0 }, None, false);
         assert_eq!(path.mode, Mode::Slip(1), "held at rest: v = {}", path.v_m_per_s);
         assert!(path.v_m_per_s > 0.0 && path.lagged_mu < 0.3, "v = {}, μ_f = {}", path.v_m_per_s, path.lagged_mu);
+    }
+
+    /// The friction noise's standardised values g over `n` intervals with
+    /// the coloured noise set by `overrides`.
+    fn friction_noise(overrides: &[&str], n: u64) -> Vec<f64> {
+        let mut overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        overrides.push("friction.sigma=0.02".into());
+        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
+        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+        let osc = Oscillator::new(&model, condition).unwrap();
+        let mut path = Path::new(&osc, 5, 0, InitialState { x_m: 0.0, v_m_per_s: 0.0 });
+        (0..n)
+            .map(|k| {
+                path.interval = k;
+                path.draw_noise();
+                path.friction_noise / 0.02
+            })
+            .collect()
+    }
+
+    /// Sample autocorrelation of `g` at `lag`.
+    fn autocorrelation(g: &[f64], lag: usize) -> f64 {
+        let m = g.iter().sum::<f64>() / g.len() as f64;
+        let var = g.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+        g.windows(lag + 1).map(|w| (w[0] - m) * (w[lag] - m)).sum::<f64>() / var
+    }
+
+    /// `fast_slow` is two AR(1) parts with τc and 10 τc, the slow one
+    /// carrying `coloured_share` of the variance: at 30 intervals with τc =
+    /// 5 intervals the correlation is 0.4 e^−6 + 0.6 e^−0.6 = 0.33, where a
+    /// single AR(1) with τc has lost it (e^−6 = 0.002). The variance stays
+    /// σ_μ². With 200 000 intervals the sample autocorrelation's standard
+    /// error is about 0.015 and the variance's about 0.03 (about 3 000
+    /// independent values), so the bounds are 4 standard errors or more.
+    #[test]
+    fn fast_slow_noise_has_two_time_scales() {
+        let interval = "noise.interval_s=0.001";
+        let tau = "coloured_friction_noise.correlation_time_s=0.005";
+        let two = friction_noise(
+            &[
+                interval,
+                tau,
+                "coloured_friction_noise.form=\"fast_slow\"",
+                "coloured_friction_noise.coloured_share=0.6",
+            ],
+            200_000,
+        );
+        let one = friction_noise(&[interval, tau], 200_000);
+        let variance = two.iter().map(|x| x * x).sum::<f64>() / two.len() as f64;
+        let (two_30, one_30) = (autocorrelation(&two, 30), autocorrelation(&one, 30));
+        let two_1 = autocorrelation(&two, 1);
+        let expected_1 = 0.4 * (-0.2f64).exp() + 0.6 * (-0.02f64).exp();
+        println!(
+            "fast_slow: variance {variance:.3}, lag 1 {two_1:.3} ({expected_1:.3}), lag 30 {two_30:.3}; ar1 lag 30 {one_30:.3}"
+        );
+        assert!((variance - 1.0).abs() < 0.12, "variance {variance}");
+        assert!((two_30 - 0.331).abs() < 0.06, "fast_slow at lag 30: {two_30}");
+        assert!((two_1 - expected_1).abs() < 0.03, "fast_slow at lag 1: {two_1} vs {expected_1}");
+        assert!(one_30.abs() < 0.03, "ar1 at lag 30: {one_30}");
     }
 
     #[test]

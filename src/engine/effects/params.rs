@@ -28,7 +28,8 @@ pub struct EffectParams {
     pub colour_rho: f64,
     /// Coloured share of the variance (`ar1`), –.
     pub colour_share: f64,
-    /// AR(1) coefficients per interval of `multi_scale`'s parts (τc/4, τc, 4τc), –.
+    /// AR(1) coefficients per interval of `multi_scale`'s parts (τc/4, τc,
+    /// 4τc), or of `fast_slow`'s (τc, 10 τc, unused), –.
     pub colour_rhos: [f64; 3],
     /// Intervals a value is held (hold form).
     pub colour_hold_intervals: u32,
@@ -84,7 +85,10 @@ impl EffectParams {
             let rho = |tau_s: f64| if tau_s > 0.0 { (-interval_s / tau_s).exp() } else { 0.0 };
             p.colour_rho = rho(c.correlation_time_s);
             p.colour_share = c.coloured_share;
-            p.colour_rhos = [0.25, 1.0, 4.0].map(|f| rho(f * c.correlation_time_s));
+            p.colour_rhos = match c.form {
+                ColourForm::FastSlow => [rho(c.correlation_time_s), rho(10.0 * c.correlation_time_s), 0.0],
+                _ => [0.25, 1.0, 4.0].map(|f| rho(f * c.correlation_time_s)),
+            };
             p.colour_hold_intervals = ((c.correlation_time_s / interval_s).round() as u32).max(1);
         }
         if let Some(s) = &effects.stiction {

@@ -135,12 +135,16 @@ pub struct ColouredFrictionNoise {
     /// `hold`: each value held for round(τc/τ) intervals;
     /// `two_scale`: half white, half AR(1) with τc (variance split equally;
     /// white only when τc = 0); `multi_scale`: the mean of three AR(1) parts
-    /// with τc/4, τc and 4τc, equal in variance (a spectrum close to 1/f).
+    /// with τc/4, τc and 4τc, equal in variance (a spectrum close to 1/f);
+    /// `fast_slow`: two AR(1) parts with τc and 10 τc, no white part, of which
+    /// the slow one carries `coloured_share` of the variance (a spectrum
+    /// with two corners; white only when τc = 0).
     #[serde(default)]
     pub form: ColourForm,
     /// Correlation time τc, s.
     pub correlation_time_s: f64,
-    /// Share of the variance that is coloured (`ar1`), –, in [0, 1].
+    /// Share of the variance that is coloured (`ar1`), or in the slow part
+    /// (`fast_slow`), –, in [0, 1].
     #[serde(default = "one")]
     pub coloured_share: f64,
 }
@@ -153,10 +157,12 @@ pub enum ColourForm {
     Hold = 1,
     TwoScale = 2,
     MultiScale = 3,
+    FastSlow = 4,
 }
 
 impl Form for ColourForm {
-    const ALL: &'static [Self] = &[ColourForm::Ar1, ColourForm::Hold, ColourForm::TwoScale, ColourForm::MultiScale];
+    const ALL: &'static [Self] =
+        &[ColourForm::Ar1, ColourForm::Hold, ColourForm::TwoScale, ColourForm::MultiScale, ColourForm::FastSlow];
 
     fn code(self) -> u32 {
         self as u32
