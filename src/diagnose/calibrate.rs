@@ -200,7 +200,7 @@ fn simulated_law(
         (0..data.units.len()).filter(|&i| !data.units[i].heldout && data.units[i].summary.is_none()).collect();
     let runs: Vec<Run> = replicates_of(engine, model, data, settings, &units)?.into_iter().flatten().collect();
     let runs: Vec<&Run> = runs.iter().collect();
-    Ok(SlipSamples::of(&runs).and_then(|samples| samples.fit_at(measured.c)))
+    Ok(SlipSamples::of(&runs, data.sensor.v_m_per_s).and_then(|samples| samples.fit_at(measured.c)))
 }
 
 /// One step of the indirect inference, in curve space: the model's law
@@ -352,14 +352,27 @@ fn speed_deciles(speed: &[f64]) -> [f64; 10] {
     std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize])
 }
 
+/// A sample counts as slipping only beyond this many standard deviations of
+/// the velocity sensor's noise (and beyond 5% of its record's largest
+/// speed): a stuck block's measured speed is that noise alone, and its
+/// |F|/N (the spring's force, anywhere below the static friction) read as
+/// friction at a low speed bends the fitted Stribeck curve. At 3 sd a stuck
+/// sample passes with probability 0.0013 (half of that with the sign
+/// friction has while slipping).
+const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
+
 impl SlipSamples {
-    fn of(runs: &[&Run]) -> Option<SlipSamples> {
+    /// The slipping samples of `runs`, whose velocity channel carries white
+    /// sensor noise of `v_noise_m_per_s` (m/s; the data's estimate, which
+    /// the simulated records carry too, so both sides pick alike).
+    fn of(runs: &[&Run], v_noise_m_per_s: f64) -> Option<SlipSamples> {
         let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
         for (k, r) in runs.iter().enumerate() {
             let (Some(v), Some(f), Some(n)) = (&r.v_m_per_s, &r.friction_force, &r.normal_force) else { continue };
             let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
             for i in 0..v.len().min(f.len()).min(n.len()) {
-                if v[i].abs() > 0.05 * vmax && f[i] * v[i] < 0.0 && n[i] > 0.0 {
+                if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] > 0.0 {
                     speed.push(v[i].abs());
                     mu.push(f[i].abs() / n[i]);
                     record.push(k);
@@ -477,10 +490,12 @@ impl SlipSamples {
     }
 }
 
-/// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`]);
-/// `None` without force channels or with fewer than 50 slipping samples.
-pub(crate) fn fit_friction_law(runs: &[&Run]) -> Option<FrictionLaw> {
-    SlipSamples::of(runs)?.fit()
+/// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`])
+/// on the slipping samples of `runs`, whose velocity sensor noise is
+/// `v_noise_m_per_s` (m/s); `None` without force channels or with fewer
+/// than 50 slipping samples.
+pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, v_noise_m_per_s)?.fit()
 }
 
 #[cfg(test)]
@@ -526,7 +541,7 @@ mod tests {
     fn friction_levels_that_differ_between_records_are_not_read_as_a_stribeck_curve() {
         let (fast, slow) =
             (record_at(0.22, 0.1, 20.0, 0.0, 0.03, 5, 0.4), record_at(0.30, 0.1, 20.0, 0.0, 0.03, 6, 0.1));
-        let law = fit_friction_law(&[&fast, &slow]).unwrap();
+        let law = fit_friction_law(&[&fast, &slow], 0.0).unwrap();
         let shape = |l: &FrictionLaw, v: f64| mu(l, v) - mu(l, 0.1);
         let truth = FrictionLaw { a: 0.26, b: 0.1, c: 20.0, d: 0.0, sigma: 0.03, anchors_m_per_s: [0.0; 10] };
         let worst = (1..=20)
@@ -538,6 +553,58 @@ mod tests {
         // The level is the two records' mean (they hold about as many
         // slipping samples each).
         assert!((mu(&law, 0.1) - mu(&truth, 0.1)).abs() < 0.01, "{law:?}");
+    }
+
+    /// A stuck block's measured speed is the velocity sensor's noise, and
+    /// its |F|/N the spring's holding force, not friction. A record that
+    /// slides slowly (up to 3 cm/s) for half of each second and sticks for
+    /// the other half, its speed read with 2 mm/s of noise: 5% of its
+    /// largest speed is below that noise, so without the sensor's noise the
+    /// stuck samples (|F|/N = 0.1, half of them with friction's sign) pass
+    /// as slipping and pull the low-speed law down; with it they do not.
+    #[test]
+    fn stuck_samples_read_through_a_noisy_velocity_are_not_friction() {
+        let (a, b, c, sigma, v_noise) = (0.2, 0.1, 20.0, 0.01, 0.002);
+        let mut rng = StdRng::seed_from_u64(9);
+        let mut gauss = move || {
+            let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+        };
+        let samples: Vec<Sample> = (0..12_000)
+            .map(|i| {
+                let t_s = f64::from(i) / 600.0;
+                let phase = t_s.fract();
+                let (v, f) = if phase < 0.5 {
+                    let v = 0.03 * (std::f64::consts::TAU * phase).sin();
+                    (v, -(a + b / (1.0 + c * v) + sigma * gauss()) * 10.0)
+                } else {
+                    (0.0, -1.0)
+                };
+                let v_read = v + v_noise * gauss();
+                Sample { t_s, x_m: 0.0, v_m_per_s: v_read, normal_force_n: 10.0, friction_force_n: f }
+            })
+            .collect();
+        let run = Run::from_samples(&samples, 1.0, 1e-3, 10.0);
+        let truth = FrictionLaw { a, b, c, d: 0.0, sigma, anchors_m_per_s: [0.0; 10] };
+        let off = |l: &FrictionLaw| {
+            (3..=12).map(|i| 0.0025 * f64::from(i)).map(|v| (mu(l, v) - mu(&truth, v)).abs()).fold(0.0, f64::max)
+        };
+        let with_noise = fit_friction_law(&[&run], v_noise).unwrap();
+        let without = fit_friction_law(&[&run], 0.0).unwrap();
+        println!(
+            "law off by {:.4} (sigma {:.4}) with the sensor noise, {:.4} (sigma {:.4}) without",
+            off(&with_noise),
+            with_noise.sigma,
+            off(&without),
+            without.sigma
+        );
+        // σ within 30%: of ~6 000 stuck samples about 4 still pass (beyond
+        // 3 sd, with friction's sign), each 0.1 off the law.
+        assert!(off(&with_noise) < 0.01 && (with_noise.sigma / sigma - 1.0).abs() < 0.3, "{with_noise:?}");
+        assert!(
+            off(&without) > 0.02 || without.sigma > 2.0 * sigma,
+            "the premise: stuck samples pass without it: {without:?}"
+        );
     }
 
     /// The law's value at speed `v` (m/s).
@@ -552,20 +619,20 @@ mod tests {
     fn friction_law_fit_recovers_a_known_law() {
         let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
         let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, anchors_m_per_s: [0.0; 10] };
-        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)]).unwrap();
+        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)], 0.0).unwrap();
         let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
         assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
         let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, anchors_m_per_s: [0.0; 10] };
-        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)]).unwrap();
+        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)], 0.0).unwrap();
         let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
         assert!((with_d.sigma / 0.019 - 1.0).abs() < 0.03, "{with_d:?}");
         // At a fixed c the fit is the unconstrained least squares, so a law
         // with friction falling below zero at rest is still reported.
-        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)]).unwrap();
+        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)], 0.0).unwrap();
         let rising = samples.fit_at(80.0).unwrap();
         assert!((rising.b + 0.3).abs() < 1e-6 && (rising.a - 0.4).abs() < 1e-6, "{rising:?}");
-        assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)]).is_none_or(|l| l.a + l.b >= 0.0));
+        assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)], 0.0).is_none_or(|l| l.a + l.b >= 0.0));
     }
 }

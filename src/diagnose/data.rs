@@ -317,8 +317,8 @@ impl<'a> Data<'a> {
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let fit_runs: Vec<&Run> =
             units.iter().filter(|u| !u.heldout).flat_map(|u| u.runs.iter().map(|&r| &set.runs[r])).collect();
-        let measured_law = calibrate::fit_friction_law(&fit_runs);
         let sensor = SensorNoise::estimate(&set.runs);
+        let measured_law = calibrate::fit_friction_law(&fit_runs, sensor.v_m_per_s);
         Ok(Data {
             set,
             units,
