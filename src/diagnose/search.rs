@@ -319,6 +319,21 @@ fn further_keeps_the_response(
     rise <= 3.0 * sd
 }
 
+/// Whether a further effect closes a real share of what is left of the
+/// response gap where the fit did not look: its response loss falls by more
+/// than three standard deviations of that fall's noise ([`response_rise`])
+/// and by at least [`MIN_LEADING_SHARE`] of the response loss above the
+/// noise floor. The key gap counts every observable and the response few
+/// of them, so an effect that the response needs (a load dependence under
+/// a coloured noise that dominates the friction features) can close little
+/// of the key gap; this admits it on the response alone, still only if it
+/// lowers both gaps beyond their noise (see [`select`]).
+fn repairs_the_response(current: &[Score], candidate: &[Score], has_heldout: bool, ruler: &Yardstick) -> bool {
+    let (rise, sd) = response_rise(current, candidate, has_heldout, ruler);
+    let (before, _) = response_gap(current, has_heldout, ruler);
+    rise < -3.0 * sd && -rise >= MIN_LEADING_SHARE * (before - NULL_HUBER)
+}
+
 /// How a form's best trial ranks against the other forms of its effect
 /// (lower is better): its key gap (held-out where there are held-out units,
 /// else `gap_fit`) plus its response loss there in the baseline's
@@ -495,7 +510,8 @@ pub(crate) fn select(
         let min_share = if steps.is_empty() { MIN_LEADING_SHARE } else { MIN_FURTHER_SHARE };
         if !(g_key - key(best) > noise_heldout
             && g_fit - best.gap_fit > noise_fit
-            && (g_key - key(best)) / explainable >= min_share)
+            && ((g_key - key(best)) / explainable >= min_share
+                || (!steps.is_empty() && repairs_the_response(&scores, &best.scores, has_heldout, &ruler))))
         {
             break;
         }
