@@ -270,6 +270,21 @@ pub fn diagnose(
     diagnose_set(&set, settings, engine, progress)
 }
 
+/// How sure a verdict of "none" is, from the baseline's key gap `key0`,
+/// the best first-round candidate's (`None` when no effect was fitted) and
+/// the key gap's noise threshold: high when nothing was left to explain or
+/// no candidate came near the noise threshold (0.95 less half the best
+/// candidate's fall in thresholds). A baseline whose key gap stands m
+/// thresholds above the noise floor (m > 1) misfits: "none" then says that
+/// no candidate explains the misfit, not that there is nothing to explain,
+/// and the confidence is divided by √m (a gap 25 thresholds up leaves a
+/// fifth of it). In [0.05, 0.95].
+fn none_confidence(key0: f64, best_key: Option<f64>, noise: f64) -> f64 {
+    let best_gain = best_key.map_or(0.0, |k| (key0 - k) / noise);
+    let misfit = ((key0 - candidates::NULL_HUBER) / noise).max(1.0);
+    ((0.95 - 0.5 * best_gain.max(0.0)) / misfit.sqrt()).clamp(0.05, 0.95)
+}
+
 /// Runs the whole diagnosis on a measurement set already read.
 pub fn diagnose_set(
     set: &MeasurementSet,
@@ -316,14 +331,8 @@ pub fn diagnose_set(
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
         None => {
-            // How sure "none" is: high when nothing was left to explain or no
-            // candidate came near the noise threshold.
-            let best_gain = selection
-                .first_round
-                .first()
-                .map(|b| (key0 - if has_heldout { b.gap_heldout } else { b.gap_fit }) / selection.noise_heldout)
-                .unwrap_or(0.0);
-            (None, (0.95 - 0.5 * best_gain.max(0.0)).clamp(0.05, 0.95))
+            let best_key = selection.first_round.first().map(|b| if has_heldout { b.gap_heldout } else { b.gap_fit });
+            (None, none_confidence(key0, best_key, selection.noise_heldout))
         }
     };
     let mut conditions: Vec<Condition> = data.units.iter().map(|u| u.condition).collect();
@@ -347,4 +356,23 @@ pub fn diagnose_set(
         misfit,
         conditions,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::none_confidence;
+
+    #[test]
+    fn none_is_sure_only_when_the_baseline_fits() {
+        // At the noise floor, with no candidate near the threshold: sure.
+        assert_eq!(none_confidence(1.5, Some(1.6), 1.1), 0.95);
+        assert_eq!(none_confidence(1.5, None, 1.1), 0.95);
+        // A candidate 1.5 thresholds below the baseline halves it and more.
+        assert!((none_confidence(2.0, Some(2.0 - 1.65), 1.1) - 0.2).abs() < 1e-12);
+        // The baseline 22 thresholds above the floor and no candidate
+        // explaining it (seed 12 set 11: held-out gap 26.45, noise 1.13, the
+        // best candidate 26.61): 0.20, not 0.95.
+        let c = none_confidence(26.45, Some(26.61), 1.13);
+        assert!((c - 0.95 / ((26.45f64 - 1.3) / 1.13).sqrt()).abs() < 1e-12 && (c - 0.20).abs() < 0.01, "{c}");
+    }
 }
