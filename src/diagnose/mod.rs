@@ -121,6 +121,11 @@ pub struct NamedEffect {
     pub share: f64,
     /// –, in [0, 1].
     pub confidence: f64,
+    /// How much the fitted model's response loss (peaks and phases at the
+    /// held-out units, in the calibrated baseline's scale; –) rises when
+    /// this effect alone is taken out of it; `None` with a single effect,
+    /// or where the model does not run without it.
+    pub response_weight: Option<f64>,
 }
 
 /// Where the calibrated baseline misfits in a way no effect explains.
@@ -309,17 +314,26 @@ pub fn diagnose_set(
     let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;
     let key0 = if has_heldout { gaps.1 } else { gaps.0 };
     let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
-    let effects: Vec<NamedEffect> = selection
+    let weights = search::response_weights(&selection.steps, &baseline_scores, &data, settings, engine)?;
+    let mut effects: Vec<NamedEffect> = selection
         .steps
         .iter()
-        .map(|s| NamedEffect {
+        .enumerate()
+        .map(|(i, s)| NamedEffect {
             effect: s.candidate.effect,
             form: s.candidate.form,
             parameters: s.candidate.parameters.clone(),
             share: ((s.before.1 - s.after_key) / explainable).clamp(0.0, 1.0),
             confidence: search::confidence(s, selection.noise_heldout, explainable),
+            response_weight: weights.get(i).copied().flatten().map(|(rise, _)| rise),
         })
         .collect();
+    // The leading effect first; the others in the order they were added.
+    let lead = search::response_leader(&weights);
+    if lead > 0 {
+        let leading = effects.remove(lead);
+        effects.insert(0, leading);
+    }
     let (fitted, fitted_scores) = match selection.steps.last() {
         Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),

@@ -185,6 +185,19 @@ impl Effects {
         }
     }
 
+    /// Takes `effect`'s table out (the baseline's behaviour for it).
+    pub fn remove(&mut self, effect: Effect) {
+        match effect {
+            Effect::NormalForceHarmonics => self.normal_force_harmonics = None,
+            Effect::NonGaussianFriction => self.non_gaussian_friction = None,
+            Effect::FrictionHysteresis => self.friction_hysteresis = None,
+            Effect::ColouredFrictionNoise => self.coloured_friction_noise = None,
+            Effect::Stiction => self.stiction = None,
+            Effect::LoadDependentFriction => self.load_dependent_friction = None,
+            Effect::NormalForceDrift => self.normal_force_drift = None,
+        }
+    }
+
     /// Range checks; errors name the dotted key.
     pub fn validate(&self) -> Result<()> {
         if let Some(h) = &self.normal_force_harmonics {
