@@ -402,45 +402,38 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
             let rho = if lag1 > 0.05 && lag10 > 0.0 { (lag10 / lag1).powf(1.0 / 9.0).clamp(0.3, 0.995) } else { 0.8 };
             let tau = (-interval / rho.ln()).clamp(2.0 * interval, 200.0 * interval);
             let share = if lag1 > 0.0 { (lag1 / rho).clamp(0.2, 1.0) } else { 1.0 };
+            let coloured = |form: &'static str, colour: ColourForm, params: Vec<Param>| Variant {
+                effect,
+                form,
+                params,
+                apply: Box::new(move |m, p| {
+                    let mut m = m.clone();
+                    m.effects.coloured_friction_noise =
+                        Some(ColouredFrictionNoise { form: colour, correlation_time_s: p[0], coloured_share: p[1] });
+                    m
+                }),
+            };
             vec![
-                Variant {
-                    effect,
-                    form: "ar1",
-                    params: vec![
+                coloured(
+                    "ar1",
+                    ColourForm::Ar1,
+                    vec![
                         Param::log("correlation_time_s", tau, 2.0, interval, 500.0 * interval),
                         Param::linear("coloured_share", share, 0.25, 0.05, 1.0),
                     ],
-                    apply: Box::new(|m, p| {
-                        let mut m = m.clone();
-                        m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
-                            form: ColourForm::Ar1,
-                            correlation_time_s: p[0],
-                            coloured_share: p[1],
-                        });
-                        m
-                    }),
-                },
+                ),
                 // A spectrum with two corners (τc and 10 τc, no white part): a
                 // noise correlated over several time scales, which one AR(1)
                 // can only mimic by running to its longest time, widening the
                 // response where the data do not.
-                Variant {
-                    effect,
-                    form: "fast_slow",
-                    params: vec![
+                coloured(
+                    "fast_slow",
+                    ColourForm::FastSlow,
+                    vec![
                         Param::log("correlation_time_s", (tau / 3.0).max(interval), 2.0, interval, 50.0 * interval),
                         Param::linear("slow_share", 0.5, 0.2, 0.05, 0.95),
                     ],
-                    apply: Box::new(|m, p| {
-                        let mut m = m.clone();
-                        m.effects.coloured_friction_noise = Some(ColouredFrictionNoise {
-                            form: ColourForm::FastSlow,
-                            correlation_time_s: p[0],
-                            coloured_share: p[1],
-                        });
-                        m
-                    }),
-                },
+                ),
             ]
         }
         Effect::Stiction => {
