@@ -2,7 +2,8 @@
 //! condition's runs, or one run, or one summary row), split into fitting and
 //! held-out units, with each unit's measured observables.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, Mutex};
 
 use serde::Serialize;
 
@@ -48,6 +49,32 @@ pub(crate) struct Data<'a> {
     pub(crate) sensor: SensorNoise,
     /// Which units are held out.
     pub(crate) hold_out: HoldOut,
+    /// The sensor-noise draws of simulated replicate records, by (seed,
+    /// realisation): the same for every model, so drawn once per diagnosis
+    /// (they were a tenth of its time).
+    pub(crate) sensor_draws: SensorDraws,
+}
+
+/// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,
+/// by (seed, realisation), computed once and shared.
+#[derive(Debug, Default)]
+pub(crate) struct SensorDraws(Mutex<HashMap<(u64, u32), Draws>>);
+
+/// One record's sensor-noise draws: a standard Gaussian pair per sample.
+type Draws = Arc<Vec<(f64, f64)>>;
+
+impl SensorDraws {
+    /// The first `n` pairs of (seed, realisation), made by `draw` (given
+    /// the sample index) the first time they are asked for.
+    pub(crate) fn get(&self, seed: u64, realisation: u32, n: usize, draw: impl Fn(usize) -> (f64, f64)) -> Draws {
+        let cached = self.0.lock().expect("sensor draws lock").get(&(seed, realisation)).cloned();
+        if let Some(d) = cached.filter(|d| d.len() >= n) {
+            return d;
+        }
+        let drawn = Arc::new((0..n).map(draw).collect::<Vec<_>>());
+        self.0.lock().expect("sensor draws lock").insert((seed, realisation), Arc::clone(&drawn));
+        drawn
+    }
 }
 
 /// Averages the scored features of several records.
@@ -331,6 +358,7 @@ impl<'a> Data<'a> {
             measured_law,
             sensor,
             hold_out,
+            sensor_draws: SensorDraws::default(),
         })
     }
 

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use crate::diagnose::data::{Data, SensorNoise};
+use crate::diagnose::data::Data;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
@@ -58,7 +58,7 @@ pub(crate) fn replicates(
         .into_iter()
         .enumerate()
         .map(|(r, mut samples)| {
-            add_sensor_noise(&mut samples, data.sensor, settings.seed, first_realisation + r as u32);
+            add_sensor_noise(&mut samples, data, settings.seed, first_realisation + r as u32);
             Run::from_samples(
                 &samples,
                 condition.excitation_frequency_hz,
@@ -70,14 +70,18 @@ pub(crate) fn replicates(
 }
 
 /// Adds white Gaussian measurement noise to a simulated record's `x` and `v`
-/// (the same draws for every model, keyed by seed and realisation).
-fn add_sensor_noise(samples: &mut [Sample], noise: SensorNoise, seed: u64, realisation: u32) {
+/// (the same draws for every model, keyed by seed and realisation, and
+/// drawn once per diagnosis).
+fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisation: u32) {
+    let noise = data.sensor;
     if noise.x_m == 0.0 && noise.v_m_per_s == 0.0 {
         return;
     }
     let key = rng::seed_key(seed ^ 0x5E45_0E5E_0000_0000);
-    for (i, s) in samples.iter_mut().enumerate() {
-        let (gx, gv) = rng::pair_a(rng::block(key, realisation, rng::STREAM_SENSOR, i as u64));
+    let draws = data.sensor_draws.get(seed, realisation, samples.len(), |i| {
+        rng::pair_a(rng::block(key, realisation, rng::STREAM_SENSOR, i as u64))
+    });
+    for (s, &(gx, gv)) in samples.iter_mut().zip(draws.iter()) {
         s.x_m += noise.x_m * gx;
         s.v_m_per_s += noise.v_m_per_s * gv;
     }
