@@ -2,7 +2,7 @@
 //! spread, shape and memory, the accelerating against decelerating branch,
 //! and breakaway against low-speed friction.
 
-use super::stats::{least_squares, moments, negligible, shape};
+use super::stats::{moments, negligible, shape, solve_normal};
 use super::{
     BREAKAWAY_SAMPLES, FrictionFeatures, HYSTERESIS_BINS, HYSTERESIS_MIN_PER_SIDE, LOW_SPEED_FRACTION, MIN_PAIRS,
     MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
@@ -33,21 +33,50 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
     let (mu_mean, _, _, _) = moments(&mu);
 
     // Baseline law μ(s): quadratic, plus a Stribeck term when it fits better.
+    // The normal equations of every fit in one pass: the quadratic block is
+    // shared, and each Stribeck rate adds one row (the same sums, in the same
+    // order, as a pass per fit).
     let m = mu.len();
     let y = |i: usize| mu[i] - mu_mean;
-    let quadratic = |i: usize, row: &mut [f64]| {
-        row[0] = 1.0;
-        row[1] = speed[i];
-        row[2] = speed[i] * speed[i];
+    let rates: Vec<f64> = stribeck_grid().collect();
+    let mut quadratic = ([[0.0f64; 3]; 3], [0.0f64; 3], 0.0f64);
+    let mut stribeck = vec![([0.0f64; 4], 0.0f64); rates.len()];
+    for (i, &s) in speed.iter().enumerate() {
+        let yi = y(i);
+        let row = [1.0, s, s * s];
+        let (ata, aty, yty) = &mut quadratic;
+        *yty += yi * yi;
+        for a in 0..3 {
+            aty[a] += row[a] * yi;
+            for b in 0..=a {
+                ata[a][b] += row[a] * row[b];
+            }
+        }
+        for (&c, (extra, extra_y)) in rates.iter().zip(stribeck.iter_mut()) {
+            let g = 1.0 / (1.0 + c * s);
+            *extra_y += g * yi;
+            for b in 0..3 {
+                extra[b] += g * row[b];
+            }
+            extra[3] += g * g;
+        }
+    }
+    let mut best: Option<(Vec<f64>, f64, Option<f64>)> = if m >= 3 {
+        solve_normal(&quadratic.0, &quadratic.1, quadratic.2).map(|(coef, ssr)| (coef, ssr, None))
+    } else {
+        None
     };
-    let mut best: Option<(Vec<f64>, f64, Option<f64>)> =
-        least_squares(m, 3, quadratic, y).map(|(coef, ssr)| (coef, ssr, None));
-    for c in stribeck_grid() {
-        let design = |i: usize, row: &mut [f64]| {
-            quadratic(i, row);
-            row[3] = 1.0 / (1.0 + c * speed[i]);
-        };
-        if let Some((coef, ssr)) = least_squares(m, 4, design, y) {
+    for (&c, (extra, extra_y)) in rates.iter().zip(&stribeck) {
+        if m < 4 {
+            break;
+        }
+        let mut ata = [[0.0f64; 4]; 4];
+        for (row, shared) in ata.iter_mut().zip(&quadratic.0) {
+            row[..3].copy_from_slice(shared);
+        }
+        ata[3] = *extra;
+        let aty = [quadratic.1[0], quadratic.1[1], quadratic.1[2], *extra_y];
+        if let Some((coef, ssr)) = solve_normal(&ata, &aty, quadratic.2) {
             if best.as_ref().is_none_or(|b| ssr < b.1) {
                 best = Some((coef, ssr, Some(c)));
             }
