@@ -361,7 +361,14 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                 until = breakaway_time(t_a, start, t_b);
             }
             let t_end = select(until.x, t_b, until.y == 0.0);
-            let end = trig_at(w * t_end);
+            // A whole grid step held to its end is carried by rotation like
+            // a slip step; an event's time exactly.
+            var end: vec2<f32>;
+            if (whole && until.y == 0.0) {
+                end = rotated(rotated(start, half_step), half_step);
+            } else {
+                end = trig_at(w * t_end);
+            }
             if (measuring) {
                 path.period_stick_s += t_end - t_a;
                 add_stick_phase(start, end);

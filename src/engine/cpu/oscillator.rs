@@ -616,7 +616,12 @@ impl<'a> Path<'a> {
                         None => (t_b, Mode::Stick),
                         Some((t, sign)) => (t, Mode::Slip(sign)),
                     };
-                    let end = Trig::at(w * t_end);
+                    // A whole grid step held to its end is carried by
+                    // rotation like a slip step; an event's time exactly.
+                    let end = match (whole, next) {
+                        (Some(half), Mode::Stick) => start.rotated(half).rotated(half),
+                        _ => Trig::at(w * t_end),
+                    };
                     if measuring {
                         self.period_stick_s += t_end - t_a;
                         self.add_stick_phase(start, end);
