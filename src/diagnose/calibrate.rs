@@ -16,7 +16,7 @@ use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
-use crate::diagnose::score::{Scope, Score, gap_of, score};
+use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
 use crate::diagnose::simulate::{ensemble_path_stats, replicates_of};
 use crate::diagnose::{DiagnoseSettings, mean};
 use crate::engine::{Condition, Engine, Model};
@@ -157,6 +157,9 @@ pub(crate) const POLISH_STEPS: usize = 3;
 /// the next round against it would credit any further effect with the
 /// remaining steps of the law (a second effect "explaining" what one more
 /// law step explains). A no-op without friction channels (no law to step).
+/// `scores` may cover the fitting units only ([`Scope::Fitting`]): the steps
+/// are judged by the fitting gap, and the held-out units are scored once,
+/// for the model kept; the result covers every unit.
 pub(crate) fn converge_law(
     model: Model,
     scores: Vec<Score>,
@@ -165,15 +168,18 @@ pub(crate) fn converge_law(
     engine: &Engine,
 ) -> Result<(Model, Vec<Score>)> {
     let (mut model, mut scores) = (model, scores);
-    if data.measured_law.is_none() {
-        return Ok((model, scores));
-    }
-    for _ in 0..POLISH_STEPS {
-        let (m, s, _) = calibrate_and_score(&model, data, settings, engine, None, 1, Scope::All)?;
-        if gap_of(&s, false) >= gap_of(&scores, false) {
-            break;
+    let mut complete = scores.iter().any(|s| s.heldout) || !data.has_heldout();
+    if data.measured_law.is_some() {
+        for _ in 0..POLISH_STEPS {
+            let (m, s, _) = calibrate_and_score(&model, data, settings, engine, None, 1, Scope::Fitting)?;
+            if gap_of(&s, false) >= gap_of(&scores, false) {
+                break;
+            }
+            (model, scores, complete) = (m, s, false);
         }
-        (model, scores) = (m, s);
+    }
+    if !complete {
+        scores = add_heldout(engine, &model, data, settings, scores)?;
     }
     Ok((model, scores))
 }
