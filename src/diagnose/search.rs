@@ -4,7 +4,9 @@
 //! effects whose form-agnostic trace stands out of the noise are fitted.
 //! Each form of a screened effect ([`Variant`]) is fitted by a coordinate
 //! search, with the baseline's friction law recalibrated at every trial, so
-//! an effect cannot win by shifting the baseline. Effects are added by
+//! an effect cannot win by shifting the baseline. The search runs on half
+//! the replicates ([`search_replicates`]); the effect's best form is then
+//! recalibrated and scored on all of them. Effects are added by
 //! forward selection: the one that lowers the held-out gap most is kept if
 //! it lowers both the held-out and the fitting gaps by more than their
 //! noise; the next is searched on top of it, and so on. An effect that
@@ -136,6 +138,7 @@ fn evaluate(
 /// recalibration steps at the start, one per trial after), so over a search
 /// it converges to the law the data imply *with* this effect instead of
 /// staying near the baseline's, which the effect itself may have distorted.
+/// The search and the returned scores use [`search_replicates`].
 fn fit_variant(
     variant: &Variant,
     base: &Model,
@@ -144,6 +147,8 @@ fn fit_variant(
     settings: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<Option<Trial>> {
+    let search = DiagnoseSettings { replicates: search_replicates(settings.replicates), ..*settings };
+    let settings = &search;
     let Some(mut best) = evaluate(variant, &variant.start(), base, 2, slope, data, settings, engine)? else {
         return Ok(None);
     };
@@ -187,6 +192,17 @@ fn fit_variant(
     }
     best.scores = add_heldout(engine, &best.model, data, settings, best.scores)?;
     Ok(Some(best))
+}
+
+/// Replicates per condition in the coordinate search of a form's
+/// parameters: half of the diagnosis's (at least 4, at most all). Trials
+/// are compared with each other on the same noise paths, so halving the
+/// replicates moves the search's choices little while halving its cost,
+/// the bulk of a diagnosis. The forms of one effect are ranked on these
+/// replicates too; the best form is then recalibrated and scored on all of
+/// them before effects are compared.
+fn search_replicates(replicates: u32) -> u32 {
+    (replicates / 2).max(4).min(replicates)
 }
 
 /// The noise a fall of the mean Huber loss over `k` scores must beat:
@@ -389,10 +405,17 @@ fn round(
             }
         }
         let Some((t, form, parameters)) = best else { continue };
-        // The law carried to where this effect's data imply it, so the
-        // effect is compared (and the next round searched) from a law that
-        // has stopped moving.
-        let (model, scores) = converge_law(t.model, t.scores, data, settings, engine)?;
+        // The best form on every replicate: one more step of the law (the
+        // extra replicates' law differs from the search's by their sampling
+        // noise), then the law carried to where this effect's data imply
+        // it, so the effect is compared (and the next round searched) from
+        // a law that has stopped moving.
+        let (model, scores, _) =
+            match calibrate_and_score(&t.model, data, settings, engine, Some(slope), 1, Scope::Fitting) {
+                Err(Error::Diverged { .. }) => continue,
+                other => other?,
+            };
+        let (model, scores) = converge_law(model, scores, data, settings, engine)?;
         let t = Trial { gap_fit: gap_of(&scores, false), values: t.values, model, scores };
         let gap_heldout = gap_of(&t.scores, true);
         let mut worst: Vec<&Score> = t.scores.iter().collect();
