@@ -11,48 +11,102 @@
 
 use rayon::prelude::*;
 
-use crate::diagnose::data::{Data, Unit};
+use crate::diagnose::data::Data;
 use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
-use crate::diagnose::simulate::{ensemble_path_stats, replicates_of};
+use crate::diagnose::simulate::{PathStats, ensemble_path_stats, replicates_of};
 use crate::diagnose::{DiagnoseSettings, mean};
+use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
 use crate::error::Result;
 
+/// What pins the baseline where the data have no friction channels: the
+/// response statistic the friction level is solved on (the mean peak where
+/// any fitting unit has one, else the mean phase: phase-only tables) and the
+/// spread statistic the noise levels are scaled on (the peak variance, else
+/// the phase variance), if the data have one.
+#[derive(Clone, Copy, Debug)]
+struct ResponseTargets {
+    level: Observable,
+    spread: Option<Observable>,
+}
+
+impl ResponseTargets {
+    fn of(data: &Data<'_>) -> Option<Self> {
+        let has = |o: Observable| {
+            data.units.iter().zip(&data.measured).any(|(u, m)| !u.heldout && m.get(&o).is_some_and(|v| v.is_finite()))
+        };
+        let level = [Observable::PeakMeanM, Observable::PhaseMeanDeg].into_iter().find(|&o| has(o))?;
+        let spread = match level {
+            Observable::PeakMeanM => Some(Observable::PeakVarM2),
+            _ => Some(Observable::PhaseVarDeg2),
+        }
+        .filter(|&o| has(o));
+        Some(Self { level, spread })
+    }
+
+    /// The model's level error at one condition: relative for mean peaks,
+    /// in radians for mean phases.
+    fn level_error(&self, paths: &[PathStats], measured: f64) -> Option<f64> {
+        match self.level {
+            Observable::PeakMeanM => (measured > 0.0)
+                .then(|| mean(&paths.iter().map(|p| p.peak_mean_m).collect::<Vec<_>>()) / measured - 1.0),
+            _ => {
+                let phases: Vec<f64> = paths.iter().map(|p| p.phase_mean_deg.to_radians()).collect();
+                Some(wrap_angle(circular_mean_var(&phases).0 - measured.to_radians()))
+            }
+        }
+    }
+
+    /// The slope a failed search falls back on, per unit of `a`: more
+    /// friction lowers the mean peaks (below the no-stop threshold, where
+    /// the data's loads lie) and delays the response.
+    fn fallback_slope(&self) -> f64 {
+        if self.level == Observable::PeakMeanM { -1.0 } else { 1.0 }
+    }
+}
+
+/// The fitting units, their simulated conditions, the measured values of
+/// `observable` there (NaN where absent) and the record length in periods.
+fn fitting_targets(
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    observable: Observable,
+) -> (Vec<Condition>, Vec<f64>, u32) {
+    let fit: Vec<usize> = (0..data.units.len()).filter(|&i| !data.units[i].heldout).collect();
+    let conditions =
+        fit.iter().map(|&i| data.simulated_condition(&data.units[i], model, settings.warmup_cycles)).collect();
+    let targets = fit.iter().map(|&i| data.measured[i].get(&observable).copied().unwrap_or(f64::NAN)).collect();
+    // The same window as the data: the records' (or summaries') length.
+    let cycles = fit
+        .iter()
+        .map(|&i| (data.record_s[i] * data.units[i].condition.excitation_frequency_hz).round() as u32)
+        .max()
+        .unwrap_or(100);
+    (conditions, targets, cycles)
+}
+
 /// Solves for the friction level `a` (with everything else fixed) so the
-/// simulated mean peaks match the measured ones on the fitting units, on
-/// average (relative), with small GPU ensembles. With `slope` (d residual /
-/// d a, from the baseline's solve) one Newton step is taken; without it a
-/// secant search runs and returns the slope it found.
+/// simulated mean peaks (or, in phase-only data, mean phases) match the
+/// measured ones on the fitting units, on average, with small ensembles:
+/// a secant search, whose first step is a Newton step on `slope` (d
+/// residual / d a, from the baseline's solve) where given (an effect's
+/// trial moves the level a long way where the response is steep in it, as
+/// phases are near the no-stop threshold, so one step is not enough).
+/// Returns the slope found.
 fn solve_friction_level(
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
     engine: &Engine,
+    targets: ResponseTargets,
     slope: Option<f64>,
 ) -> Result<(Model, f64)> {
-    let fit: Vec<&Unit> = data.units.iter().filter(|u| !u.heldout).collect();
-    let conditions: Vec<Condition> =
-        fit.iter().map(|u| data.simulated_condition(u, model, settings.warmup_cycles)).collect();
-    let targets: Vec<f64> = data
-        .units
-        .iter()
-        .zip(&data.measured)
-        .filter(|(u, _)| !u.heldout)
-        .map(|(_, m)| m.get(&Observable::PeakMeanM).copied().unwrap_or(f64::NAN))
-        .collect();
-    // The same window as the data: the records' (or summaries') length.
-    let cycles = data
-        .units
-        .iter()
-        .zip(&data.record_s)
-        .filter(|(u, _)| !u.heldout)
-        .map(|(u, s)| (s * u.condition.excitation_frequency_hz).round() as u32)
-        .max()
-        .unwrap_or(100);
+    let (conditions, measured, cycles) = fitting_targets(model, data, settings, targets.level);
     let residual = |a: f64| -> Result<f64> {
         let mut m = model.clone();
         m.friction.a = a;
@@ -68,9 +122,9 @@ fn solve_friction_level(
         )?;
         let errs: Vec<f64> = stats
             .iter()
-            .zip(&targets)
-            .filter(|(_, t)| t.is_finite() && **t > 0.0)
-            .map(|(s, t)| mean(&s.iter().map(|p| p.peak_mean_m).collect::<Vec<_>>()) / t - 1.0)
+            .zip(&measured)
+            .filter(|(_, t)| t.is_finite())
+            .filter_map(|(s, &t)| targets.level_error(s, t))
             .collect();
         Ok(mean(&errs))
     };
@@ -82,10 +136,12 @@ fn solve_friction_level(
     };
     let mut a0 = model.friction.a.max(lowest);
     let mut r0 = residual(a0)?;
-    if let Some(slope) = slope {
-        return Ok((with_a(a0 - r0 / slope), slope));
-    }
-    let mut a1 = (a0 + 0.05).max(lowest + 0.01);
+    // The second point: a Newton step on the known slope, or a small step.
+    let mut a1 = match slope {
+        Some(s) if r0.abs() < 5e-4 => return Ok((with_a(a0), s)),
+        Some(s) => (a0 - r0 / s).clamp(lowest, a0 + 0.5).min(5.0),
+        None => (a0 + 0.05).max(lowest + 0.01),
+    };
     let mut r1 = residual(a1)?;
     let mut slope = (r1 - r0) / (a1 - a0);
     for _ in 0..5 {
@@ -101,7 +157,97 @@ fn solve_friction_level(
         }
     }
     let best = if r1.abs() <= r0.abs() { a1 } else { a0 };
-    Ok((with_a(best), if slope.is_finite() && slope < 0.0 { slope } else { -1.0 }))
+    let fallback = targets.fallback_slope();
+    Ok((with_a(best), if slope.is_finite() && slope * fallback > 0.0 { slope } else { fallback }))
+}
+
+/// One step that scales the noise levels so that the simulated spread
+/// statistic (peak or phase variance) matches the measured one on the
+/// fitting units. The spread is split by simulation into the part the
+/// friction noise makes and the part the normal-force noise makes (the
+/// model with σ_μ = 0 on the same noise paths), and the two parts' scale
+/// factors (σ_μ² and σ_N² multipliers) are fitted to the measured spreads
+/// in log terms with a robust loss ([`noise_scales`]). σ_N stays where the
+/// data's normal-force channel (or stated variance) put it.
+fn scale_noise(
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+    spread: Observable,
+) -> Result<Model> {
+    let (conditions, measured, cycles) = fitting_targets(model, data, settings, spread);
+    let simulate = |m: &Model| -> Result<Vec<f64>> {
+        let stats = ensemble_path_stats(
+            engine,
+            m,
+            &conditions,
+            cycles,
+            settings.ensemble_realisations.min(24),
+            settings.seed ^ 0x5CA1,
+            settings.warmup_cycles,
+        )?;
+        Ok(stats.iter().map(|s| mean(&s.iter().filter_map(|p| p.get(spread)).collect::<Vec<_>>())).collect())
+    };
+    let whole = simulate(model)?;
+    let mut quiet = model.clone();
+    quiet.friction.sigma = 0.0;
+    let from_normal = simulate(&quiet)?;
+    let parts: Vec<(f64, f64, f64)> = whole
+        .iter()
+        .zip(&from_normal)
+        .zip(&measured)
+        .filter(|(_, t)| t.is_finite() && **t > 0.0)
+        .map(|((&w, &n), &t)| (t, (w - n).max(0.0), n.max(0.0)))
+        .collect();
+    let normal_given = data.set.summary.iter().any(|s| s.normal_force_var_n2.is_some())
+        || data.set.runs.iter().any(|r| r.normal_force.is_some());
+    let Some((k_mu, k_n)) = noise_scales(&parts, !normal_given) else { return Ok(model.clone()) };
+    let mut out = model.clone();
+    out.friction.sigma = (out.friction.sigma * k_mu.sqrt()).min(1.0);
+    out.normal_force.sigma *= k_n.sqrt();
+    Ok(out)
+}
+
+/// The factors `(k_μ, k_N)`, each in [0.01, 100], by which the friction
+/// noise's and the normal-force noise's parts of the spread (`(measured,
+/// friction part, normal-force part)` per unit) are best scaled so that
+/// their sum matches the measured spread: the least Cauchy loss ln(1 + e²)
+/// of the log ratios e (quadratic near a fit, growing only as the log of
+/// the misfit beyond a factor e, so a unit near the no-stop threshold whose
+/// model spreads a hundred times more than the data while its level is
+/// still off does not steer the rest), plus a
+/// small pull of each log factor towards 0 (no change), which decides a
+/// factor the spreads cannot tell (on the benchmark's phase tables σ_N's
+/// part is below 1% at heavy loads). `k_N` stays 1 unless `free_normal`.
+/// `None` without a unit whose model spreads at all.
+fn noise_scales(parts: &[(f64, f64, f64)], free_normal: bool) -> Option<(f64, f64)> {
+    if !parts.iter().any(|&(_, p, q)| p + q > 0.0) {
+        return None;
+    }
+    let loss = |k_mu: f64, k_n: f64| -> f64 {
+        let fit: f64 = parts
+            .iter()
+            .filter(|&&(_, p, q)| p + q > 0.0)
+            .map(|&(t, p, q)| {
+                let e = (t / (k_mu * p + k_n * q)).ln();
+                e.mul_add(e, 1.0).ln()
+            })
+            .sum();
+        fit + 0.01 * (k_mu.ln().powi(2) + k_n.ln().powi(2))
+    };
+    // Log grid, 0.05 apart over a factor 100 each way.
+    let grid = || (-92..=92).map(|i| (f64::from(i) * 0.05).exp());
+    let mut best = (f64::INFINITY, 1.0, 1.0);
+    for k_mu in grid() {
+        for k_n in if free_normal { grid().collect::<Vec<_>>() } else { vec![1.0] } {
+            let l = loss(k_mu, k_n);
+            if l < best.0 {
+                best = (l, k_mu, k_n);
+            }
+        }
+    }
+    Some((best.1, best.2))
 }
 
 /// Calibrates the friction law of `model` to the data and scores it.
@@ -140,10 +286,29 @@ pub(crate) fn calibrate_and_score(
         let scores = score(engine, &m, data, settings, scope)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
     }
-    let (m, slope) = solve_friction_level(model, data, settings, engine, slope)?;
+    let Some(targets) = ResponseTargets::of(data) else {
+        let scores = score(engine, model, data, settings, scope)?;
+        return Ok((model.clone(), scores, slope.unwrap_or(-1.0)));
+    };
+    let baseline = slope.is_none();
+    let (mut m, slope) = solve_friction_level(model, data, settings, engine, targets, slope)?;
+    if let Some(spread) = targets.spread {
+        // The baseline settles level and noise together; a trial takes one
+        // step of each from where its model stands.
+        for _ in 0..if baseline { NOISE_ROUNDS } else { 1 } {
+            m = scale_noise(&m, data, settings, engine, spread)?;
+            if baseline {
+                m = solve_friction_level(&m, data, settings, engine, targets, Some(slope))?.0;
+            }
+        }
+    }
     let scores = score(engine, &m, data, settings, scope)?;
     Ok((m, scores, slope))
 }
+
+/// Rounds of noise scaling and level solving that calibrate a baseline
+/// without friction channels.
+const NOISE_ROUNDS: usize = 3;
 
 /// Law-only recalibration steps after a model was calibrated, at most
 /// this many: each moves the friction law one more step of the indirect
@@ -519,6 +684,36 @@ mod tests {
     use crate::engine::Sample;
     use rand::rngs::StdRng;
     use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn noise_scales_recover_both_sources_and_shrug_off_one_unit_off_its_branch() {
+        // Friction noise's part grows with the load, the normal force's
+        // stays: four units whose measured spread is 2.0 × the one and
+        // 0.5 × the other, and a fifth where the model spreads 100 times
+        // more than the data (a load near the no-stop threshold).
+        let (k_mu, k_n) = (2.0, 0.5);
+        let mut parts: Vec<(f64, f64, f64)> = [1.0, 2.0, 4.0, 8.0]
+            .iter()
+            .map(|&load: &f64| {
+                let (p, q) = (0.1 * load * load, 0.4);
+                (k_mu * p + k_n * q, p, q)
+            })
+            .collect();
+        // Alone, the four are fitted to the grid's resolution (a factor
+        // e^0.05 on the variance), less the small pull towards no change.
+        let (a, b) = noise_scales(&parts, true).expect("the model spreads");
+        assert!((a / k_mu).ln().abs() < 0.06 && (b / k_n).ln().abs() < 0.06, "k {a} {b}");
+        // With the fifth, the standard deviations are still within 10%.
+        parts.push((0.01, 1.0, 0.0));
+        let (a, b) = noise_scales(&parts, true).expect("the model spreads");
+        assert!(((a / k_mu).sqrt() - 1.0).abs() < 0.1, "k_mu {a}");
+        assert!(((b / k_n).sqrt() - 1.0).abs() < 0.1, "k_N {b}");
+        // With σ_N given by the data, its factor stays 1.
+        let (_, b) = noise_scales(&parts, false).expect("the model spreads");
+        assert_eq!(b, 1.0);
+        // A model that does not spread at all cannot be scaled.
+        assert!(noise_scales(&[(1.0, 0.0, 0.0)], true).is_none());
+    }
 
     #[test]
     fn deciles_by_selection_are_those_of_a_sort() {
