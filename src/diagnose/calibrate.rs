@@ -107,7 +107,9 @@ fn solve_friction_level(
     slope: Option<f64>,
 ) -> Result<(Model, f64)> {
     let (conditions, measured, cycles) = fitting_targets(model, data, settings, targets.level);
-    let residual = |a: f64| -> Result<f64> {
+    // The mean error (signed, what the secant zeroes) and the mean squared
+    // error (what decides between the points tried) at level `a`.
+    let residual = |a: f64| -> Result<(f64, f64)> {
         let mut m = model.clone();
         m.friction.a = a;
         m.validate()?;
@@ -126,7 +128,7 @@ fn solve_friction_level(
             .filter(|(_, t)| t.is_finite())
             .filter_map(|(s, &t)| targets.level_error(s, t))
             .collect();
-        Ok(mean(&errs))
+        Ok((mean(&errs), mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())))
     };
     let lowest = (-model.friction.b).max(0.0);
     let with_a = |a: f64| {
@@ -134,15 +136,47 @@ fn solve_friction_level(
         out.friction.a = a.clamp(lowest, 5.0);
         out
     };
+    let mut tried: Vec<(f64, f64)> = Vec::new();
     let mut a0 = model.friction.a.max(lowest);
-    let mut r0 = residual(a0)?;
+    if slope.is_none() {
+        // The baseline starts from the best of a scan of levels, so that a
+        // prior far from the data (its loads past the no-stop threshold,
+        // where the block sticks, phases mean nothing and the residual is
+        // flat) does not hold the search.
+        for i in 0..LEVEL_SCAN {
+            let a = lowest + 0.02 + 0.05 * f64::from(i);
+            tried.push((a, residual(a)?.1));
+        }
+        let i = (0..tried.len()).min_by(|&x, &y| tried[x].1.total_cmp(&tried[y].1)).unwrap_or(0);
+        a0 = tried[i].0;
+        // Between the scan's points: the vertex of the parabola through
+        // the best and its neighbours, where it lies between them.
+        if i > 0 && i + 1 < tried.len() {
+            let ((xa, ya), (xb, yb), (xc, yc)) = (tried[i - 1], tried[i], tried[i + 1]);
+            // Equally spaced: the vertex is xb + h (ya − yc) / (2 (ya − 2 yb + yc)).
+            let curvature = ya - 2.0 * yb + yc;
+            if curvature > 0.0 {
+                let vertex = xb + 0.5 * (xc - xb) * (ya - yc) / curvature;
+                if vertex > xa && vertex < xc {
+                    let l = residual(vertex)?.1;
+                    tried.push((vertex, l));
+                    if l < yb {
+                        a0 = vertex;
+                    }
+                }
+            }
+        }
+    }
+    let (mut r0, l0) = residual(a0)?;
+    tried.push((a0, l0));
     // The second point: a Newton step on the known slope, or a small step.
     let mut a1 = match slope {
         Some(s) if r0.abs() < 5e-4 => return Ok((with_a(a0), s)),
         Some(s) => (a0 - r0 / s).clamp(lowest, a0 + 0.5).min(5.0),
-        None => (a0 + 0.05).max(lowest + 0.01),
+        None => (a0 + 0.02).max(lowest + 0.01),
     };
-    let mut r1 = residual(a1)?;
+    let (mut r1, l1) = residual(a1)?;
+    tried.push((a1, l1));
     let mut slope = (r1 - r0) / (a1 - a0);
     for _ in 0..5 {
         if r1.abs() < 5e-4 || (r1 - r0).abs() < 1e-12 {
@@ -151,15 +185,21 @@ fn solve_friction_level(
         let a2 = (a1 - r1 * (a1 - a0) / (r1 - r0)).clamp(lowest, a1 + 0.5).min(5.0);
         (a0, r0) = (a1, r1);
         a1 = a2;
-        r1 = residual(a1)?;
+        let l;
+        (r1, l) = residual(a1)?;
+        tried.push((a1, l));
         if (a1 - a0).abs() > 1e-9 {
             slope = (r1 - r0) / (a1 - a0);
         }
     }
-    let best = if r1.abs() <= r0.abs() { a1 } else { a0 };
+    let best = tried.iter().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(a1, |t| t.0);
     let fallback = targets.fallback_slope();
     Ok((with_a(best), if slope.is_finite() && slope * fallback > 0.0 { slope } else { fallback }))
 }
+
+/// Levels the baseline's level search scans first: `a` from 0.02 above
+/// its lowest in steps of 0.05 (to about 1).
+const LEVEL_SCAN: u32 = 20;
 
 /// One step that scales the noise levels so that the simulated spread
 /// statistic (peak or phase variance) matches the measured one on the
