@@ -278,9 +278,10 @@ fn noise_scales(parts: &[(f64, f64, f64)], free_normal: bool) -> Option<(f64, f6
     };
     // Log grid, 0.05 apart over a factor 100 each way.
     let grid = || (-92..=92).map(|i| (f64::from(i) * 0.05).exp());
+    let normal_factors: Vec<f64> = if free_normal { grid().collect() } else { vec![1.0] };
     let mut best = (f64::INFINITY, 1.0, 1.0);
     for k_mu in grid() {
-        for k_n in if free_normal { grid().collect::<Vec<_>>() } else { vec![1.0] } {
+        for &k_n in &normal_factors {
             let l = loss(k_mu, k_n);
             if l < best.0 {
                 best = (l, k_mu, k_n);
