@@ -69,25 +69,51 @@ impl ResponseTargets {
     }
 }
 
-/// The fitting units, their simulated conditions, the measured values of
-/// `observable` there (NaN where absent) and the record length in periods.
-fn fitting_targets(
-    model: &Model,
-    data: &Data<'_>,
-    settings: &DiagnoseSettings,
-    observable: Observable,
-) -> (Vec<Condition>, Vec<f64>, u32) {
-    let fit: Vec<usize> = (0..data.units.len()).filter(|&i| !data.units[i].heldout).collect();
-    let conditions =
-        fit.iter().map(|&i| data.simulated_condition(&data.units[i], model, settings.warmup_cycles)).collect();
-    let targets = fit.iter().map(|&i| data.measured[i].get(&observable).copied().unwrap_or(f64::NAN)).collect();
-    // The same window as the data: the records' (or summaries') length.
-    let cycles = fit
-        .iter()
-        .map(|&i| (data.record_s[i] * data.units[i].condition.excitation_frequency_hz).round() as u32)
-        .max()
-        .unwrap_or(100);
-    (conditions, targets, cycles)
+/// The fitting units as simulated conditions, the measured values of one
+/// observable there (NaN where absent) and the record length in periods:
+/// what the baseline's level and noise are solved against without
+/// friction channels.
+struct FittingTargets {
+    conditions: Vec<Condition>,
+    measured: Vec<f64>,
+    cycles: u32,
+}
+
+impl FittingTargets {
+    fn of(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, observable: Observable) -> FittingTargets {
+        let fit: Vec<usize> = (0..data.units.len()).filter(|&i| !data.units[i].heldout).collect();
+        let conditions =
+            fit.iter().map(|&i| data.simulated_condition(&data.units[i], model, settings.warmup_cycles)).collect();
+        let measured = fit.iter().map(|&i| data.measured[i].get(&observable).copied().unwrap_or(f64::NAN)).collect();
+        // The same window as the data: the records' (or summaries') length.
+        let cycles = fit
+            .iter()
+            .map(|&i| (data.record_s[i] * data.units[i].condition.excitation_frequency_hz).round() as u32)
+            .max()
+            .unwrap_or(100);
+        FittingTargets { conditions, measured, cycles }
+    }
+
+    /// Small ensembles (at most 24 realisations) of `model` at every
+    /// condition, on the noise paths of the diagnosis's seed with `salt`
+    /// (one salt per search, so its trials share their paths).
+    fn simulate(
+        &self,
+        engine: &Engine,
+        model: &Model,
+        settings: &DiagnoseSettings,
+        salt: u64,
+    ) -> Result<Vec<Vec<PathStats>>> {
+        ensemble_path_stats(
+            engine,
+            model,
+            &self.conditions,
+            self.cycles,
+            settings.ensemble_realisations.min(24),
+            settings.seed ^ salt,
+            settings.warmup_cycles,
+        )
+    }
 }
 
 /// Solves for the friction level `a` (with everything else fixed) so the
@@ -106,25 +132,17 @@ fn solve_friction_level(
     targets: ResponseTargets,
     slope: Option<f64>,
 ) -> Result<(Model, f64)> {
-    let (conditions, measured, cycles) = fitting_targets(model, data, settings, targets.level);
+    let fitting = FittingTargets::of(model, data, settings, targets.level);
     // The mean error (signed, what the secant zeroes) and the mean squared
     // error (what decides between the points tried) at level `a`.
     let residual = |a: f64| -> Result<(f64, f64)> {
         let mut m = model.clone();
         m.friction.a = a;
         m.validate()?;
-        let stats = ensemble_path_stats(
-            engine,
-            &m,
-            &conditions,
-            cycles,
-            settings.ensemble_realisations.min(24),
-            settings.seed ^ 0xA5A5,
-            settings.warmup_cycles,
-        )?;
+        let stats = fitting.simulate(engine, &m, settings, 0xA5A5)?;
         let errs: Vec<f64> = stats
             .iter()
-            .zip(&measured)
+            .zip(&fitting.measured)
             .filter(|(_, t)| t.is_finite())
             .filter_map(|(s, &t)| targets.level_error(s, t))
             .collect();
@@ -216,17 +234,9 @@ fn scale_noise(
     engine: &Engine,
     spread: Observable,
 ) -> Result<Model> {
-    let (conditions, measured, cycles) = fitting_targets(model, data, settings, spread);
+    let fitting = FittingTargets::of(model, data, settings, spread);
     let simulate = |m: &Model| -> Result<Vec<f64>> {
-        let stats = ensemble_path_stats(
-            engine,
-            m,
-            &conditions,
-            cycles,
-            settings.ensemble_realisations.min(24),
-            settings.seed ^ 0x5CA1,
-            settings.warmup_cycles,
-        )?;
+        let stats = fitting.simulate(engine, m, settings, 0x5CA1)?;
         Ok(stats.iter().map(|s| mean(&s.iter().filter_map(|p| p.get(spread)).collect::<Vec<_>>())).collect())
     };
     let whole = simulate(model)?;
@@ -236,13 +246,11 @@ fn scale_noise(
     let parts: Vec<(f64, f64, f64)> = whole
         .iter()
         .zip(&from_normal)
-        .zip(&measured)
+        .zip(&fitting.measured)
         .filter(|(_, t)| t.is_finite() && **t > 0.0)
         .map(|((&w, &n), &t)| (t, (w - n).max(0.0), n.max(0.0)))
         .collect();
-    let normal_given = data.set.summary.iter().any(|s| s.normal_force_var_n2.is_some())
-        || data.set.runs.iter().any(|r| r.normal_force.is_some());
-    let Some((k_mu, k_n)) = noise_scales(&parts, !normal_given) else { return Ok(model.clone()) };
+    let Some((k_mu, k_n)) = noise_scales(&parts, !data.states_normal_force_noise()) else { return Ok(model.clone()) };
     let mut out = model.clone();
     out.friction.sigma = (out.friction.sigma * k_mu.sqrt()).min(1.0);
     out.normal_force.sigma *= k_n.sqrt();

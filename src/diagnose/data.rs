@@ -362,6 +362,15 @@ impl<'a> Data<'a> {
         })
     }
 
+    /// Whether the data state the normal force's noise: a recorded N
+    /// channel or a stated N variance. The baseline's σ_N then comes from
+    /// them ([`crate::diagnose::calibrate`]) and is not scaled on the
+    /// response's spread.
+    pub(crate) fn states_normal_force_noise(&self) -> bool {
+        self.set.summary.iter().any(|s| s.normal_force_var_n2.is_some())
+            || self.set.runs.iter().any(|r| r.normal_force.is_some())
+    }
+
     pub(crate) fn has_heldout(&self) -> bool {
         self.units.iter().any(|u| u.heldout)
     }
