@@ -345,11 +345,7 @@ pub fn diagnose_set(
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
         None => {
-            let best_key = selection
-                .first_round
-                .iter()
-                .map(|b| if has_heldout { b.gap_heldout } else { b.gap_fit })
-                .min_by(f64::total_cmp);
+            let best_key = selection.first_round.iter().map(|b| search::key_gap(b, has_heldout)).min_by(f64::total_cmp);
             (None, none_confidence(key0, best_key, selection.noise_heldout))
         }
     };

@@ -470,7 +470,7 @@ fn effect_rank(c: &Candidate, has_heldout: bool, ruler: &Yardstick) -> f64 {
 }
 
 /// The candidate's key gap: held-out where there are held-out units.
-fn key_gap(c: &Candidate, has_heldout: bool) -> f64 {
+pub(crate) fn key_gap(c: &Candidate, has_heldout: bool) -> f64 {
     if has_heldout { c.gap_heldout } else { c.gap_fit }
 }
 
@@ -559,7 +559,7 @@ pub(crate) fn select(
         if steps.is_empty() {
             first_round = candidates.clone();
         }
-        let key = |c: &Candidate| if has_heldout { c.gap_heldout } else { c.gap_fit };
+        let key = |c: &Candidate| key_gap(c, has_heldout);
         if std::env::var_os("STICKSLIP_DEBUG").is_some() {
             for c in &candidates {
                 let (before, k) = response_gap(&scores, has_heldout, &ruler);
