@@ -21,7 +21,7 @@ mod sweep;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -318,7 +318,9 @@ pub(crate) struct Progress {
     what: String,
     bar: Option<ProgressBar>,
     plain: Option<Arc<Mutex<PlainState>>>,
-    stop: Arc<AtomicBool>,
+    /// Dropped to stop the heartbeat thread, which wakes at once (a sleep
+    /// would add up to its period to every timed command's end).
+    stop: Option<mpsc::Sender<()>>,
     heartbeat: Option<std::thread::JoinHandle<()>>,
 }
 
@@ -334,8 +336,8 @@ impl Progress {
     }
 
     fn new(what: &str, with_bar: bool) -> Progress {
-        let stop = Arc::new(AtomicBool::new(false));
-        let mut p = Progress { what: what.to_string(), bar: None, plain: None, stop: stop.clone(), heartbeat: None };
+        let (stop, stopped) = mpsc::channel::<()>();
+        let mut p = Progress { what: what.to_string(), bar: None, plain: None, stop: Some(stop), heartbeat: None };
         if quiet() {
             return p;
         }
@@ -366,10 +368,10 @@ impl Progress {
             p.plain = Some(state.clone());
             let what = what.to_string();
             p.heartbeat = Some(std::thread::spawn(move || {
-                while !stop.load(Ordering::Relaxed) {
-                    std::thread::sleep(Duration::from_millis(250));
+                // Wakes every 250 ms, and at once when `stop` is dropped.
+                while let Err(RecvTimeoutError::Timeout) = stopped.recv_timeout(Duration::from_millis(250)) {
                     let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
-                    if s.last_print.elapsed() >= HEARTBEAT && !stop.load(Ordering::Relaxed) {
+                    if s.last_print.elapsed() >= HEARTBEAT {
                         eprintln!("{}", s.line(&what));
                         s.last_print = Instant::now();
                     }
@@ -430,7 +432,7 @@ impl Progress {
     }
 
     fn stop_heartbeat(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
+        drop(self.stop.take());
         if let Some(h) = self.heartbeat.take() {
             let _ = h.join();
         }
