@@ -9,6 +9,10 @@
 //! realisation.
 //!
 //!     cargo bench --bench throughput
+//!
+//! The GPU sizes suit lavapipe on a few cores; a real GPU needs far more
+//! realisations to fill it. `STICKSLIP_BENCH_GPU_SIZES` (three comma-separated
+//! counts, e.g. `65536,262144,1048576`) replaces them.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use stickslip::engine::gpu::GpuContext;
@@ -45,9 +49,22 @@ fn throughput(c: &mut Criterion, group: &str, engine: &Engine, sizes: [u32; 3]) 
     group.finish();
 }
 
+/// The GPU ensemble sizes: `STICKSLIP_BENCH_GPU_SIZES` when set, else sizes
+/// that suit lavapipe.
+fn gpu_sizes() -> [u32; 3] {
+    let Ok(list) = std::env::var("STICKSLIP_BENCH_GPU_SIZES") else {
+        return [1024, 4096, 16384];
+    };
+    let sizes: Vec<u32> = list
+        .split(',')
+        .map(|s| s.trim().parse().expect("STICKSLIP_BENCH_GPU_SIZES: counts like 65536,262144,1048576"))
+        .collect();
+    sizes.try_into().expect("STICKSLIP_BENCH_GPU_SIZES: exactly three counts")
+}
+
 fn gpu_throughput(c: &mut Criterion) {
     let ctx = GpuContext::new(true).expect("a GPU adapter (lavapipe will do)");
-    throughput(c, "gpu", &Engine::gpu(ctx, GpuOptions::default()), [1024, 4096, 16384]);
+    throughput(c, "gpu", &Engine::gpu(ctx, GpuOptions::default()), gpu_sizes());
 }
 
 fn cpu_throughput(c: &mut Criterion) {
