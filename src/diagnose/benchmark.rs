@@ -13,7 +13,7 @@ use std::time::Instant;
 use crate::diagnose::candidates::NULL_HUBER;
 use crate::diagnose::measure::{MeasurementSet, RigInfo, SummaryRow, read_measurement_set};
 use crate::diagnose::report::write_diagnosis;
-use crate::diagnose::simulate::{PathStats, ensemble_path_stats};
+use crate::diagnose::simulate::{PathStats, path_stats_per_condition, record_path_stats};
 use crate::diagnose::synthetic::{PlannedSet, SetShape, benchmark_plan, random_truth, write_set};
 use crate::diagnose::{DiagnoseSettings, diagnose_set, mean, sd};
 use crate::engine::reduce::circular_mean_var;
@@ -114,9 +114,8 @@ pub fn peak_shift_in_noise_units(
     shape: SetShape,
     engine: &Engine,
 ) -> Result<f64> {
-    let cycles = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).max().unwrap_or(100);
-    let a = ensemble_path_stats(engine, with, conditions, cycles, 32, 99, 60)?;
-    let b = ensemble_path_stats(engine, without, conditions, cycles, 32, 99, 60)?;
+    let a = record_path_stats(engine, with, conditions, shape.duration_s, 32, 99, 60)?;
+    let b = record_path_stats(engine, without, conditions, shape.duration_s, 32, 99, 60)?;
     let mut worst: f64 = 0.0;
     for (pa, pb) in a.iter().zip(&b) {
         let (ma, mb): (Vec<f64>, Vec<f64>) =
@@ -141,9 +140,8 @@ pub fn error_against_truth(
     shape: SetShape,
     engine: &Engine,
 ) -> Result<f64> {
-    let cycles = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).max().unwrap_or(100);
-    let t = ensemble_path_stats(engine, truth, conditions, cycles, 32, 77, 60)?;
-    let m = ensemble_path_stats(engine, model, conditions, cycles, 32, 77, 60)?;
+    let t = record_path_stats(engine, truth, conditions, shape.duration_s, 32, 77, 60)?;
+    let m = record_path_stats(engine, model, conditions, shape.duration_s, 32, 77, 60)?;
     let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
     let mut terms = Vec::new();
     for (pt, pm) in t.iter().zip(&m) {
@@ -173,20 +171,23 @@ fn phase_only_set(
 ) -> Result<MeasurementSet> {
     let reference = Engine::cpu("the synthetic truth");
     let _ = engine;
-    let cycles = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).max().unwrap_or(100);
-    let stats = ensemble_path_stats(&reference, truth, conditions, cycles, 1, seed, 60)?;
+    // Each row over its own record's periods, as a rig measuring for the
+    // same time at each frequency would publish.
+    let cycles: Vec<u32> = conditions.iter().map(|c| (shape.duration_s * c.excitation_frequency_hz) as u32).collect();
+    let stats = path_stats_per_condition(&reference, truth, conditions, &cycles, 1, seed, 60)?;
     let summary = conditions
         .iter()
         .zip(&stats)
+        .zip(&cycles)
         .enumerate()
-        .map(|(i, (c, s))| SummaryRow {
+        .map(|(i, ((c, s), &cycles))| SummaryRow {
             excitation_frequency_hz: c.excitation_frequency_hz,
             excitation_amplitude_m: truth.excitation.amplitude_m,
             normal_force_mean_n: c.normal_force_n,
             normal_force_var_n2: None,
             peak_mean_m: None,
             peak_var_m2: None,
-            n_peaks: Some(u64::from(cycles)),
+            n_peaks: Some(u64::from(cycles.max(2))),
             phase_mean_deg: Some(s[0].phase_mean_deg),
             phase_var_deg2: Some(s[0].phase_var_deg2),
             line: i as u64 + 2,

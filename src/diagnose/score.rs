@@ -8,7 +8,7 @@ use serde::Serialize;
 use crate::diagnose::data::Data;
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::observable::Observable;
-use crate::diagnose::simulate::{ensemble_path_stats, replicates};
+use crate::diagnose::simulate::{path_stats_per_condition, replicates};
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
@@ -130,16 +130,17 @@ pub(crate) fn score(
     let summary_units: Vec<usize> = (0..data.units.len()).filter(|&i| data.units[i].summary.is_some()).collect();
     if !summary_units.is_empty() {
         let conditions: Vec<Condition> = summary_units.iter().map(|&i| data.units[i].condition).collect();
-        let cycles = summary_units
+        // Each row over as many periods as it averaged (350 where it does
+        // not say), so its simulated spread is that of its own statistic.
+        let cycles: Vec<u32> = summary_units
             .iter()
-            .filter_map(|&i| data.units[i].summary.map(|row| data.set.summary[row].n_peaks.unwrap_or(350) as u32))
-            .max()
-            .unwrap_or(350);
-        let stats = ensemble_path_stats(
+            .map(|&i| data.units[i].summary.map_or(350, |row| data.set.summary[row].n_peaks.unwrap_or(350) as u32))
+            .collect();
+        let stats = path_stats_per_condition(
             engine,
             model,
             &conditions,
-            cycles,
+            &cycles,
             settings.ensemble_realisations,
             settings.seed,
             settings.warmup_cycles,

@@ -125,6 +125,54 @@ impl PathStats {
     }
 }
 
+/// Per-path statistics over records of `duration_s` seconds: like
+/// [`ensemble_path_stats`], but each condition runs the periods its own
+/// record holds (`duration_s` × its frequency), as a measured record there
+/// would.
+pub(crate) fn record_path_stats(
+    engine: &Engine,
+    model: &Model,
+    conditions: &[Condition],
+    duration_s: f64,
+    realisations: u32,
+    seed: u64,
+    warmup: u32,
+) -> Result<Vec<Vec<PathStats>>> {
+    let cycles: Vec<u32> = conditions.iter().map(|c| (duration_s * c.excitation_frequency_hz) as u32).collect();
+    path_stats_per_condition(engine, model, conditions, &cycles, realisations, seed, warmup)
+}
+
+/// Per-path statistics with each condition's own number of measured
+/// periods (`cycles[i]` for `conditions[i]`, at least 2): one ensemble per
+/// distinct length. One length for all would measure the short records'
+/// conditions over a longer window than their data: their simulated spread
+/// would be too small, and time-dependent effects (a drift) would reach
+/// values the records never saw.
+pub(crate) fn path_stats_per_condition(
+    engine: &Engine,
+    model: &Model,
+    conditions: &[Condition],
+    cycles: &[u32],
+    realisations: u32,
+    seed: u64,
+    warmup: u32,
+) -> Result<Vec<Vec<PathStats>>> {
+    debug_assert_eq!(conditions.len(), cycles.len());
+    let mut lengths: Vec<u32> = cycles.iter().map(|&c| c.max(2)).collect();
+    lengths.sort_unstable();
+    lengths.dedup();
+    let mut out = vec![Vec::new(); conditions.len()];
+    for length in lengths {
+        let members: Vec<usize> = (0..conditions.len()).filter(|&i| cycles[i].max(2) == length).collect();
+        let group: Vec<Condition> = members.iter().map(|&i| conditions[i]).collect();
+        let stats = ensemble_path_stats(engine, model, &group, length, realisations, seed, warmup)?;
+        for (i, per_path) in members.into_iter().zip(stats) {
+            out[i] = per_path;
+        }
+    }
+    Ok(out)
+}
+
 /// Per-path statistics of an ensemble: for each condition, every
 /// realisation's statistics over `cycles` measured periods.
 pub(crate) fn ensemble_path_stats(
@@ -157,4 +205,28 @@ pub(crate) fn ensemble_path_stats(
         }
     };
     Ok(paths.chunks(realisations as usize).map(|chunk| chunk.iter().map(stats).collect()).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each condition gets its own number of periods, and the results come
+    /// back in the conditions' order, as if each ran alone.
+    #[test]
+    fn each_condition_runs_its_own_record_length() {
+        let model = Model::paper_rig(&[]).expect("the paper rig");
+        let engine = Engine::cpu("test");
+        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
+        let conditions = [at(9.0, 12.0), at(6.0, 10.0), at(9.0, 16.0)];
+        let cycles = [30, 12, 30];
+        let together = path_stats_per_condition(&engine, &model, &conditions, &cycles, 3, 5, 4).expect("runs");
+        for (i, c) in conditions.iter().enumerate() {
+            let alone = ensemble_path_stats(&engine, &model, &[*c], cycles[i], 3, 5, 4).expect("runs");
+            assert_eq!(together[i], alone[0], "condition {i}");
+        }
+        // Not what one length for all would give.
+        let one_length = ensemble_path_stats(&engine, &model, &conditions[1..2], 30, 3, 5, 4).expect("runs");
+        assert_ne!(together[1], one_length[0]);
+    }
 }
