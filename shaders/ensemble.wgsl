@@ -27,6 +27,11 @@ struct Params {
     point_offset: u32,
     // 1: also write every measured peak to `peaks` (for path-by-path checks).
     record_peaks: u32,
+    // 1: write a sample to `samples` at every noise boundary of the measured
+    // cycles (records aligned with the noise).
+    record_samples: u32,
+    // Samples per path in `samples`: the most noise boundaries one dispatch crosses.
+    sample_slots: u32,
 }
 
 // The effects (src/engine/effects.rs EffectParams); forms are the codes of
@@ -120,6 +125,30 @@ struct PathState {
 // Per grid point: HISTOGRAM_BINS counts (first: below range, last: above).
 @group(0) @binding(5) var<storage, read_write> histograms: array<atomic<u32>>;
 @group(0) @binding(6) var<uniform> effects: EffectParams;
+// Per path and noise boundary crossed in this dispatch (slot k: the k-th
+// boundary): (x m, v m/s, N N, friction force N) when params.record_samples
+// is 1; the host picks the slots of the measured boundaries.
+@group(0) @binding(7) var<storage, read_write> samples: array<f32>;
+
+// This invocation's first slot in `samples`, and its noise interval index
+// when the dispatch began.
+var<private> sample_row: u32;
+var<private> interval_at_dispatch: u32;
+
+// Writes the sample of the noise boundary just crossed, at local time t_s in
+// the period (s), after the new interval's noise was drawn (the CPU's
+// aligned Sampler).
+fn record_sample(t_s: f32) {
+    let slot = path.interval - interval_at_dispatch - 1u;
+    if (slot >= params.sample_slots) {
+        return;
+    }
+    let at = 4u * (sample_row + slot);
+    samples[at] = path.x_m;
+    samples[at + 1u] = path.v_m_per_s;
+    samples[at + 2u] = path.normal_force_n;
+    samples[at + 3u] = friction_force(trig_at(point.omega_rad_per_s * t_s));
+}
 
 fn load_invocation(n: u32) {
     point_index = n / params.realisations_per_point;
@@ -186,6 +215,8 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
         s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, s.colour_state_1,
         s.colour_state_2, s.lagged_mu, s.stick_since_s, 0.0, 0.0, 0.0, 0.0);
+    sample_row = n * params.sample_slots;
+    interval_at_dispatch = s.interval;
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u));
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;

@@ -429,6 +429,16 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
     return start;
 }
 
+// Friction force on the block with the base at `trig` (for output samples), N.
+fn friction_force(trig: vec2<f32>) -> f32 {
+    if (path.mode == MODE_STICK) {
+        return -spring_force(trig.x, path.x_m);
+    }
+    let sign = f32(path.mode);
+    let mu = friction_coefficient(sign * path.v_m_per_s, path.v_m_per_s, path.x_m, path.lagged_mu);
+    return -sign * mu * path.normal_force_n;
+}
+
 // The fewest equal steps no longer than max_step that cover span (the CPU's
 // span_steps).
 fn span_steps(span: f32, max_step: f32) -> u32 {
@@ -485,6 +495,11 @@ fn run_period(measuring: bool) {
             path.next_boundary_frac = frac;
             path.next_boundary_whole += point.noise_interval_whole + carry;
             draw_noise();
+            // Records aligned with the noise sample each boundary of the
+            // measured cycles, with the new interval's noise.
+            if (measuring && params.record_samples != 0u) {
+                record_sample(t);
+            }
         }
         if (!(t < point.period_s)) {
             finished = true;

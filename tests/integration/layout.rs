@@ -75,6 +75,8 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 cycles,
                 point_offset,
                 record_peaks,
+                record_samples,
+                sample_slots,
             }),
             "ensemble.wgsl",
         ),

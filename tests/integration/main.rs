@@ -12,5 +12,6 @@ mod hostile;
 mod layout;
 mod measure;
 mod props;
+mod records;
 mod rng;
 mod sweep;

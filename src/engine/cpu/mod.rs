@@ -165,12 +165,9 @@ pub(crate) fn sample_record(
     initial: InitialState,
 ) -> Vec<Sample> {
     let start_s = f64::from(warmup_cycles) * osc.period_s;
-    let cycles = (seconds / osc.period_s).ceil() as u32 + 1;
-    let noisy = osc.noise_interval_fixed != Oscillator::NOISELESS_INTERVAL;
-    let aligned = at_noise_boundaries && noisy && (sample_interval_s / osc.noise_interval_s - 1.0).abs() < 1e-9;
-    let mut sampler = if aligned {
-        let first = (u128::from(warmup_cycles) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64;
-        Sampler::at_noise_boundaries(first)
+    let cycles = record_cycles(osc, seconds);
+    let mut sampler = if samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries) {
+        Sampler::at_noise_boundaries(first_sampled_interval(osc, warmup_cycles))
     } else {
         Sampler::new(sample_interval_s, start_s)
     };
@@ -182,6 +179,28 @@ pub(crate) fn sample_record(
         s.t_s -= start_s;
     }
     samples
+}
+
+/// Whether a record sampled every `sample_interval_s` (s) is taken at the
+/// noise-interval boundaries themselves: asked for (`at_noise_boundaries`),
+/// the noise is on, and the interval is the noise's to 1e-9. Both backends
+/// decide with this test (the GPU kernel samples only such records).
+pub(crate) fn samples_at_noise_boundaries(osc: &Oscillator, sample_interval_s: f64, at_noise_boundaries: bool) -> bool {
+    let noisy = osc.noise_interval_fixed != Oscillator::NOISELESS_INTERVAL;
+    at_noise_boundaries && noisy && (sample_interval_s / osc.noise_interval_s - 1.0).abs() < 1e-9
+}
+
+/// Index of the first noise interval a noise-aligned record samples: the
+/// interval that starts at the first boundary at or after the end of
+/// `warmup_cycles` periods.
+pub(crate) fn first_sampled_interval(osc: &Oscillator, warmup_cycles: u32) -> u64 {
+    (u128::from(warmup_cycles) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64
+}
+
+/// Excitation periods a record of `seconds` (s) integrates after its
+/// warm-up: one more than it spans, so the last sample is always reached.
+pub(crate) fn record_cycles(osc: &Oscillator, seconds: f64) -> u32 {
+    (seconds / osc.period_s).ceil() as u32 + 1
 }
 
 /// Runs one realisation and returns its per-period peaks and phases.

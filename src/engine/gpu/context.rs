@@ -79,6 +79,7 @@ impl Kernels {
                 storage_entry(4, false),
                 storage_entry(5, false),
                 uniform_entry(6),
+                storage_entry(7, false),
             ],
         });
         let check = device.create_shader_module(wgpu::ShaderModuleDescriptor {

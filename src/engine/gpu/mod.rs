@@ -65,10 +65,17 @@ impl Backend for GpuBackend {
         BackendKind::Gpu
     }
 
-    /// Sums and peaks come from the kernel. Records are not sampled by the
-    /// kernel yet: they come from the CPU reference on the same noise keys.
+    /// Sums and peaks come from the kernel. So do records sampled at the
+    /// noise boundaries (`at_noise_boundaries` with the noise on and the
+    /// sampling interval equal to the noise interval, as a diagnosis's
+    /// replicates are): the kernel writes a sample at each boundary, in f32.
+    /// Records sampled otherwise (between boundaries, or without noise) would
+    /// split the kernel's steps, so they fall back to the CPU reference on the
+    /// same noise keys.
     fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
-        if let Record::Samples { .. } = job.record {
+        if let Record::Samples { interval_s, at_noise_boundaries, .. } = job.record
+            && !ensemble::records_on_gpu(&job.oscillators()?, interval_s, at_noise_boundaries)
+        {
             return CpuBackend.run(job, progress);
         }
         ensemble::run(&self.ctx, self.options, job, progress)

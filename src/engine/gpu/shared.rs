@@ -52,6 +52,12 @@ pub struct Params {
     pub point_offset: u32,
     /// 1: also write every measured peak to the peaks buffer.
     pub record_peaks: u32,
+    /// 1: write a sample at every noise boundary of the measured cycles to
+    /// the samples buffer (records aligned with the noise).
+    pub record_samples: u32,
+    /// Samples per path in the samples buffer: the most noise boundaries
+    /// one dispatch crosses.
+    pub sample_slots: u32,
 }
 
 /// The effects as the kernel sees them (struct `EffectParams`, uniform):
@@ -244,6 +250,8 @@ impl Params {
             cycles: 0,
             point_offset: 0,
             record_peaks: u32::from(record_peaks),
+            record_samples: 0,
+            sample_slots: 0,
         }
     }
 }
