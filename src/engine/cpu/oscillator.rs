@@ -27,7 +27,9 @@
 //! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //!
-//! Output samples (records) split steps on the CPU only.
+//! Output samples (records) between noise boundaries split steps on the CPU
+//! only; records sampled at the noise boundaries split none, and the GPU
+//! kernel writes those itself.
 
 use crate::engine::cpu::effects;
 use crate::engine::effects::{ColourForm, HysteresisForm, STICTION_DECAY_M, StictionForm};

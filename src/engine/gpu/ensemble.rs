@@ -1,7 +1,9 @@
 //! The dispatch loop of the ensemble kernel (`shaders/ensemble.wgsl`): path
 //! state lives in a storage buffer between dispatches, each invocation
 //! integrates one realisation for a few cycles per dispatch, and peaks are
-//! reduced exactly on the GPU into per-point sums and histograms.
+//! reduced exactly on the GPU into per-point sums and histograms. Records
+//! sampled at the noise boundaries are written by the kernel (16 B per path
+//! and boundary of a dispatch) and read back after each measured dispatch.
 //!
 //! Memory: points are processed in chunks of at most 2^20 invocations, so
 //! the GPU holds at most 48 MiB of path state plus 8 KiB of histogram and
