@@ -446,7 +446,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
     }
     let f = &mut model.friction;
     let variance = f.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
-    f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt().max(SIGMA_STEP_FLOOR * f.sigma);
+    f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt().max(SIGMA_STEP_MIN_SHARE * f.sigma);
 }
 
 /// A law step lowers σ_μ to no less than this share of what it was. The
@@ -458,7 +458,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
 /// fitting gap 47 → 89, which hid the effect behind a noise level no trial
 /// had tried). Repeated steps still reach a σ_μ the data imply; a single
 /// step cannot collapse it.
-const SIGMA_STEP_FLOOR: f64 = 0.5;
+const SIGMA_STEP_MIN_SHARE: f64 = 0.5;
 
 pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     let set = data.set;
