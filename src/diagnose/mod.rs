@@ -197,10 +197,13 @@ impl Diagnosis {
     }
 }
 
-/// What a misfit of an observable points at.
-fn misfit_hint(o: Observable) -> Option<&'static str> {
+/// What a misfit of an observable points at: the parameters of the
+/// baseline it moves with, or the effect whose form-agnostic signature it
+/// is (so a misfit that no candidate's form closed still names where to
+/// look). Every observable has one.
+fn misfit_hint(o: Observable) -> &'static str {
     use Observable as O;
-    Some(match o {
+    match o {
         O::FrictionMuMean | O::FrictionLowSpeedMuMean => "the friction law's level (a, b, c, d) or its load dependence",
         O::FrictionResidualStd => "the friction noise level sigma_mu",
         O::PeakMeanM | O::PhaseMeanDeg => "the friction level a or the rig (mass, stiffness, damping, base amplitude)",
@@ -208,11 +211,26 @@ fn misfit_hint(o: Observable) -> Option<&'static str> {
         O::NormalForceMeanN | O::NormalForceVarN2 | O::NormalForceResidualVarN2 => {
             "the normal-force noise sigma_N or N0"
         }
-        O::StickFraction | O::FrictionBreakawayMean | O::FrictionStictionExcess => {
+        O::StickFraction | O::FrictionBreakawayMean | O::FrictionStictionExcess | O::FrictionSlipSamples => {
             "the friction near zero speed (the Stribeck drop b, c, or stiction)"
         }
-        _ => return None,
-    })
+        O::FrictionHysteresis => {
+            "a friction memory: the accelerating and decelerating branches of mu(v) differ (friction_hysteresis, perhaps in a form no candidate has)"
+        }
+        O::FrictionResidualAutocorrLag1 | O::FrictionResidualAutocorrLag10 => {
+            "friction that remembers beyond one noise interval: coloured friction noise or a friction memory"
+        }
+        O::FrictionResidualSkewness | O::FrictionResidualExcessKurtosis => {
+            "the friction noise's distribution (skew or heavy tails: non_gaussian_friction)"
+        }
+        O::NormalForceHarmonic1N | O::NormalForceHarmonic2N | O::NormalForceHarmonic3N | O::NormalForceHarmonic4N => {
+            "a normal force that varies with the excitation (normal_force_harmonics)"
+        }
+        O::NormalForceDriftNPerS | O::NormalForceDriftPerS | O::PeakTrendPerS => {
+            "a slow change over the record (normal_force_drift, or wear)"
+        }
+        O::PeakCount => "the record's length or the excitation frequency (a peak per period)",
+    }
 }
 
 /// The baseline's misfit by observable, when it is beyond noise.
@@ -235,18 +253,17 @@ fn misfit_of(scores: &[Score], noise: f64) -> Option<Misfit> {
     }
     worst.sort_by(|a, b| b.mean_loss.total_cmp(&a.mean_loss));
     worst.truncate(6);
-    let mut hints: Vec<String> = Vec::new();
-    for m in &worst {
-        if let Some(h) = misfit_hint(m.observable) {
-            let h = format!(
+    let hints = worst
+        .iter()
+        .map(|m| {
+            format!(
                 "{} ({} {})",
-                h,
+                misfit_hint(m.observable),
                 m.observable.name(),
                 if m.mean_z > 0.0 { "measured above simulated" } else { "measured below simulated" }
-            );
-            hints.push(h);
-        }
-    }
+            )
+        })
+        .collect();
     Some(Misfit { observables: worst, hints })
 }
 
@@ -374,7 +391,42 @@ pub fn diagnose_set(
 
 #[cfg(test)]
 mod tests {
-    use super::none_confidence;
+    use super::{Observable, Score, misfit_of, none_confidence};
+
+    /// A fitting score of `observable` with z = `z`.
+    fn fitting_score(observable: Observable, z: f64) -> Score {
+        Score {
+            excitation_frequency_hz: 7.0,
+            normal_force_n: 10.0,
+            observable,
+            measured: z,
+            simulated: 0.0,
+            z,
+            heldout: false,
+            unit: 0,
+            scale: 1.0,
+            simulated_share: 0.5,
+        }
+    }
+
+    /// Seed 21's 18-run `rational` hysteresis set: no candidate's form closed
+    /// enough of the gap, and its two worst observables (the branch
+    /// asymmetry at z ≈ −135, the residual's lag-1 autocorrelation at
+    /// z ≈ +113) had no hint, so the report named only the friction level.
+    /// Every misfit observable now says where to look, worst first.
+    #[test]
+    fn every_misfit_observable_says_where_to_look() {
+        let scores = [
+            fitting_score(Observable::FrictionHysteresis, -135.0),
+            fitting_score(Observable::FrictionResidualAutocorrLag1, 113.0),
+            fitting_score(Observable::PeakMeanM, 0.5),
+        ];
+        let misfit = misfit_of(&scores, 1.0).expect("a misfit beyond the noise");
+        assert_eq!(misfit.observables.len(), 2, "the peak mean is within the noise");
+        assert_eq!(misfit.hints.len(), 2);
+        assert!(misfit.hints[0].contains("friction memory") && misfit.hints[0].contains("measured below simulated"));
+        assert!(misfit.hints[1].contains("coloured friction noise"));
+    }
 
     #[test]
     fn none_is_sure_only_when_the_baseline_fits() {
