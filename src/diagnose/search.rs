@@ -430,6 +430,7 @@ fn round(
                 other => other?,
             };
         let (model, scores) = converge_law(model, scores, data, settings, engine)?;
+        let (model, scores) = keep_the_better_law(model, scores, &t.model, data, settings, engine)?;
         let t = Trial { gap_fit: gap_of(&scores, false), values: t.values, model, scores };
         let gap_heldout = gap_of(&t.scores, true);
         let mut worst: Vec<&Score> = t.scores.iter().collect();
@@ -459,6 +460,55 @@ fn round(
     }
     rank_effects(&mut out, if data.has_heldout() { g0_ho } else { g0_fit }, data.has_heldout(), ruler);
     Ok(out)
+}
+
+/// The round's best form with its law stepped on every replicate and
+/// carried to convergence (`converged`, scored on every unit), unless it
+/// ends fitting worse, beyond the gap's noise, than the search's law
+/// (`searched`) scored on the same replicates: then the searched law. Only
+/// where the law is calibrated on force channels (`measured_law`); summary
+/// sets step their law differently.
+///
+/// A law step reads the measured law against the simulated one as if the
+/// trial's effect had the data's form. Where it has another (the 18-run
+/// seed-21 set hides a friction memory in the withheld `rational` form),
+/// the effect's structured residual moves the law the wrong way: that
+/// one step took the best memory form's fitting gap from 70 to 117, no
+/// later step brought it back, and the verdict was `none`. The comparison
+/// is made after convergence: on two of seed 11's sets the first step
+/// raised the gap beyond its noise and later steps took it lower than the
+/// searched law's (keeping the searched law there added a spurious second
+/// effect and cut a confidence from 0.97 to 0.88).
+fn keep_the_better_law(
+    converged: Model,
+    converged_scores: Vec<Score>,
+    searched: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<(Model, Vec<Score>)> {
+    if data.measured_law.is_none() {
+        return Ok((converged, converged_scores));
+    }
+    let searched_scores = match score(engine, searched, data, settings, Scope::Fitting) {
+        Err(Error::Diverged { .. }) => return Ok((converged, converged_scores)),
+        other => other?,
+    };
+    let (after, before, k) =
+        (gap_of(&converged_scores, false), gap_of(&searched_scores, false), count_of(&converged_scores, false));
+    Ok(if step_made_it_worse(after, before, k) {
+        let searched_scores = add_heldout(engine, searched, data, settings, searched_scores)?;
+        (searched.clone(), searched_scores)
+    } else {
+        (converged, converged_scores)
+    })
+}
+
+/// Whether the stepped law's fitting gap `stepped` stands above the
+/// unstepped law's `searched`, over `k` fitting scores, by more than the
+/// gap's noise.
+fn step_made_it_worse(stepped: f64, searched: f64, k: usize) -> bool {
+    stepped - searched > gap_noise(k)
 }
 
 /// How a candidate ranks against the other effects of its round where
@@ -720,6 +770,19 @@ mod tests {
     /// noise that took the key gap from 179.2 to 13.2. It takes the key gap
     /// to 9.4 and the fitting gap from 32.3 to 5.8: 32% of what was left,
     /// though 2% of the baseline's gap. Its noise thresholds are about 1.2.
+    /// The seed-21 `rational` memory: its law step raised the fitting gap
+    /// from 70 to 117, where a few hundred fitting scores put the gap's
+    /// noise under 1. A step within the noise is kept.
+    #[test]
+    fn a_law_step_is_undone_only_when_it_worsens_the_fit_beyond_noise() {
+        assert!(step_made_it_worse(117.0, 70.0, 430));
+        assert!(!step_made_it_worse(70.5, 70.0, 430));
+        assert!(!step_made_it_worse(60.0, 70.0, 430));
+        let noise = gap_noise(430);
+        assert!(!step_made_it_worse(70.0 + 0.9 * noise, 70.0, 430));
+        assert!(step_made_it_worse(70.0 + 1.1 * noise, 70.0, 430));
+    }
+
     #[test]
     fn a_further_effect_is_judged_against_what_is_left() {
         let noise = (1.2, 1.2);
