@@ -395,18 +395,7 @@ mod tests {
 
     /// A fitting score of `observable` with z = `z`.
     fn fitting_score(observable: Observable, z: f64) -> Score {
-        Score {
-            excitation_frequency_hz: 7.0,
-            normal_force_n: 10.0,
-            observable,
-            measured: z,
-            simulated: 0.0,
-            z,
-            heldout: false,
-            unit: 0,
-            scale: 1.0,
-            simulated_share: 0.5,
-        }
+        crate::diagnose::score::test_score(0, observable, z, false)
     }
 
     /// Seed 21's 18-run `rational` hysteresis set: no candidate's form closed

@@ -62,6 +62,24 @@ pub fn gap_of(scores: &[Score], heldout: bool) -> f64 {
     if picked.is_empty() { 0.0 } else { picked.iter().sum::<f64>() / picked.len() as f64 }
 }
 
+/// A score of `observable` at `unit` with z = `z` and scale 1 at 7 Hz and
+/// 10 N, held out or fitting (for unit tests).
+#[cfg(test)]
+pub(crate) fn test_score(unit: usize, observable: Observable, z: f64, heldout: bool) -> Score {
+    Score {
+        excitation_frequency_hz: 7.0,
+        normal_force_n: 10.0,
+        observable,
+        measured: z,
+        simulated: 0.0,
+        z,
+        heldout,
+        unit,
+        scale: 1.0,
+        simulated_share: 0.5,
+    }
+}
+
 /// How many fitting (or held-out) scores there are.
 pub fn count_of(scores: &[Score], heldout: bool) -> usize {
     scores.iter().filter(|s| s.heldout == heldout).count()

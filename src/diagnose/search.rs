@@ -752,18 +752,7 @@ mod tests {
 
     /// A held-out score of `observable` at `unit` with z = `z` and scale 1.
     fn score(unit: usize, observable: Observable, z: f64) -> Score {
-        Score {
-            excitation_frequency_hz: 7.0,
-            normal_force_n: 10.0,
-            observable,
-            measured: z,
-            simulated: 0.0,
-            z,
-            heldout: true,
-            unit,
-            scale: 1.0,
-            simulated_share: 0.5,
-        }
+        crate::diagnose::score::test_score(unit, observable, z, true)
     }
 
     /// Seed 11 set 15 of the benchmark: load dependence on top of a coloured
