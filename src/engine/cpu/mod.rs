@@ -194,7 +194,15 @@ pub(crate) fn samples_at_noise_boundaries(osc: &Oscillator, sample_interval_s: f
 /// interval that starts at the first boundary at or after the end of
 /// `warmup_cycles` periods.
 pub(crate) fn first_sampled_interval(osc: &Oscillator, warmup_cycles: u32) -> u64 {
-    (u128::from(warmup_cycles) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64
+    first_boundary_from(osc, u64::from(warmup_cycles))
+}
+
+/// Index of the first noise boundary at or after the start of period
+/// `periods` (`ceil(periods · 2^32 / interval)` in the 32.32 fixed point
+/// both backends share): also how many boundaries `j ≥ 0` lie before it,
+/// and the most any `periods` consecutive periods hold.
+pub(crate) fn first_boundary_from(osc: &Oscillator, periods: u64) -> u64 {
+    (u128::from(periods) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64
 }
 
 /// Excitation periods a record of `seconds` (s) integrates after its

@@ -12,7 +12,7 @@
 use wgpu::util::DeviceExt;
 
 use crate::engine::cpu::oscillator::noise_boundary_time_s;
-use crate::engine::cpu::{first_sampled_interval, record_cycles, samples_at_noise_boundaries};
+use crate::engine::cpu::{first_boundary_from, first_sampled_interval, record_cycles, samples_at_noise_boundaries};
 use crate::engine::gpu::shared::{EffectParams, GridPoint, Params, PathState};
 use crate::engine::gpu::{
     GpuContext, LOOP_ITERATIONS_PER_DISPATCH, loop_iterations_per_cycle, read_back, storage_buffer, workgroups,
@@ -118,12 +118,12 @@ pub(crate) fn records_on_gpu(oscillators: &[Oscillator], interval_s: f64, at_noi
 /// count of boundaries `j ≥ 1` before it: `j · noise_interval_fixed <
 /// period · 2^32`), as the kernel counts them.
 fn interval_at_period_start(o: &Oscillator, period: u64) -> u64 {
-    ((u128::from(period) << 32).div_ceil(u128::from(o.noise_interval_fixed)) as u64).saturating_sub(1)
+    first_boundary_from(o, period).saturating_sub(1)
 }
 
 /// The most noise boundaries any `cycles` consecutive periods hold.
 fn boundaries_within(o: &Oscillator, cycles: u64) -> u64 {
-    (u128::from(cycles) << 32).div_ceil(u128::from(o.noise_interval_fixed)) as u64
+    first_boundary_from(o, cycles)
 }
 
 /// Floats per sample in the samples buffer: x, v, N, friction force.
