@@ -78,5 +78,8 @@ fn drift_factor(t_s: f32) -> f32 {
     if (effects.drift_form == DRIFT_FORM_WANDER) {
         return 1.0 + rate * DRIFT_WANDER_S * sin(t_s / DRIFT_WANDER_S);
     }
+    if (effects.drift_form == DRIFT_FORM_QUADRATIC) {
+        return max(0.0, 1.0 + (rate + effects.drift_curvature_per_s2 * t_s) * t_s);
+    }
     return 1.0 + rate * t_s;
 }

@@ -62,7 +62,7 @@ struct EffectParams {
     drift_form: u32,
     drift_rate_per_s: f32,
     noise_interval_s: f32,
-    _pad1: u32,
+    drift_curvature_per_s2: f32,
     _pad2: u32,
     _pad3: u32,
 }

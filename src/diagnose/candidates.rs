@@ -12,7 +12,7 @@
 //! | coloured noise | AR(1) with a coloured share (Lorentzian plus white) | the residual autocorrelation | residual autocorrelation, peak variance |
 //! | stiction | constant (released over a slip length), ageing with dwell time | the breakaway excess (the measured one, released, where the baseline's law absorbed it) | breakaway excess, stick fraction |
 //! | load-dependent friction | linear, power law in N0 | the slope of μ (or of the peaks) against N0 | mean μ, mean peak and phase across loads |
-//! | normal-force drift | linear | the measured N's drift (or the peaks' trend) | N's drift, the peaks' trend |
+//! | normal-force drift | linear, quadratic | the measured N's drift and curvature (or the peaks' trend) | N's drift and curvature, the peaks' trend |
 //!
 //! The library's other forms (bumps and square harmonics, lognormal and
 //! mixture noise, tanh and rational build-ups, held and multi-scale colour,
@@ -127,7 +127,9 @@ pub(crate) fn signature(effect: Effect) -> &'static [Observable] {
             &[Observable::FrictionStictionExcess, Observable::FrictionBreakawayMean, Observable::StickFraction]
         }
         Effect::LoadDependentFriction => &[Observable::FrictionMuMean, Observable::PeakMeanM, Observable::PhaseMeanDeg],
-        Effect::NormalForceDrift => &[Observable::NormalForceDriftPerS, Observable::PeakTrendPerS],
+        Effect::NormalForceDrift => {
+            &[Observable::NormalForceDriftPerS, Observable::NormalForceCurvaturePerS2, Observable::PeakTrendPerS]
+        }
     }
 }
 
@@ -138,11 +140,31 @@ pub(crate) struct Context<'a> {
     /// The model the candidates are added to.
     model: &'a Model,
     scores: &'a [Score],
+    /// Periods each simulated record is preceded by (the drift's clock
+    /// starts there).
+    warmup_cycles: u32,
 }
 
 impl<'a> Context<'a> {
-    pub(crate) fn new(data: &'a Data<'a>, model: &'a Model, scores: &'a [Score]) -> Context<'a> {
-        Context { data, model, scores }
+    pub(crate) fn new(data: &'a Data<'a>, model: &'a Model, scores: &'a [Score], warmup_cycles: u32) -> Context<'a> {
+        Context { data, model, scores, warmup_cycles }
+    }
+
+    /// Mean over the fitting units of the time from a simulated run's start
+    /// to the middle of its record, s.
+    fn mean_record_middle_s(&self) -> f64 {
+        let middles: Vec<f64> = self
+            .data
+            .units
+            .iter()
+            .filter(|u| !u.heldout)
+            .map(|u| {
+                let f = u.condition.excitation_frequency_hz;
+                let record: Vec<f64> = u.runs.iter().map(|&r| self.data.set.runs[r].duration_s()).collect();
+                f64::from(self.warmup_cycles) / f + 0.5 * if record.is_empty() { 0.0 } else { mean(&record) }
+            })
+            .collect();
+        if middles.is_empty() { 0.0 } else { mean(&middles) }
     }
 
     /// Mean over the fitting units of a measured observable.
@@ -560,19 +582,48 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 .or_else(|| ctx.excess(Observable::PeakTrendPerS).map(|t| -t))
                 .filter(|r| r.abs() > 1e-6)
                 .unwrap_or(0.002);
-            let drift = |form: DriftForm, rate: f64| NormalForceDrift { form, rate_per_s: rate };
-            // Only the linear form: the saturating and wandering drifts are
-            // the benchmark's withheld forms.
-            vec![Variant {
-                effect,
-                form: "linear",
-                params: vec![Param::log("rate_per_s", rate, 1.4, -0.5, 0.5)],
-                apply: Box::new(move |m, p| {
-                    let mut m = m.clone();
-                    m.effects.normal_force_drift = Some(drift(DriftForm::Linear, p[0]));
-                    m
-                }),
-            }]
+            // A quadratic's t² term shows in the record as the curvature
+            // (relative to the record's mean) and tilts the record's slope
+            // by 2 q × the record's middle (time from the run's start).
+            let curvature = ctx
+                .excess(Observable::NormalForceCurvaturePerS2)
+                .filter(|q| q.is_finite() && q.abs() > 1e-9)
+                .unwrap_or(0.0)
+                .clamp(-1e-2, 1e-2);
+            let initial_rate = (rate - 2.0 * curvature * ctx.mean_record_middle_s()).clamp(-0.5, 0.5);
+            let drift = |form: DriftForm, rate: f64, curvature: f64| NormalForceDrift {
+                form,
+                rate_per_s: rate,
+                curvature_per_s2: curvature,
+            };
+            // Linear and quadratic forms only: the saturating and wandering
+            // drifts are the benchmark's withheld forms (the quadratic bends
+            // as both do, without either's shape).
+            vec![
+                Variant {
+                    effect,
+                    form: "linear",
+                    params: vec![Param::log("rate_per_s", rate, 1.4, -0.5, 0.5)],
+                    apply: Box::new(move |m, p| {
+                        let mut m = m.clone();
+                        m.effects.normal_force_drift = Some(drift(DriftForm::Linear, p[0], 0.0));
+                        m
+                    }),
+                },
+                Variant {
+                    effect,
+                    form: "quadratic",
+                    params: vec![
+                        Param::linear("rate_per_s", initial_rate, 0.2 * initial_rate.abs().max(1e-4), -0.5, 0.5),
+                        Param::linear("curvature_per_s2", curvature, 0.2 * curvature.abs().max(1e-6), -1e-2, 1e-2),
+                    ],
+                    apply: Box::new(move |m, p| {
+                        let mut m = m.clone();
+                        m.effects.normal_force_drift = Some(drift(DriftForm::Quadratic, p[0], p[1]));
+                        m
+                    }),
+                },
+            ]
         }
     }
 }

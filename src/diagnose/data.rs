@@ -385,7 +385,14 @@ impl<'a> Data<'a> {
         let factor = match &model.effects.normal_force_drift {
             Some(d) => {
                 (0..64)
-                    .map(|i| drift_factor(d.form, d.rate_per_s, start + length * (f64::from(i) + 0.5) / 64.0))
+                    .map(|i| {
+                        drift_factor(
+                            d.form,
+                            d.rate_per_s,
+                            d.curvature_per_s2,
+                            start + length * (f64::from(i) + 0.5) / 64.0,
+                        )
+                    })
                     .sum::<f64>()
                     / 64.0
             }

@@ -24,6 +24,7 @@ pub enum Observable {
     NormalForceResidualVarN2,
     NormalForceDriftNPerS,
     NormalForceDriftPerS,
+    NormalForceCurvaturePerS2,
     FrictionSlipSamples,
     FrictionMuMean,
     FrictionResidualStd,
@@ -88,7 +89,7 @@ impl Observable {
     }
 
     /// Every observable, in the order of a record's features.
-    pub const ALL: [Observable; 28] = [
+    pub const ALL: [Observable; 29] = [
         Observable::PeakCount,
         Observable::PeakMeanM,
         Observable::PeakVarM2,
@@ -105,6 +106,7 @@ impl Observable {
         Observable::NormalForceResidualVarN2,
         Observable::NormalForceDriftNPerS,
         Observable::NormalForceDriftPerS,
+        Observable::NormalForceCurvaturePerS2,
         Observable::FrictionSlipSamples,
         Observable::FrictionMuMean,
         Observable::FrictionResidualStd,
@@ -138,6 +140,7 @@ impl Observable {
             Observable::NormalForceResidualVarN2 => "normal_force_residual_var_n2",
             Observable::NormalForceDriftNPerS => "normal_force_drift_n_per_s",
             Observable::NormalForceDriftPerS => "normal_force_drift_per_s",
+            Observable::NormalForceCurvaturePerS2 => "normal_force_curvature_per_s2",
             Observable::FrictionSlipSamples => "friction_slip_samples",
             Observable::FrictionMuMean => "friction_mu_mean",
             Observable::FrictionResidualStd => "friction_residual_std",
@@ -199,7 +202,8 @@ impl Observable {
             | Observable::NormalForceHarmonic4N
             | Observable::NormalForceResidualVarN2
             | Observable::NormalForceDriftNPerS
-            | Observable::NormalForceDriftPerS => MotionPhase::NormalForce,
+            | Observable::NormalForceDriftPerS
+            | Observable::NormalForceCurvaturePerS2 => MotionPhase::NormalForce,
             Observable::FrictionHysteresis => MotionPhase::SlipBranches,
             Observable::FrictionBreakawayMean | Observable::FrictionStictionExcess => MotionPhase::Breakaway,
             Observable::FrictionLowSpeedMuMean => MotionPhase::LowSpeedSlip,

@@ -402,7 +402,7 @@ fn round(
         .collect();
     screened.sort_by(|a, b| b.1.total_cmp(&a.1));
     screened.truncate(SCREEN_MAX);
-    let ctx = Context::new(data, base, base_scores);
+    let ctx = Context::new(data, base, base_scores, settings.warmup_cycles);
     let mut out = Vec::new();
     for (effect, excess) in screened {
         progress(&format!("trying {effect} (signature {excess:.1} noise units above the baseline)"));

@@ -169,6 +169,7 @@ pub fn random_truth(
             Effect::NormalForceDrift => {
                 m.effects.normal_force_drift = Some(NormalForceDrift {
                     form: if first { DriftForm::Saturating } else { DriftForm::Wander },
+                    curvature_per_s2: 0.0,
                     rate_per_s: pick(0.006, 0.012),
                 });
             }

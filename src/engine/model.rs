@@ -454,6 +454,7 @@ impl Model {
         }
         if let Some(d) = &e.normal_force_drift {
             bound("normal_force_drift.rate_per_s", d.rate_per_s, RATE_MAX, "1/s")?;
+            bound("normal_force_drift.curvature_per_s2", d.curvature_per_s2, RATE_MAX, "1/s²")?;
         }
         Ok(())
     }

@@ -10,7 +10,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 30] = [
+const ZERO: [&[&str]; 31] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -51,11 +51,12 @@ const ZERO: [&[&str]; 30] = [
     &["normal_force_drift.rate_per_s=0.0"],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"wander\""],
+    &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"quadratic\""],
 ];
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time).
-const ON: [&[&str]; 30] = [
+const ON: [&[&str]; 31] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -104,6 +105,11 @@ const ON: [&[&str]; 30] = [
     &["normal_force_drift.rate_per_s=0.01"],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"wander\""],
+    &[
+        "normal_force_drift.rate_per_s=0.01",
+        "normal_force_drift.curvature_per_s2=-4e-4",
+        "normal_force_drift.form=\"quadratic\"",
+    ],
 ];
 
 fn model(sets: &[&str]) -> Model {

@@ -158,6 +158,25 @@ fn normal_force_drift_is_recovered() {
 }
 
 #[test]
+fn a_bent_drift_is_not_read_as_noise() {
+    // A quadratic drift: its t² term comes back as the curvature (relative
+    // to the record's mean), and what is left is the noise put in.
+    let mut rng = Rng(19);
+    let t = times(5.0, 50.0);
+    let n: Vec<f64> = t.iter().map(|t| 16.0 * (1.0 + 0.01 * t - 2e-4 * t * t) + 0.33 * rng.gaussian()).collect();
+    let nf = run_features(&run_with_force(t.clone(), n)).normal_force.unwrap();
+    let curvature = -2e-4 * 16.0 / nf.mean_n;
+    assert!((nf.curvature_per_s2.unwrap() / curvature - 1.0).abs() < 0.05, "{nf:?}");
+    assert!((nf.residual_var_n2.unwrap() / 0.33f64.powi(2) - 1.0).abs() < 0.05, "{nf:?}");
+    // A wandering one (a sine of period 94 s, 18 % of N0): a straight line
+    // would leave a variance of about (16 · 0.18)² / 8 ≈ 1 N² as noise.
+    let n: Vec<f64> = t.iter().map(|t| 16.0 * (1.0 + 0.18 * (t / 15.0).sin()) + 0.33 * rng.gaussian()).collect();
+    let nf = run_features(&run_with_force(t, n)).normal_force.unwrap();
+    assert!((nf.residual_var_n2.unwrap() / 0.33f64.powi(2) - 1.0).abs() < 0.05, "{nf:?}");
+    assert!(nf.curvature_per_s2.unwrap() < 0.0, "{nf:?}");
+}
+
+#[test]
 fn friction_residual_shape() {
     let n = 30_000;
     // Gaussian noise: no skew, no excess kurtosis, no correlation, no hysteresis.

@@ -153,7 +153,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 drift_form,
                 drift_rate_per_s,
                 noise_interval_s,
-                _pad1,
+                drift_curvature_per_s2,
                 _pad2,
                 _pad3,
             }),

@@ -42,6 +42,9 @@ pub const HYSTERESIS_MIN_PER_SIDE: usize = 3;
 pub const BREAKAWAY_SAMPLES: usize = 3;
 /// Shortest run of stuck samples that counts as a stick phase.
 pub const MIN_STICK_SAMPLES: usize = 2;
+/// Degree of the polynomial in time that a record's slow normal force
+/// (its mean and drift) is fitted with, beside the harmonics.
+pub const SLOW_DEGREE: usize = 4;
 /// Normal-force harmonics fitted: 1× … `HARMONICS`× the excitation frequency.
 pub const HARMONICS: usize = 4;
 /// A harmonic is fitted only below this fraction of the sample rate (Nyquist is 0.5).
@@ -115,13 +118,18 @@ pub struct NormalForceFeatures {
     /// Its phase φ in `A cos(kΩt + φ)`, rad, with the record's own `t` (the
     /// base at `U0 cos Ωt`).
     pub harmonic_phase_rad: [Option<f64>; HARMONICS],
-    /// Variance of what the fit leaves (mean, drift and harmonics removed),
+    /// Variance of what the fit leaves (the slow part — a polynomial of
+    /// degree [`SLOW_DEGREE`] in time — and the harmonics removed),
     /// N², with the fitted parameters' degrees of freedom taken off.
     pub residual_var_n2: Option<f64>,
     /// Slope of the fitted line, N/s.
     pub drift_n_per_s: Option<f64>,
     /// Slope of the fitted line divided by the mean, 1/s (`None` for a zero mean).
     pub drift_per_s: Option<f64>,
+    /// The slow part's curvature: the coefficient of t² of its quadratic
+    /// (Legendre P2) term, divided by the mean, 1/s² (`None` for a zero
+    /// mean).
+    pub curvature_per_s2: Option<f64>,
 }
 
 /// Features of the friction coefficient `μ = |F| / N` while slipping.
@@ -214,6 +222,7 @@ impl RunFeatures {
             (Observable::NormalForceResidualVarN2, n.and_then(|n| n.residual_var_n2)),
             (Observable::NormalForceDriftNPerS, n.and_then(|n| n.drift_n_per_s)),
             (Observable::NormalForceDriftPerS, n.and_then(|n| n.drift_per_s)),
+            (Observable::NormalForceCurvaturePerS2, n.and_then(|n| n.curvature_per_s2)),
             (Observable::FrictionSlipSamples, f.map(|f| f.slip_samples as f64)),
             (Observable::FrictionMuMean, f.map(|f| f.mu_mean)),
             (Observable::FrictionResidualStd, f.map(|f| f.residual_std)),

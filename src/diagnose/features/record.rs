@@ -2,7 +2,7 @@
 //! the share of time at rest.
 
 use super::stats::{least_squares, moments, shape, slope};
-use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, STICK_SPEED_FRACTION};
+use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, SLOW_DEGREE, STICK_SPEED_FRACTION};
 use crate::diagnose::measure::{self, Run};
 use crate::engine::reduce::circular_mean_var;
 
@@ -126,12 +126,17 @@ pub(super) fn normal_force_features(run: &Run, force: &[f64], base: &[(f64, f64)
     let t0 = t[0];
     let span = t[n - 1] - t0;
     let centre = 0.5 * (t[n - 1] + t0);
-    let p = 2 + 2 * fitted.len();
+    // The slow part: Legendre polynomials P0 … P_SLOW_DEGREE of the record's
+    // time scaled to [−1, 1], so that a drift that is not a straight line
+    // (wear that saturates, heating that comes and goes) is not read as
+    // noise; P1's coefficient is the straight-line drift.
+    let slow = 1 + SLOW_DEGREE;
+    let p = slow + 2 * fitted.len();
     // cos kΩt and sin kΩt from the fundamental's by the multiple-angle
     // recurrence (one sin/cos per sample, computed once per record).
     let fill_row = |i: usize, row: &mut [f64]| {
-        row[0] = 1.0;
-        row[1] = (t[i] - centre) / span;
+        let s = 2.0 * (t[i] - centre) / span;
+        legendre(s, &mut row[..slow]);
         let (c1, s1) = base[i];
         let (mut ck, mut sk) = (1.0, 0.0);
         let mut k_done = 0;
@@ -140,25 +145,30 @@ pub(super) fn normal_force_features(run: &Run, force: &[f64], base: &[(f64, f64)
                 (ck, sk) = (ck * c1 - sk * s1, sk * c1 + ck * s1);
                 k_done += 1;
             }
-            row[2 + 2 * j] = ck;
-            row[3 + 2 * j] = sk;
+            row[slow + 2 * j] = ck;
+            row[slow + 1 + 2 * j] = sk;
         }
     };
     let fit = (span > 0.0).then(|| least_squares(n, p, fill_row, |i| force[i] - mean)).flatten();
     let mut harmonic_amplitude_n = [None; HARMONICS];
     let mut harmonic_phase_rad = [None; HARMONICS];
-    let (mut residual_var_n2, mut drift_n_per_s) = (None, None);
+    let (mut residual_var_n2, mut drift_n_per_s, mut curvature_n_per_s2) = (None, None, None);
     if let Some((coef, ssr)) = fit {
         for (j, &k) in fitted.iter().enumerate() {
-            let (a, b) = (coef[2 + 2 * j], coef[3 + 2 * j]);
+            let (a, b) = (coef[slow + 2 * j], coef[slow + 1 + 2 * j]);
             harmonic_amplitude_n[k - 1] = Some(a.hypot(b));
             // a cos kΩt + b sin kΩt = A cos(kΩt + φ) with φ = atan2(−b, a).
             harmonic_phase_rad[k - 1] = Some((-b).atan2(a));
         }
         residual_var_n2 = (n > p).then(|| ssr / (n - p) as f64);
-        drift_n_per_s = Some(coef[1] / span);
+        // P1 = s = 2 (t − centre) / span; P2 = (3 s² − 1) / 2, whose t² term
+        // is 6 / span² per unit of its coefficient.
+        drift_n_per_s = Some(2.0 * coef[1] / span);
+        curvature_n_per_s2 = Some(6.0 * coef[2] / (span * span));
     }
-    let drift_per_s = drift_n_per_s.filter(|_| mean != 0.0).map(|d| d / mean);
+    let relative = |v: Option<f64>| v.filter(|_| mean != 0.0).map(|d| d / mean);
+    let drift_per_s = relative(drift_n_per_s);
+    let curvature_per_s2 = relative(curvature_n_per_s2);
     Some(NormalForceFeatures {
         mean_n: mean,
         var_n2,
@@ -167,7 +177,19 @@ pub(super) fn normal_force_features(run: &Run, force: &[f64], base: &[(f64, f64)
         residual_var_n2,
         drift_n_per_s,
         drift_per_s,
+        curvature_per_s2,
     })
+}
+
+/// `P0(s) … P_{k−1}(s)` into `out` (k = `out.len()`), by Bonnet's recursion.
+fn legendre(s: f64, out: &mut [f64]) {
+    for k in 0..out.len() {
+        out[k] = match k {
+            0 => 1.0,
+            1 => s,
+            _ => ((2 * k - 1) as f64 * s * out[k - 1] - (k - 1) as f64 * out[k - 2]) / k as f64,
+        };
+    }
 }
 
 /// Share of samples at rest (see [`RunFeatures::stick_fraction`]).

@@ -70,6 +70,8 @@ pub(crate) fn least_squares(
         10 => fixed::<10>(n, fill, y),
         11 => fixed::<11>(n, fill, y),
         12 => fixed::<12>(n, fill, y),
+        13 => fixed::<13>(n, fill, y),
+        14 => fixed::<14>(n, fill, y),
         _ => None,
     }
 }

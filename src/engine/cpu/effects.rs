@@ -76,9 +76,11 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
 }
 
 /// Drift factor of N0 at time `t` (s) from the run's start, initial
-/// relative rate `rate` (1/s).
-pub fn drift_factor(form: DriftForm, rate: f64, t: f64) -> f64 {
+/// relative rate `rate` (1/s), relative curvature `curvature` (1/s², the
+/// quadratic form's).
+pub fn drift_factor(form: DriftForm, rate: f64, curvature: f64, t: f64) -> f64 {
     match form {
+        DriftForm::Quadratic => (1.0 + (rate + curvature * t) * t).max(0.0),
         DriftForm::Saturating => 1.0 + rate * DRIFT_SATURATION_S * (1.0 - (-t / DRIFT_SATURATION_S).exp()),
         DriftForm::Wander => 1.0 + rate * DRIFT_WANDER_S * (t / DRIFT_WANDER_S).sin(),
         DriftForm::Linear => 1.0 + rate * t,

@@ -266,7 +266,8 @@ impl<'a> Path<'a> {
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
-        let mean_n = o.normal_force_mean_n * effects::drift_factor(e.drift_form, e.drift_rate_per_s, t_s);
+        let mean_n = o.normal_force_mean_n
+            * effects::drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
         let theta = std::f64::consts::TAU * self.interval_phase;
         let mut harmonics_n = 0.0;
         for k in 0..4 {

@@ -274,6 +274,7 @@ impl Effects {
         }
         if let Some(d) = &self.normal_force_drift {
             check("normal_force_drift.rate_per_s", d.rate_per_s, true, "must be finite")?;
+            check("normal_force_drift.curvature_per_s2", d.curvature_per_s2, true, "must be finite")?;
         }
         Ok(())
     }

@@ -44,6 +44,8 @@ pub struct EffectParams {
     pub drift_form: DriftForm,
     /// 1/s
     pub drift_rate_per_s: f64,
+    /// 1/s²
+    pub drift_curvature_per_s2: f64,
 }
 
 /// E[max(0, cos θ)^p] over θ uniform: Γ((p+1)/2) / (2 √π Γ(p/2 + 1)).
@@ -109,6 +111,7 @@ impl EffectParams {
         if let Some(d) = &effects.normal_force_drift {
             p.drift_form = d.form;
             p.drift_rate_per_s = d.rate_per_s;
+            p.drift_curvature_per_s2 = d.curvature_per_s2;
         }
         p
     }

@@ -251,12 +251,18 @@ impl Form for LoadForm {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NormalForceDrift {
-    /// N0 × `linear` (1 + r t); `saturating` (1 + r·20 s·(1 − e^(−t/20 s)));
-    /// `wander` (1 + r·15 s·sin(t/15 s)).
+    /// N0 × `linear` (1 + r t); `quadratic` (max(0, 1 + r t + q t²): wear
+    /// that slows, heating that comes and goes; never below zero);
+    /// `saturating` (1 + r·20 s·(1 − e^(−t/20 s))); `wander`
+    /// (1 + r·15 s·sin(t/15 s)).
     #[serde(default)]
     pub form: DriftForm,
     /// Initial relative rate r, 1/s.
     pub rate_per_s: f64,
+    /// Relative curvature q of the `quadratic` form, 1/s² (unused by the
+    /// others).
+    #[serde(default)]
+    pub curvature_per_s2: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -266,10 +272,11 @@ pub enum DriftForm {
     Linear = 0,
     Saturating = 1,
     Wander = 2,
+    Quadratic = 3,
 }
 
 impl Form for DriftForm {
-    const ALL: &'static [Self] = &[DriftForm::Linear, DriftForm::Saturating, DriftForm::Wander];
+    const ALL: &'static [Self] = &[DriftForm::Linear, DriftForm::Saturating, DriftForm::Wander, DriftForm::Quadratic];
 
     fn code(self) -> u32 {
         self as u32

@@ -97,7 +97,8 @@ pub struct EffectParams {
     pub drift_rate_per_s: f32,
     /// s
     pub noise_interval_s: f32,
-    pub _pad1: u32,
+    /// 1/s²
+    pub drift_curvature_per_s2: f32,
     pub _pad2: u32,
     pub _pad3: u32,
 }
@@ -133,7 +134,7 @@ impl EffectParams {
             drift_form: e.drift_form.code(),
             drift_rate_per_s: e.drift_rate_per_s as f32,
             noise_interval_s: o.noise_interval_s as f32,
-            _pad1: 0,
+            drift_curvature_per_s2: e.drift_curvature_per_s2 as f32,
             _pad2: 0,
             _pad3: 0,
         }
