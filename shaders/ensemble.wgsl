@@ -198,7 +198,7 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (path.mode == MODE_STICK) {
         start_stick(0.0);
     } else {
-        path.lagged_mu = static_coefficient();
+        path.lagged_mu = lag_start_coefficient();
     }
     store_path(n);
 }

@@ -181,6 +181,19 @@ fn static_coefficient() -> f32 {
     return max(params.friction_a + point.friction_offset + params.friction_b + path.friction_noise + path.stiction_excess, 0.0);
 }
 
+// Where the lagged coefficient starts at a breakaway: the static one less
+// the stiction excess friction_coefficient adds while it is released
+// (src/engine/cpu/oscillator.rs: Path::lag_start_coefficient).
+fn lag_start_coefficient() -> f32 {
+    let released = effects.stiction_form == STICTION_FORM_DECAYING
+        || (effects.stiction_form == STICTION_FORM_CONSTANT && effects.stiction_release_m > 0.0);
+    var excess = 0.0;
+    if (released) {
+        excess = path.stiction_excess;
+    }
+    return static_coefficient() - excess;
+}
+
 fn breakaway_force() -> f32 {
     return static_coefficient() * path.normal_force_n;
 }
@@ -376,7 +389,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             path.mode = i32(until.y);
             path.slip_start_x_m = path.x_m;
             if (path.mode != MODE_STICK) {
-                path.lagged_mu = static_coefficient();
+                path.lagged_mu = lag_start_coefficient();
             }
             t_a = t_end;
             start = end;
@@ -420,7 +433,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             if (path.mode == MODE_STICK) {
                 start_stick(period_start_s + t_a);
             } else {
-                path.lagged_mu = static_coefficient();
+                path.lagged_mu = lag_start_coefficient();
             }
             path.slip_start_x_m = path.x_m;
             events += 1u;

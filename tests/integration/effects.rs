@@ -55,8 +55,9 @@ const ZERO: [&[&str]; 31] = [
 ];
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
-/// mixes in a slow part, so its strength is a correlation time).
-const ON: [&[&str]; 31] = [
+/// mixes in a slow part, so its strength is a correlation time), and the
+/// one pair whose parts meet in one state (lag and a released stiction).
+const ON: [&[&str]; 32] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -98,6 +99,14 @@ const ON: [&[&str]; 31] = [
     &["stiction.excess=0.15", "stiction.form=\"decaying\""],
     &["stiction.excess=0.15", "stiction.release_length_m=3e-4"],
     &["stiction.excess=0.15", "stiction.form=\"dwell\"", "stiction.dwell_time_s=0.02"],
+    // A lag on top of a released stiction: the lagged coefficient starts
+    // below the static one by the excess the release adds.
+    &[
+        "stiction.excess=0.15",
+        "stiction.release_length_m=3e-4",
+        "friction_hysteresis.time_constant_s=0.01",
+        "friction_hysteresis.form=\"lag\"",
+    ],
     &["load_dependent_friction.strength=0.01"],
     &["load_dependent_friction.strength=0.3", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"saturating\""],

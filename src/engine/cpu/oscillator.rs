@@ -204,7 +204,7 @@ impl<'a> Path<'a> {
         if path.mode == Mode::Stick {
             path.start_stick(0.0);
         } else {
-            path.lagged_mu = path.static_coefficient();
+            path.lagged_mu = path.lag_start_coefficient();
         }
         path
     }
@@ -349,6 +349,22 @@ impl<'a> Path<'a> {
     fn static_coefficient(&self) -> f64 {
         let o = self.osc;
         (o.friction_a + o.effects.friction_offset + o.friction_b + self.friction_noise + self.stiction_excess).max(0.0)
+    }
+
+    /// Where hysteresis `lag`'s lagged coefficient starts when the block
+    /// breaks away: the static coefficient the breakaway was judged by, less
+    /// the stiction excess that [`Path::friction_coefficient`] adds on top
+    /// while it is released (`decaying`, or `constant` with a release
+    /// length), so that sliding starts at exactly the static coefficient.
+    /// Counted twice, friction at the start of a slip exceeded the force
+    /// that broke the block away: it stopped at once and re-slipped, up to
+    /// the event limit of every segment (a diagnosis's trials of `lag` on
+    /// top of a released stiction took 20–45 s instead of under 1 s), –.
+    fn lag_start_coefficient(&self) -> f64 {
+        let e = &self.osc.effects;
+        let released = e.stiction_form == StictionForm::Decaying
+            || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
+        self.static_coefficient() - if released { self.stiction_excess } else { 0.0 }
     }
 
     /// Breakaway force `μ_s N`, N.
@@ -632,7 +648,7 @@ impl<'a> Path<'a> {
                     self.mode = next;
                     self.slip_start_x_m = self.x_m;
                     if next != Mode::Stick {
-                        self.lagged_mu = self.static_coefficient();
+                        self.lagged_mu = self.lag_start_coefficient();
                     }
                     (t_a, start, whole) = (t_end, end, None);
                     events += 1;
@@ -675,7 +691,7 @@ impl<'a> Path<'a> {
                         // one the breakaway was judged by (carried over, it
                         // held a block the test let go, which then could
                         // not move and re-slipped up to the event limit).
-                        self.lagged_mu = self.static_coefficient();
+                        self.lagged_mu = self.lag_start_coefficient();
                     }
                     self.slip_start_x_m = self.x_m;
                     events += 1;
@@ -866,6 +882,41 @@ mod tests {
         path.advance_segment(0.0, 1e-3, Trig { cos: 1.0, sin: 0.0 }, None, false);
         assert_eq!(path.mode, Mode::Slip(1), "held at rest: v = {}", path.v_m_per_s);
         assert!(path.v_m_per_s > 0.0 && path.lagged_mu < 0.3, "v = {}, μ_f = {}", path.v_m_per_s, path.lagged_mu);
+    }
+
+    /// Under hysteresis `lag` with a stiction released over a slip length,
+    /// a block that breaks away slips on: sliding starts at the static
+    /// coefficient, the lagged part of it without the excess the release
+    /// adds on top. With the excess counted twice (the lagged coefficient
+    /// started at the static one, excess included), friction at the start
+    /// exceeded the force that broke the block away, and it re-slipped
+    /// without moving up to the event limit and was forced to stick.
+    #[test]
+    fn a_breakaway_under_lag_and_a_released_stiction_slips_on() {
+        let overrides: Vec<String> = [
+            "friction.sigma=0",
+            "normal_force.sigma=0",
+            "friction_hysteresis.form=\"lag\"",
+            "friction_hysteresis.time_constant_s=0.01",
+            "stiction.excess=0.2",
+            "stiction.release_length_m=1e-4",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
+        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+        let osc = Oscillator::new(&model, condition).unwrap();
+        let mut path = Path::new(&osc, 1, 0, InitialState { x_m: 0.0, v_m_per_s: 0.0 });
+        let (n, mu_s) = (path.normal_force_n, path.static_coefficient());
+        // At rest, the spring at t = 0 pushing with 1.05 of the breakaway force.
+        path.mode = Mode::Stick;
+        path.x_m = osc.base_amplitude_m - 1.05 * mu_s * n / osc.stiffness_n_per_m;
+        let x0 = path.x_m;
+        path.advance_segment(0.0, 1e-3, Trig { cos: 1.0, sin: 0.0 }, None, false);
+        assert_eq!(path.mode, Mode::Slip(1), "stuck: v = {}", path.v_m_per_s);
+        assert!(path.v_m_per_s > 0.0 && path.x_m > x0, "v = {}, moved {} m", path.v_m_per_s, path.x_m - x0);
+        assert!((path.lag_start_coefficient() + 0.2 - mu_s).abs() < 1e-12);
     }
 
     /// The friction noise's standardised values g over `n` intervals with
