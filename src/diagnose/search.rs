@@ -155,18 +155,26 @@ fn fit_variant(
     let Some(mut best) = evaluate(variant, &variant.start(), base, 2, slope, data, settings, engine)? else {
         return Ok(None);
     };
-    let try_move = |best: &mut Trial, i: usize, k: f64| -> Result<bool> {
+    // Values already tried from the current best and rejected: a move
+    // clamped at a bound can land on one again, and the same values on the
+    // same best give the same trial (the simulation is deterministic).
+    let mut rejected: Vec<Vec<f64>> = Vec::new();
+    let mut try_move = |best: &mut Trial, i: usize, k: f64| -> Result<bool> {
         let mut values = best.values.clone();
         values[i] = variant.params[i].moved(values[i], k);
-        if values[i] == best.values[i] {
+        if values[i] == best.values[i] || rejected.contains(&values) {
             return Ok(false);
         }
         match evaluate(variant, &values, &best.model, 1, slope, data, settings, engine)? {
             Some(t) if t.gap_fit < best.gap_fit => {
                 *best = t;
+                rejected.clear();
                 Ok(true)
             }
-            _ => Ok(false),
+            _ => {
+                rejected.push(values);
+                Ok(false)
+            }
         }
     };
     for i in 0..variant.params.len() {
