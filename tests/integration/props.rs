@@ -77,6 +77,7 @@ const KEYS: &[&str] = &[
     "friction_hysteresis.length_m",
     "coloured_friction_noise.correlation_time_s",
     "normal_force_drift.rate_per_s",
+    "normal_force_drift.curvature_per_s2",
     "load_dependent_friction.strength",
     "non_gaussian_friction.strength",
 ];
