@@ -782,6 +782,24 @@ mod tests {
         crate::diagnose::score::test_score(unit, observable, z, true)
     }
 
+    /// A round's candidate for `effect` with fitting gap `gap_fit` and the
+    /// (held-out) `scores`.
+    fn test_candidate(effect: Effect, gap_fit: f64, scores: &[Score]) -> Candidate {
+        Candidate {
+            effect,
+            form: "",
+            signature_excess: 10.0,
+            gap_fit,
+            gap_heldout: gap_of(scores, true),
+            shrink: 0.0,
+            heldout_shrink: None,
+            parameters: BTreeMap::new(),
+            unexplained: Vec::new(),
+            model: crate::engine::Model::default(),
+            scores: scores.to_vec(),
+        }
+    }
+
     /// Seed 11 set 15 of the benchmark: load dependence on top of a coloured
     /// noise that took the key gap from 179.2 to 13.2. It takes the key gap
     /// to 9.4 and the fitting gap from 32.3 to 5.8: 32% of what was left,
@@ -870,19 +888,7 @@ mod tests {
         let feature = |z: f64| [1, 2, 3].map(|u| score(u, Observable::FrictionMuMean, z));
         let form_b_tied = [&[score(0, Observable::PeakMeanM, 1.0)][..], &feature(2.3)].concat();
         let form_d = [&[score(0, Observable::PeakMeanM, 0.0)][..], &feature(3.0)].concat();
-        let candidate = |effect: Effect, scores: &[Score]| Candidate {
-            effect,
-            form: "",
-            signature_excess: 10.0,
-            gap_fit: 0.0,
-            gap_heldout: gap_of(scores, true),
-            shrink: 0.0,
-            heldout_shrink: None,
-            parameters: BTreeMap::new(),
-            unexplained: Vec::new(),
-            model: crate::engine::Model::default(),
-            scores: scores.to_vec(),
-        };
+        let candidate = |effect: Effect, scores: &[Score]| test_candidate(effect, 0.0, scores);
         let mut round = vec![
             candidate(Effect::FrictionHysteresis, &form_a),
             candidate(Effect::Stiction, &form_b_tied),
@@ -910,30 +916,21 @@ mod tests {
         };
         let baseline = held_out(30.0, 30.0);
         let ruler = yardstick(&baseline);
-        let candidate = |effect: Effect, gap_fit: f64, scores: &[Score]| Candidate {
-            effect,
-            form: "",
-            signature_excess: 10.0,
-            gap_fit,
-            gap_heldout: gap_of(scores, true),
-            shrink: 0.0,
-            heldout_shrink: None,
-            parameters: BTreeMap::new(),
-            unexplained: Vec::new(),
-            model: crate::engine::Model::default(),
-            scores: scores.to_vec(),
-        };
         let (a, b) = (held_out(27.0, 22.7), held_out(20.0, 34.0));
         let before = (889.0, gap_of(&baseline, true));
         let (key_a, key_b) = (gap_of(&a, true), gap_of(&b, true));
         assert!(key_b - key_a > RANK_TIE_SHARE * (before.1 - key_a), "the premise: no tie on the held-out gap alone");
-        let mut round =
-            vec![candidate(Effect::FrictionHysteresis, 389.0, &a), candidate(Effect::LoadDependentFriction, 135.0, &b)];
+        let mut round = vec![
+            test_candidate(Effect::FrictionHysteresis, 389.0, &a),
+            test_candidate(Effect::LoadDependentFriction, 135.0, &b),
+        ];
         rank_effects(&mut round, before, true, &ruler);
         assert_eq!(round[0].effect, Effect::LoadDependentFriction);
         // Fitting no better than A, B stays behind it.
-        let mut round =
-            vec![candidate(Effect::FrictionHysteresis, 389.0, &a), candidate(Effect::LoadDependentFriction, 389.0, &b)];
+        let mut round = vec![
+            test_candidate(Effect::FrictionHysteresis, 389.0, &a),
+            test_candidate(Effect::LoadDependentFriction, 389.0, &b),
+        ];
         rank_effects(&mut round, before, true, &ruler);
         assert_eq!(round[0].effect, Effect::FrictionHysteresis);
     }

@@ -847,6 +847,21 @@ mod tests {
         }
     }
 
+    /// The paper rig at 7 Hz and 16.39 N without noise, under hysteresis
+    /// `lag` with a 10 ms memory, plus `overrides`.
+    fn noiseless_lag_oscillator(overrides: &[&str]) -> Oscillator {
+        let base = [
+            "friction.sigma=0",
+            "normal_force.sigma=0",
+            "friction_hysteresis.form=\"lag\"",
+            "friction_hysteresis.time_constant_s=0.01",
+        ];
+        let overrides: Vec<String> = base.iter().chain(overrides).map(|s| s.to_string()).collect();
+        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
+        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+        Oscillator::new(&model, condition).unwrap()
+    }
+
     /// A slip from rest right after a velocity zero is a breakaway like one
     /// from a stick, so under hysteresis `lag` the lagged coefficient starts
     /// at the static one the breakaway was judged by. Here the law rises with
@@ -858,19 +873,7 @@ mod tests {
     /// forced to stick.
     #[test]
     fn a_slip_from_rest_under_lag_starts_at_the_static_coefficient() {
-        let overrides: Vec<String> = [
-            "friction.b=-0.4",
-            "friction.sigma=0",
-            "normal_force.sigma=0",
-            "friction_hysteresis.form=\"lag\"",
-            "friction_hysteresis.time_constant_s=0.01",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
-        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
-        let osc = Oscillator::new(&model, condition).unwrap();
+        let osc = noiseless_lag_oscillator(&["friction.b=-0.4"]);
         let mut path = Path::new(&osc, 1, 0, InitialState { x_m: 0.0, v_m_per_s: 1e-4 });
         let n = path.normal_force_n;
         assert!((path.static_coefficient() - 0.027).abs() < 1e-12 && n > 0.0);
@@ -893,20 +896,7 @@ mod tests {
     /// without moving up to the event limit and was forced to stick.
     #[test]
     fn a_breakaway_under_lag_and_a_released_stiction_slips_on() {
-        let overrides: Vec<String> = [
-            "friction.sigma=0",
-            "normal_force.sigma=0",
-            "friction_hysteresis.form=\"lag\"",
-            "friction_hysteresis.time_constant_s=0.01",
-            "stiction.excess=0.2",
-            "stiction.release_length_m=1e-4",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
-        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
-        let osc = Oscillator::new(&model, condition).unwrap();
+        let osc = noiseless_lag_oscillator(&["stiction.excess=0.2", "stiction.release_length_m=1e-4"]);
         let mut path = Path::new(&osc, 1, 0, InitialState { x_m: 0.0, v_m_per_s: 0.0 });
         let (n, mu_s) = (path.normal_force_n, path.static_coefficient());
         // At rest, the spring at t = 0 pushing with 1.05 of the breakaway force.
