@@ -63,7 +63,7 @@ pub(crate) struct Param {
 }
 
 impl Param {
-    fn log(name: &'static str, start: f64, step: f64, lo: f64, hi: f64) -> Param {
+    pub(crate) fn log(name: &'static str, start: f64, step: f64, lo: f64, hi: f64) -> Param {
         Param { name, start, log: true, step, lo, hi }
     }
 
@@ -244,6 +244,14 @@ fn slope(points: &[(f64, f64)]) -> Option<f64> {
     let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     (sxx > 1e-12 * mx.abs().max(1.0)).then(|| sxy / sxx)
+}
+
+/// How many distinct loads (N) `points` (N, value) hold.
+fn distinct_loads(points: &[(f64, f64)]) -> usize {
+    let mut loads: Vec<f64> = points.iter().map(|p| p.0).collect();
+    loads.sort_by(f64::total_cmp);
+    loads.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * b.abs().max(1.0));
+    loads.len()
 }
 
 /// The normal force's harmonics in excess of the model's noise floor, per
@@ -537,7 +545,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 .filter(|s| s.is_finite() && s.abs() > 1e-5)
                 .unwrap_or(0.005);
             let reference = mean_n0;
-            vec![
+            let mut forms = vec![
                 Variant {
                     effect,
                     form: "linear",
@@ -547,6 +555,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                         m.effects.load_dependent_friction = Some(LoadDependentFriction {
                             form: LoadForm::Linear,
                             strength: p[0],
+                            curvature_per_n2: 0.0,
                             reference_force_n: reference,
                         });
                         m
@@ -569,12 +578,41 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                         m.effects.load_dependent_friction = Some(LoadDependentFriction {
                             form: LoadForm::Power,
                             strength: p[0],
+                            curvature_per_n2: 0.0,
                             reference_force_n: reference,
                         });
                         m
                     }),
                 },
-            ]
+            ];
+            // Where three or more loads were fitted, a friction whose change
+            // with load steepens or flattens (wear-in at high loads, a
+            // contact area that saturates): the linear form's slope k bent
+            // by c, k (N0 − Nref) (1 + c (N0 − Nref)/Nref), so the bend is
+            // searched in steps of the slope's own scale (q = k c / Nref in
+            // the model file). A straight line through such loads
+            // interpolates between them with the chord's error.
+            if distinct_loads(&from_mu) >= 3 {
+                forms.push(Variant {
+                    effect,
+                    form: "quadratic",
+                    params: vec![
+                        Param::log("strength_per_n", start, 1.5, -1.0, 1.0),
+                        Param::linear("bend", 0.0, 0.25, -3.0, 3.0),
+                    ],
+                    apply: Box::new(move |m, p| {
+                        let mut m = m.clone();
+                        m.effects.load_dependent_friction = Some(LoadDependentFriction {
+                            form: LoadForm::Quadratic,
+                            strength: p[0],
+                            curvature_per_n2: p[0] * p[1] / reference,
+                            reference_force_n: reference,
+                        });
+                        m
+                    }),
+                });
+            }
+            forms
         }
         Effect::NormalForceDrift => {
             let rate = ctx

@@ -163,6 +163,7 @@ pub fn random_truth(
                 m.effects.load_dependent_friction = Some(LoadDependentFriction {
                     form: if first { LoadForm::Saturating } else { LoadForm::Exponential },
                     strength: pick(0.25, 0.5) * m.friction.a / mean_n0,
+                    curvature_per_n2: 0.0,
                     reference_force_n: mean_n0,
                 });
             }

@@ -450,6 +450,7 @@ impl Model {
         }
         if let Some(l) = &e.load_dependent_friction {
             bound("load_dependent_friction.strength", l.strength, RATE_MAX, "")?;
+            bound("load_dependent_friction.curvature_per_n2", l.curvature_per_n2, RATE_MAX, "1/N²")?;
             bound("load_dependent_friction.reference_force_n", l.reference_force_n, FORCE_MAX_N, "N")?;
         }
         if let Some(d) = &e.normal_force_drift {

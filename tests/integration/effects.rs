@@ -10,7 +10,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 31] = [
+const ZERO: [&[&str]; 32] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -48,6 +48,7 @@ const ZERO: [&[&str]; 31] = [
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"saturating\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"exponential\""],
+    &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"quadratic\""],
     &["normal_force_drift.rate_per_s=0.0"],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"wander\""],
@@ -57,7 +58,7 @@ const ZERO: [&[&str]; 31] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 32] = [
+const ON: [&[&str]; 33] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -111,6 +112,11 @@ const ON: [&[&str]; 32] = [
     &["load_dependent_friction.strength=0.3", "load_dependent_friction.form=\"power\""],
     &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"saturating\""],
     &["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"exponential\""],
+    &[
+        "load_dependent_friction.strength=0.01",
+        "load_dependent_friction.curvature_per_n2=0.002",
+        "load_dependent_friction.form=\"quadratic\"",
+    ],
     &["normal_force_drift.rate_per_s=0.01"],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"wander\""],
@@ -286,4 +292,26 @@ fn a_lag_too_short_to_integrate_is_refused_by_name() {
     let m = model(&["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=1e-12"]);
     let err = Oscillator::new(&m, COND).expect_err("refused").to_string();
     assert!(err.contains("friction_hysteresis.time_constant_s") && err.contains("steps per period"), "{err}");
+}
+
+#[test]
+fn a_quadratic_load_dependence_bends_the_linear_one_by_its_curvature() {
+    // Offsets of `a` about the 10 N reference: with no curvature the
+    // quadratic form is the linear one; with q it adds q (N0 − Nref)².
+    let offset = |sets: &[&str], n0: f64| {
+        stickslip::engine::effects::EffectParams::new(&model(sets).effects, n0, 0.3, 1.0 / 600.0).friction_offset
+    };
+    let linear = ["load_dependent_friction.strength=0.01"];
+    let straight = ["load_dependent_friction.strength=0.01", "load_dependent_friction.form=\"quadratic\""];
+    let bent = [
+        "load_dependent_friction.strength=0.01",
+        "load_dependent_friction.curvature_per_n2=0.002",
+        "load_dependent_friction.form=\"quadratic\"",
+    ];
+    for n0 in [4.0, 10.0, 16.39, 30.0] {
+        let x = n0 - 10.0;
+        assert_eq!(offset(&straight, n0), offset(&linear, n0), "at {n0} N");
+        let expected = 0.01 * x + 0.002 * x * x;
+        assert!((offset(&bent, n0) - expected).abs() < 1e-12, "at {n0} N: {} vs {expected}", offset(&bent, n0));
+    }
 }

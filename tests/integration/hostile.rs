@@ -297,12 +297,14 @@ fn physics_that_stays_finite() {
         assert!(err.contains(key), "{key}={value}: {err}");
         assert!(err.len() < 300, "no 309-digit numbers: {err}");
     }
-    // The quadratic drift's curvature, beside the rate its table needs.
-    let key = "normal_force_drift.curvature_per_s2";
-    let err = Model::paper_rig(&["normal_force_drift.rate_per_s=0.01".into(), format!("{key}=-1e308")])
-        .expect_err(key)
-        .to_string();
-    assert!(err.contains(key) && err.len() < 300, "{err}");
+    // The quadratic forms' curvatures, beside the strengths their tables need.
+    for (table, key) in [
+        ("normal_force_drift.rate_per_s=0.01", "normal_force_drift.curvature_per_s2"),
+        ("load_dependent_friction.strength=0.01", "load_dependent_friction.curvature_per_n2"),
+    ] {
+        let err = Model::paper_rig(&[table.into(), format!("{key}=-1e308")]).expect_err(key).to_string();
+        assert!(err.contains(key) && err.len() < 300, "{err}");
+    }
     // Grid flags name the flag and the physical rule, negative numbers included.
     refused(&["sweep", "--normal-forces", "-1", "--out", "/nonexistent/x"], &["--normal-forces", ">= 0 N"]);
     refused(&["sweep", "--normal-forces", "1e308", "--out", "/nonexistent/x"], &["--normal-forces"]);

@@ -79,6 +79,7 @@ const KEYS: &[&str] = &[
     "normal_force_drift.rate_per_s",
     "normal_force_drift.curvature_per_s2",
     "load_dependent_friction.strength",
+    "load_dependent_friction.curvature_per_n2",
     "non_gaussian_friction.strength",
 ];
 

@@ -265,6 +265,7 @@ impl Effects {
         }
         if let Some(l) = &self.load_dependent_friction {
             check("load_dependent_friction.strength", l.strength, true, "must be finite")?;
+            check("load_dependent_friction.curvature_per_n2", l.curvature_per_n2, true, "must be finite")?;
             check(
                 "load_dependent_friction.reference_force_n",
                 l.reference_force_n,

@@ -103,6 +103,7 @@ impl EffectParams {
             let r = l.reference_force_n;
             p.friction_offset = match l.form {
                 LoadForm::Linear => l.strength * (n0 - r),
+                LoadForm::Quadratic => (l.strength + l.curvature_per_n2 * (n0 - r)) * (n0 - r),
                 LoadForm::Power => mu_at_rest.max(0.0) * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
                 LoadForm::Saturating => l.strength * r * (1.0 - (-(n0 - r) / r).exp()),
                 LoadForm::Exponential => l.strength * r * (((n0 - r) / r).exp() - 1.0),

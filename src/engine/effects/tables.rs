@@ -217,13 +217,19 @@ impl Form for StictionForm {
 #[serde(deny_unknown_fields)]
 pub struct LoadDependentFriction {
     /// Offset Δa added to `a`: `linear` k (N0 − Nref) with k in 1/N;
-    /// `power` μ₀ ((N0/Nref)^k − 1) with μ₀ = a + b the law's level at rest
-    /// (so it scales with the friction however a and b share it); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
+    /// `quadratic` k (N0 − Nref) + q (N0 − Nref)² (a friction whose change
+    /// with load steepens or flattens); `power` μ₀ ((N0/Nref)^k − 1) with
+    /// μ₀ = a + b the law's level at rest (so it scales with the friction
+    /// however a and b share it); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
     /// `exponential` k Nref (e^((N0 − Nref)/Nref) − 1).
     #[serde(default)]
     pub form: LoadForm,
     /// k (see `form`).
     pub strength: f64,
+    /// q of the `quadratic` form, 1/N² (0 where the table does not say;
+    /// only the quadratic form reads it).
+    #[serde(default)]
+    pub curvature_per_n2: f64,
     /// Reference normal force Nref, N.
     #[serde(default = "ten")]
     pub reference_force_n: f64,
@@ -237,10 +243,12 @@ pub enum LoadForm {
     Power = 1,
     Saturating = 2,
     Exponential = 3,
+    Quadratic = 4,
 }
 
 impl Form for LoadForm {
-    const ALL: &'static [Self] = &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating, LoadForm::Exponential];
+    const ALL: &'static [Self] =
+        &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating, LoadForm::Exponential, LoadForm::Quadratic];
 
     fn code(self) -> u32 {
         self as u32
