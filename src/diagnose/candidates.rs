@@ -246,6 +246,45 @@ fn slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 1e-12 * mx.abs().max(1.0)).then(|| sxy / sxx)
 }
 
+/// The form that bends `form` of `effect` once it fitted with `values`, if
+/// there is one: for the `linear` load dependence, where three or more
+/// loads were fitted, a friction whose change with load steepens or
+/// flattens (wear-in at high loads, a contact area that saturates), the
+/// fitted slope k bent by c, k (N0 − Nref) (1 + c (N0 − Nref)/Nref), so the
+/// bend is searched in steps of the slope's own scale (q = k c / Nref in the
+/// model file). A straight line through such loads misses the middle ones
+/// by the chord's error. Searched only from a slope that fitted (see the
+/// search's round), starting there: it costs no trials where there is no
+/// load dependence to bend.
+pub(crate) fn bent(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
+    if effect != Effect::LoadDependentFriction || form != "linear" {
+        return None;
+    }
+    let loads: Vec<(f64, f64)> = ctx.by_load(Observable::FrictionMuMean).iter().map(|&(n, m, _)| (n, m)).collect();
+    if distinct_loads(&loads) < 3 {
+        return None;
+    }
+    let reference = ctx.mean_load();
+    Some(Variant {
+        effect,
+        form: "quadratic",
+        params: vec![
+            Param::log("strength_per_n", *values.first()?, 1.2, -1.0, 1.0),
+            Param::linear("bend", 0.0, 0.25, -3.0, 3.0),
+        ],
+        apply: Box::new(move |m, p| {
+            let mut m = m.clone();
+            m.effects.load_dependent_friction = Some(LoadDependentFriction {
+                form: LoadForm::Quadratic,
+                strength: p[0],
+                curvature_per_n2: p[0] * p[1] / reference,
+                reference_force_n: reference,
+            });
+            m
+        }),
+    })
+}
+
 /// How many distinct loads (N) `points` (N, value) hold.
 fn distinct_loads(points: &[(f64, f64)]) -> usize {
     let mut loads: Vec<f64> = points.iter().map(|p| p.0).collect();
@@ -545,7 +584,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 .filter(|s| s.is_finite() && s.abs() > 1e-5)
                 .unwrap_or(0.005);
             let reference = mean_n0;
-            let mut forms = vec![
+            vec![
                 Variant {
                     effect,
                     form: "linear",
@@ -584,35 +623,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                         m
                     }),
                 },
-            ];
-            // Where three or more loads were fitted, a friction whose change
-            // with load steepens or flattens (wear-in at high loads, a
-            // contact area that saturates): the linear form's slope k bent
-            // by c, k (N0 − Nref) (1 + c (N0 − Nref)/Nref), so the bend is
-            // searched in steps of the slope's own scale (q = k c / Nref in
-            // the model file). A straight line through such loads
-            // interpolates between them with the chord's error.
-            if distinct_loads(&from_mu) >= 3 {
-                forms.push(Variant {
-                    effect,
-                    form: "quadratic",
-                    params: vec![
-                        Param::log("strength_per_n", start, 1.5, -1.0, 1.0),
-                        Param::linear("bend", 0.0, 0.25, -3.0, 3.0),
-                    ],
-                    apply: Box::new(move |m, p| {
-                        let mut m = m.clone();
-                        m.effects.load_dependent_friction = Some(LoadDependentFriction {
-                            form: LoadForm::Quadratic,
-                            strength: p[0],
-                            curvature_per_n2: p[0] * p[1] / reference,
-                            reference_force_n: reference,
-                        });
-                        m
-                    }),
-                });
-            }
-            forms
+            ]
         }
         Effect::NormalForceDrift => {
             let rate = ctx

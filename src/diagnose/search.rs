@@ -22,7 +22,7 @@
 use std::collections::BTreeMap;
 
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
-use crate::diagnose::candidates::{Context, NULL_HUBER, Param, Variant, signature_excess, variants};
+use crate::diagnose::candidates::{Context, NULL_HUBER, Param, Variant, bent, signature_excess, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{HUBER_K, Scope, Score, add_heldout, count_of, gap_of, score};
 use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
@@ -488,6 +488,7 @@ fn round(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<Candidate>> {
     let (g0_fit, g0_ho) = (gap_of(base_scores, false), gap_of(base_scores, true));
+    let fit_noise = gap_noise(count_of(base_scores, false));
     let mut screened: Vec<(Effect, f64)> = Effect::ALL
         .iter()
         .filter(|e| !named.contains(e))
@@ -502,9 +503,17 @@ fn round(
         progress(&format!("trying {effect} (signature {excess:.1} noise units above the baseline)"));
         // The best form so far: its trial, name and parameters.
         let mut best: Option<(Trial, &'static str, BTreeMap<String, f64>)> = None;
-        let forms = variants(effect, &ctx);
-        for variant in &forms {
+        let mut forms: std::collections::VecDeque<Variant> = variants(effect, &ctx).into();
+        while let Some(variant) = forms.pop_front() {
+            let variant = &variant;
             if let Some(t) = fit_variant(variant, base, slope, data, settings, engine)? {
+                // A form that fitted may be bent further (a slope that
+                // steepens with load), searched from where it fitted.
+                if g0_fit - t.gap_fit > fit_noise
+                    && let Some(b) = bent(effect, variant.form, &t.values, &ctx)
+                {
+                    forms.push_back(b);
+                }
                 let rank = |t: &Trial| {
                     let leading = named.is_empty();
                     form_order(leading, base_scores, t, data.has_heldout(), settings.replicates, ruler)
