@@ -958,7 +958,7 @@ mod tests {
     #[test]
     fn a_search_whose_every_move_helped_looks_back_between_its_last_two_points() {
         // A gap that falls steeply up to the best slope and rises gently
-        // beyond it, searched from seven steps (factor 1.5) below: the
+        // beyond it, searched from about five steps (factor 1.5) below: the
         // moves ×1.5, ×2.25 and ×5.06 all help, the last one to 2.5 times
         // the best. Looking back by half of it lands at 1.1 times the best;
         // without, the closing half step stops at twice the best.
