@@ -22,7 +22,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::diagnose::data::Data;
+use crate::diagnose::data::{Data, levels};
 use crate::diagnose::mean;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
@@ -260,8 +260,7 @@ pub(crate) fn bent(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>
     if effect != Effect::LoadDependentFriction || form != "linear" {
         return None;
     }
-    let loads: Vec<(f64, f64)> = ctx.by_load(Observable::FrictionMuMean).iter().map(|&(n, m, _)| (n, m)).collect();
-    if distinct_loads(&loads) < 3 {
+    if levels(ctx.by_load(Observable::FrictionMuMean).iter().map(|p| p.0)).len() < 3 {
         return None;
     }
     let reference = ctx.mean_load();
@@ -283,14 +282,6 @@ pub(crate) fn bent(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>
             m
         }),
     })
-}
-
-/// How many distinct loads (N) `points` (N, value) hold.
-fn distinct_loads(points: &[(f64, f64)]) -> usize {
-    let mut loads: Vec<f64> = points.iter().map(|p| p.0).collect();
-    loads.sort_by(f64::total_cmp);
-    loads.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * b.abs().max(1.0));
-    loads.len()
 }
 
 /// The normal force's harmonics in excess of the model's noise floor, per

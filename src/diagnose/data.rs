@@ -153,7 +153,7 @@ fn same_level(a: f64, b: f64) -> bool {
 }
 
 /// Distinct values, sorted, compared by [`same_level`].
-fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
+pub(crate) fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
     let mut v: Vec<f64> = values.collect();
     v.sort_by(f64::total_cmp);
     v.dedup_by(|a, b| same_level(*a, *b));
