@@ -770,39 +770,177 @@ pub(crate) fn select(
         // is the best one that passes: a rival that fits the held-out units
         // better but the fitting ones worse (it trades one for the other)
         // does not end the search.
+        let leading = steps.is_empty();
         let keeps = |c: &Candidate| {
-            keeps_the_response_as(steps.is_empty(), &scores, &c.scores, has_heldout, settings.replicates, &ruler)
+            keeps_the_response_as(leading, &scores, &c.scores, has_heldout, settings.replicates, &ruler)
         };
         let passes = |c: &Candidate| {
-            let repairs = !steps.is_empty() && repairs_the_response(&scores, &c.scores, has_heldout, &ruler);
+            let repairs = !leading && repairs_the_response(&scores, &c.scores, has_heldout, &ruler);
             closes_enough((g_fit, g_key), (c.gap_fit, key(c)), (noise_fit, noise_heldout), repairs)
         };
-        let best = if steps.is_empty() {
+        let best = if leading {
             candidates.iter().find(|c| keeps(c)).filter(|c| passes(c))
         } else {
             candidates.iter().find(|c| keeps(c) && passes(c))
         };
-        let Some(best) = best else {
-            break;
-        };
-        // The best rival among those that keep the response too.
-        let rank = |c: &Candidate| effect_rank(c, has_heldout, &ruler);
-        let rank_before = form_rank(&scores, g_fit, has_heldout, &ruler);
-        let runner_up = candidates.iter().find(|c| c.effect != best.effect && keeps(c));
-        let behind = |of: &dyn Fn(&Candidate) -> f64, before: f64| {
-            (runner_up.map_or(before, of) - of(best)) / (before - of(best)).max(1e-9)
-        };
-        let separation = behind(&key, g_key).max(behind(&rank, rank_before));
-        model = best.model.clone();
-        scores = best.scores.clone();
-        steps.push(Step {
+        let step_of = |best: &Candidate| Step {
             candidate: best.clone(),
             before: (g_fit, g_key),
             after_key: key(best),
-            separation: separation.clamp(0.0, 1.0),
-        });
+            separation: separation(best, &candidates, &keeps, &scores, has_heldout, &ruler),
+        };
+        if let Some(best) = best {
+            let step = step_of(best);
+            (model, scores) = (best.model.clone(), best.scores.clone());
+            steps.push(step);
+            continue;
+        }
+        // No leading effect passed. One that fell short only of the share
+        // of the key gap, while it predicts the response better, may need
+        // a second effect beside it: look one effect ahead of it (see
+        // [`pair_ahead`]).
+        let ahead = |c: &&Candidate| worth_looking_ahead(&scores, c, has_heldout, settings.replicates, &ruler);
+        let Some(first) = candidates.iter().filter(|_| leading).find(ahead) else {
+            break;
+        };
+        let Some(second) = pair_ahead(first, baseline_scores, &ruler, slope, data, settings, engine, progress)? else {
+            break;
+        };
+        let first = step_of(first);
+        (model, scores) = (second.candidate.model.clone(), second.candidate.scores.clone());
+        steps.extend([first, second]);
     }
     Ok(Selection { steps, first_round, noise_fit, noise_heldout })
+}
+
+/// How far the best rival of `best` among a round's `candidates` (one of
+/// another effect that `keeps` the response too) stays behind it, as a
+/// share of how far `best` moved things from `current` (which stands in
+/// for the rival when there is none): the larger of this share in the key
+/// gap and in [`effect_rank`] ([`Step::separation`]).
+fn separation(
+    best: &Candidate,
+    candidates: &[Candidate],
+    keeps: &dyn Fn(&Candidate) -> bool,
+    current: &[Score],
+    has_heldout: bool,
+    ruler: &Yardstick,
+) -> f64 {
+    let key = |c: &Candidate| key_gap(c, has_heldout);
+    let rank = |c: &Candidate| effect_rank(c, has_heldout, ruler);
+    let (g_fit, g_key) = (gap_of(current, false), gap_of(current, has_heldout));
+    let rank_before = form_rank(current, g_fit, has_heldout, ruler);
+    let runner_up = candidates.iter().find(|c| c.effect != best.effect && keeps(c));
+    let behind = |of: &dyn Fn(&Candidate) -> f64, before: f64| {
+        (runner_up.map_or(before, of) - of(best)) / (before - of(best)).max(1e-9)
+    };
+    behind(&key, g_key).max(behind(&rank, rank_before)).clamp(0.0, 1.0)
+}
+
+/// Whether a leading candidate that was not named is worth a look one
+/// effect ahead ([`pair_ahead`]): it keeps the response where the fit did
+/// not look ([`keeps_the_response`]), lowers both gaps from `current`'s
+/// beyond their noise (short of the share a leading effect must close),
+/// and predicts that response better, beyond three standard deviations of
+/// the difference's noise ([`response_rise`]).
+fn worth_looking_ahead(
+    current: &[Score],
+    c: &Candidate,
+    has_heldout: bool,
+    replicates: u32,
+    ruler: &Yardstick,
+) -> bool {
+    let before = (gap_of(current, false), gap_of(current, has_heldout));
+    let noise = (gap_noise(count_of(current, false)), gap_noise(count_of(current, has_heldout)));
+    let (rise, sd) = response_rise(current, &c.scores, has_heldout, ruler);
+    keeps_the_response(current, &c.scores, has_heldout, replicates, ruler)
+        && closes_enough(before, (c.gap_fit, key_gap(c, has_heldout)), noise, true)
+        && rise < -3.0 * sd
+}
+
+/// Whether `second`, searched on top of `first` ([`pair_ahead`]), makes a
+/// pair with it: as a further effect it keeps the response
+/// ([`further_keeps_the_response`]) and lowers both gaps beyond their noise
+/// by a real share of what `first` left, or repairs the response
+/// ([`closes_enough`], [`repairs_the_response`]); and the two together
+/// close what a leading effect must of the calibrated baseline's
+/// (`baseline_scores`) gaps and predict the response better than it beyond
+/// three standard deviations of the difference's noise.
+fn pair_passes(
+    baseline_scores: &[Score],
+    first: &Candidate,
+    second: &Candidate,
+    has_heldout: bool,
+    ruler: &Yardstick,
+) -> bool {
+    let gaps = |c: &Candidate| (c.gap_fit, key_gap(c, has_heldout));
+    let baseline = (gap_of(baseline_scores, false), gap_of(baseline_scores, has_heldout));
+    // Every gap here counts the same scores.
+    let noise = (gap_noise(count_of(baseline_scores, false)), gap_noise(count_of(baseline_scores, has_heldout)));
+    let repairs = repairs_the_response(&first.scores, &second.scores, has_heldout, ruler);
+    let (rise, sd) = response_rise(baseline_scores, &second.scores, has_heldout, ruler);
+    further_keeps_the_response(&first.scores, &second.scores, has_heldout, ruler)
+        && closes_enough(gaps(first), gaps(second), noise, repairs)
+        && closes_enough(baseline, gaps(second), noise, false)
+        && rise < -3.0 * sd
+}
+
+/// One effect looked ahead of a leading candidate, `first`, that was not
+/// named alone but is [`worth_looking_ahead`]: the next round is searched
+/// on top of it, and its best effect that makes a pair with it
+/// ([`pair_passes`]) is returned as the second step.
+///
+/// Forward selection adds one effect at a time and so misses two effects
+/// of which the one that explains most of the features fakes the other:
+/// the 18-run seed-23 set 8 (a strong load dependence under a moderate
+/// coloured noise) had a coloured noise at the search's longest
+/// correlation time (0.83 s, where the truth's parts are 3–53 ms) take the
+/// held-out key gap from 213 to 16 by widening every simulated
+/// distribution, while the response loss, in the baseline's fixed scale,
+/// rose from 689 to 1029; the load dependence lowered the response to 563
+/// but closed only 19% of the key gap, so the verdict was `none`. Searched
+/// on top of the load dependence, the noise is fitted where the load
+/// misfit no longer pulls it: key gap 173 → 3.6, response 563 → 50 (689
+/// for the baseline), truth shrink at the withheld load 0.99.
+#[allow(clippy::too_many_arguments)]
+fn pair_ahead(
+    first: &Candidate,
+    baseline_scores: &[Score],
+    ruler: &Yardstick,
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Option<Step>> {
+    let has_heldout = data.has_heldout();
+    let current = &first.scores;
+    let before = (first.gap_fit, key_gap(first, has_heldout));
+    progress(&format!("{} closed too little of the gap alone; looking one effect ahead of it", first.effect));
+    let candidates = round(&first.model, current, &[first.effect], slope, ruler, data, settings, engine, progress)?;
+    let keeps = |c: &Candidate| further_keeps_the_response(current, &c.scores, has_heldout, ruler);
+    let passes = |c: &Candidate| pair_passes(baseline_scores, first, c, has_heldout, ruler);
+    if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+        for c in &candidates {
+            let (rise, sd) = response_rise(baseline_scores, &c.scores, has_heldout, ruler);
+            eprintln!(
+                "ahead of {}: {} key {:.2} (from {:.2}) fit {:.2} (from {:.2}) response against the baseline {rise:+.2} (sd {sd:.2}) passes {}",
+                first.effect,
+                c.effect,
+                key_gap(c, has_heldout),
+                before.1,
+                c.gap_fit,
+                before.0,
+                passes(c)
+            );
+        }
+    }
+    Ok(candidates.iter().find(|c| passes(c)).map(|second| Step {
+        candidate: second.clone(),
+        before,
+        after_key: key_gap(second, has_heldout),
+        separation: separation(second, &candidates, &keeps, current, has_heldout, ruler),
+    }))
 }
 
 /// What each named effect carries of the fitted model's response where
@@ -996,6 +1134,50 @@ mod tests {
         let t_kept = trial(with(1.2, 0.0));
         assert!(further_keeps_the_response(&base, &t_kept.scores, true, &ruler));
         assert!(order(&t_kept) < order(&s));
+    }
+
+    #[test]
+    fn two_effects_of_which_neither_passes_alone_are_named_together_only_on_the_response() {
+        // Eight held-out response units, a hundred held-out and a hundred
+        // fitting feature units: the 18-run seed-23 set 8 in small.
+        let with = |response: f64, feature: f64, fitting: f64| -> Vec<Score> {
+            let peaks = (0..8).map(|u| score(u, Observable::PeakMeanM, response));
+            let held = (10..110).map(|u| score(u, Observable::FrictionMuMean, feature));
+            let fit =
+                (200..300).map(|u| crate::diagnose::score::test_score(u, Observable::FrictionMuMean, fitting, false));
+            peaks.chain(held).chain(fit).collect()
+        };
+        let candidate = |effect: Effect, scores: Vec<Score>| test_candidate(effect, gap_of(&scores, false), &scores);
+        let baseline = with(20.0, 14.0, 14.0);
+        let ruler = yardstick(&baseline);
+        let gaps = |c: &Candidate| (c.gap_fit, key_gap(c, true));
+        let baseline_gaps = (gap_of(&baseline, false), gap_of(&baseline, true));
+        let noise = (gap_noise(100), gap_noise(108));
+        // A load dependence predicts the response better and lowers both
+        // gaps, but closes too small a share of the key gap to be named.
+        let load = candidate(Effect::LoadDependentFriction, with(15.0, 12.5, 11.0));
+        assert!(!closes_enough(baseline_gaps, gaps(&load), noise, false), "the premise: it is not named alone");
+        assert!(worth_looking_ahead(&baseline, &load, true, 8, &ruler));
+        // One that fits the features by widening every distribution, the
+        // response worse, or one that leaves the response, is not.
+        let widening = candidate(Effect::ColouredFrictionNoise, with(25.0, 1.0, 1.0));
+        assert!(
+            keeps_the_response(&baseline, &widening.scores, true, 8, &ruler),
+            "the premise: within the loose bound"
+        );
+        assert!(!worth_looking_ahead(&baseline, &widening, true, 8, &ruler));
+        let unmoved = candidate(Effect::Stiction, with(20.0, 12.5, 11.0));
+        assert!(!worth_looking_ahead(&baseline, &unmoved, true, 8, &ruler));
+        // The noise searched on top of it: the pair fits and predicts.
+        let both = candidate(Effect::ColouredFrictionNoise, with(1.0, 1.0, 1.0));
+        assert!(pair_passes(&baseline, &load, &both, true, &ruler));
+        // Not a second effect that spoils the response the first predicts,
+        // nor a pair that closes too little of the baseline's key gap.
+        let spoils = candidate(Effect::ColouredFrictionNoise, with(18.0, 1.0, 1.0));
+        assert!(!pair_passes(&baseline, &load, &spoils, true, &ruler));
+        let little = candidate(Effect::ColouredFrictionNoise, with(1.0, 12.0, 10.0));
+        assert!(closes_enough(gaps(&load), gaps(&little), noise, true), "the premise: it passes as a further effect");
+        assert!(!pair_passes(&baseline, &load, &little, true, &ruler));
     }
 
     #[test]
