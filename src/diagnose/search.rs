@@ -501,8 +501,10 @@ fn round(
     let mut out = Vec::new();
     for (effect, excess) in screened {
         progress(&format!("trying {effect} (signature {excess:.1} noise units above the baseline)"));
-        // The best form so far: its trial, name and parameters.
-        let mut best: Option<(Trial, &'static str, BTreeMap<String, f64>)> = None;
+        // Every form that fitted: its trial, name and parameters.
+        let mut fitted: Vec<(Trial, &'static str, BTreeMap<String, f64>)> = Vec::new();
+        let leading = named.is_empty();
+        let rank = |t: &Trial| form_order(leading, base_scores, t, data.has_heldout(), settings.replicates, ruler);
         let mut forms: std::collections::VecDeque<Variant> = variants(effect, &ctx).into();
         while let Some(variant) = forms.pop_front() {
             let variant = &variant;
@@ -514,10 +516,6 @@ fn round(
                 {
                     forms.push_back(b);
                 }
-                let rank = |t: &Trial| {
-                    let leading = named.is_empty();
-                    form_order(leading, base_scores, t, data.has_heldout(), settings.replicates, ruler)
-                };
                 if std::env::var_os("STICKSLIP_DEBUG").is_some() {
                     eprintln!(
                         "form {effect} [{}] {:?}: fit {:.2} key {:.2} response {:.2} refused for it {} rank {:.2}",
@@ -530,26 +528,46 @@ fn round(
                         rank(&t).1
                     );
                 }
-                if best.as_ref().is_none_or(|b| rank(&t) < rank(&b.0)) {
-                    let parameters = variant.describe(&t.values);
-                    best = Some((t, variant.form, parameters));
-                }
+                let parameters = variant.describe(&t.values);
+                fitted.push((t, variant.form, parameters));
             }
         }
-        let Some((t, form, parameters)) = best else { continue };
-        // The best form on every replicate: one more step of the law (the
-        // extra replicates' law differs from the search's by their sampling
-        // noise), then the law carried to where this effect's data imply
-        // it, so the effect is compared (and the next round searched) from
-        // a law that has stopped moving.
-        let (model, scores, _) =
-            match calibrate_and_score(&t.model, data, settings, engine, Some(slope), 1, Scope::Fitting) {
-                Err(Error::Diverged { .. }) => continue,
-                other => other?,
-            };
-        let (model, scores) = converge_law(model, scores, data, settings, engine)?;
-        let (model, scores) = keep_the_better_law(model, scores, &t.model, data, settings, engine)?;
-        let t = Trial { gap_fit: gap_of(&scores, false), values: t.values, model, scores };
+        // Best first; a stable sort keeps the search's order among ties.
+        fitted.sort_by(|a, b| {
+            let (ra, rb) = (rank(&a.0), rank(&b.0));
+            ra.0.cmp(&rb.0).then(ra.1.total_cmp(&rb.1))
+        });
+        // The best form on every replicate. For a further effect, where
+        // the selection would refuse it there for the response it
+        // predicts, the next form in the order stands for the effect
+        // instead if it would not (the search ranked the forms on half the
+        // replicates; see [`form_order`]). The 18-run seed-23 set 7
+        // (normal-force harmonics with a skewed `mixture` noise): the
+        // symmetric `tukey_h` ranked first on half the replicates (key gap
+        // 5.8 against the skew form's 9.6, from 66) and on all of them
+        // raised the response loss 4.69 → 5.88 (sd 0.38), so the noise was
+        // refused; the skew form keeps it (4.64) at key gap 6.4. A leading
+        // effect keeps its first form: the looser rule it is held to
+        // ([`keeps_the_response`]) would let a second form that fits far
+        // worse lead instead (set 8: a coloured noise's second form, key
+        // gap 55 where the first had 16, then led a wrong pair).
+        let forms_tried = if leading { 1 } else { 2 };
+        let mut chosen: Option<(Trial, &'static str, BTreeMap<String, f64>)> = None;
+        for (t, form, parameters) in fitted.into_iter().take(forms_tried) {
+            let Some(t) = on_every_replicate(t, slope, data, settings, engine)? else { continue };
+            let keeps =
+                keeps_the_response_as(leading, base_scores, &t.scores, data.has_heldout(), settings.replicates, ruler);
+            if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+                eprintln!("form {effect} [{form}] on every replicate: refused for it {}", !keeps);
+            }
+            if chosen.is_none() || keeps {
+                chosen = Some((t, form, parameters));
+            }
+            if keeps {
+                break;
+            }
+        }
+        let Some((t, form, parameters)) = chosen else { continue };
         let gap_heldout = gap_of(&t.scores, true);
         let mut worst: Vec<&Score> = t.scores.iter().collect();
         worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
@@ -578,6 +596,28 @@ fn round(
     }
     rank_effects(&mut out, (g0_fit, if data.has_heldout() { g0_ho } else { g0_fit }), data.has_heldout(), ruler);
     Ok(out)
+}
+
+/// A form's best trial on every replicate: one more step of the law (the
+/// extra replicates' law differs from the search's by their sampling
+/// noise), then the law carried to where this effect's data imply it, so
+/// the effect is compared (and the next round searched) from a law that
+/// has stopped moving. `None` where the model diverges.
+fn on_every_replicate(
+    t: Trial,
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<Trial>> {
+    let (model, scores, _) = match calibrate_and_score(&t.model, data, settings, engine, Some(slope), 1, Scope::Fitting)
+    {
+        Err(Error::Diverged { .. }) => return Ok(None),
+        other => other?,
+    };
+    let (model, scores) = converge_law(model, scores, data, settings, engine)?;
+    let (model, scores) = keep_the_better_law(model, scores, &t.model, data, settings, engine)?;
+    Ok(Some(Trial { gap_fit: gap_of(&scores, false), values: t.values, model, scores }))
 }
 
 /// The round's best form with its law stepped on every replicate and
