@@ -552,21 +552,15 @@ fn round(
         // worse lead instead (set 8: a coloured noise's second form, key
         // gap 55 where the first had 16, then led a wrong pair).
         let forms_tried = if leading { 1 } else { 2 };
-        let mut chosen: Option<(Trial, &'static str, BTreeMap<String, f64>)> = None;
-        for (t, form, parameters) in fitted.into_iter().take(forms_tried) {
-            let Some(t) = on_every_replicate(t, slope, data, settings, engine)? else { continue };
+        let chosen = first_kept(fitted, forms_tried, |(t, form, parameters)| {
+            let Some(t) = on_every_replicate(t, slope, data, settings, engine)? else { return Ok(None) };
             let keeps =
                 keeps_the_response_as(leading, base_scores, &t.scores, data.has_heldout(), settings.replicates, ruler);
             if std::env::var_os("STICKSLIP_DEBUG").is_some() {
                 eprintln!("form {effect} [{form}] on every replicate: refused for it {}", !keeps);
             }
-            if chosen.is_none() || keeps {
-                chosen = Some((t, form, parameters));
-            }
-            if keeps {
-                break;
-            }
-        }
+            Ok(Some(((t, form, parameters), keeps)))
+        })?;
         let Some((t, form, parameters)) = chosen else { continue };
         let gap_heldout = gap_of(&t.scores, true);
         let mut worst: Vec<&Score> = t.scores.iter().collect();
@@ -596,6 +590,25 @@ fn round(
     }
     rank_effects(&mut out, (g0_fit, if data.has_heldout() { g0_ho } else { g0_fit }), data.has_heldout(), ruler);
     Ok(out)
+}
+
+/// Of the first `tries` of `ranked` (best first), judged in turn by
+/// `judge` (the item as judged and whether it is kept; `None`: it could not
+/// be judged), the first one kept, else the first one judged.
+fn first_kept<T>(
+    ranked: Vec<T>,
+    tries: usize,
+    mut judge: impl FnMut(T) -> Result<Option<(T, bool)>>,
+) -> Result<Option<T>> {
+    let mut first = None;
+    for item in ranked.into_iter().take(tries) {
+        match judge(item)? {
+            Some((judged, true)) => return Ok(Some(judged)),
+            Some((judged, false)) if first.is_none() => first = Some(judged),
+            _ => {}
+        }
+    }
+    Ok(first)
 }
 
 /// A form's best trial on every replicate: one more step of the law (the
@@ -1218,6 +1231,34 @@ mod tests {
         let little = candidate(Effect::ColouredFrictionNoise, with(1.0, 12.0, 10.0));
         assert!(closes_enough(gaps(&load), gaps(&little), noise, true), "the premise: it passes as a further effect");
         assert!(!pair_passes(&baseline, &load, &little, true, &ruler));
+    }
+
+    #[test]
+    fn the_next_form_stands_for_an_effect_only_where_the_first_is_refused() {
+        // Forms judged by whether they are kept (true) or refused (false);
+        // None where they could not be judged (a model that diverged).
+        let choose = |verdicts: &[Option<bool>], tries: usize| -> Option<usize> {
+            let ranked: Vec<usize> = (0..verdicts.len()).collect();
+            let mut judged = Vec::new();
+            let out = first_kept(ranked, tries, |i| {
+                judged.push(i);
+                Ok(verdicts[i].map(|kept| (i, kept)))
+            })
+            .unwrap();
+            assert!(judged.len() <= tries, "judged {judged:?}, at most {tries}");
+            out
+        };
+        // The first kept is taken, and nothing after it is judged.
+        assert_eq!(choose(&[Some(true), Some(true)], 2), Some(0));
+        // Refused: the next form, if that one is kept (seed-23 set 7) ...
+        assert_eq!(choose(&[Some(false), Some(true)], 2), Some(1));
+        // ... else the first stays (the selection refuses the effect).
+        assert_eq!(choose(&[Some(false), Some(false)], 2), Some(0));
+        // A leading effect tries one form only.
+        assert_eq!(choose(&[Some(false), Some(true)], 1), Some(0));
+        // A form that could not be judged is passed over.
+        assert_eq!(choose(&[None, Some(false)], 2), Some(1));
+        assert_eq!(choose(&[None], 2), None);
     }
 
     #[test]
