@@ -852,8 +852,11 @@ pub(crate) fn select(
         // of the key gap, while it predicts the response better, may need
         // a second effect beside it: look one effect ahead of it (see
         // [`pair_ahead`]).
+        if !leading {
+            break;
+        }
         let ahead = |c: &&Candidate| worth_looking_ahead(&scores, c, has_heldout, settings.replicates, &ruler);
-        let Some(first) = candidates.iter().filter(|_| leading).find(ahead) else {
+        let Some(first) = candidates.iter().find(ahead) else {
             break;
         };
         let Some(second) = pair_ahead(first, baseline_scores, &ruler, slope, data, settings, engine, progress)? else {
