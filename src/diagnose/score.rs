@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::diagnose::data::Data;
-use crate::diagnose::features::{RunFeatures, run_features};
+use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::simulate::{path_stats_per_condition, replicates};
 use crate::diagnose::{DiagnoseSettings, mean, sd};
@@ -207,7 +207,13 @@ fn record_scores(
     let mut scores = Vec::new();
     let simulated: Vec<Vec<RunFeatures>> = run_units
         .par_iter()
-        .map(|&u| Ok(replicates(engine, model, data, settings, u)?.iter().map(run_features).collect()))
+        .map(|&u| {
+            let runs = replicates(engine, model, data, settings, u)?;
+            // The replicates of a unit are sampled alike: one grid serves them.
+            let Some(first) = runs.first() else { return Ok(Vec::new()) };
+            let grid = SampleGrid::of(first);
+            Ok(runs.iter().map(|r| run_features_on(r, &grid)).collect())
+        })
         .collect::<Result<_>>()?;
     for (&i, sims) in run_units.iter().zip(simulated) {
         let u = &data.units[i];

@@ -3,7 +3,7 @@
 
 use std::f64::consts::TAU;
 
-use stickslip::diagnose::features::{RunFeatures, run_features};
+use stickslip::diagnose::features::{RunFeatures, SampleGrid, run_features, run_features_on};
 use stickslip::diagnose::measure::Run;
 use stickslip::engine::{Condition, Model};
 
@@ -140,6 +140,33 @@ fn normal_force_harmonic_is_recovered() {
     assert!((nf.residual_var_n2.unwrap() / 0.33f64.powi(2) - 1.0).abs() < 0.05, "{nf:?}");
     assert!(nf.drift_n_per_s.unwrap().abs() < 1e-3, "{nf:?}");
     assert_eq!(value(&features, "normal_force_harmonic2_n"), Some(h[1]));
+}
+
+#[test]
+fn records_sampled_alike_share_a_grid_and_get_the_same_features() {
+    // Replicates of one condition: the same times, other forces and motions.
+    let mut rng = Rng(23);
+    let t = times(3.0, 20.0);
+    let replicate = |rng: &mut Rng| {
+        let n = t.iter().map(|t| 16.0 + 0.2 * (TAU * F_HZ * t).sin() + 0.3 * rng.gaussian()).collect();
+        let mut run = run_with_force(t.clone(), n);
+        run.x_m.iter_mut().for_each(|x| *x += 1e-4 * rng.gaussian());
+        run
+    };
+    let runs: Vec<Run> = (0..3).map(|_| replicate(&mut rng)).collect();
+    let grid = SampleGrid::of(&runs[0]);
+    for run in &runs {
+        assert_eq!(run_features_on(run, &grid), run_features(run));
+    }
+    // A record the grid was not made for (other times, another frequency)
+    // gets its own features, not the grid's.
+    let mut shifted = replicate(&mut rng);
+    shifted.t_s.iter_mut().for_each(|t| *t += 0.5 / RATE_HZ);
+    let mut other_frequency = replicate(&mut rng);
+    other_frequency.excitation_frequency_hz = 1.5 * F_HZ;
+    for run in [&shifted, &other_frequency] {
+        assert_eq!(run_features_on(run, &grid), run_features(run));
+    }
 }
 
 #[test]

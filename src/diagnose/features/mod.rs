@@ -175,21 +175,64 @@ pub struct FrictionFeatures {
     pub stiction_excess: Option<f64>,
 }
 
+/// What the features of records sampled at the same times under the same
+/// excitation frequency share: the base's `(cos Ωt, sin Ωt)` at every sample
+/// and the normal-force fit's design. A diagnosis simulates several replicate
+/// records per condition on one grid; made once, it serves them all, and
+/// their features are exactly those [`run_features`] computes alone.
+#[derive(Clone, Debug)]
+pub struct SampleGrid {
+    t_s: Vec<f64>,
+    excitation_frequency_hz: f64,
+    base: Vec<(f64, f64)>,
+    normal_force: Option<record::ForceDesign>,
+}
+
+impl SampleGrid {
+    /// The grid of `run`'s sample times and excitation frequency.
+    pub fn of(run: &Run) -> SampleGrid {
+        // The base's (cos Ωt, sin Ωt) at every sample, with the record's own t.
+        let omega = std::f64::consts::TAU * run.excitation_frequency_hz;
+        let base: Vec<(f64, f64)> = run
+            .t_s
+            .iter()
+            .map(|&t| {
+                let (s, c) = (omega * t).sin_cos();
+                (c, s)
+            })
+            .collect();
+        let normal_force = run.normal_force.as_ref().and_then(|_| record::ForceDesign::of(run, &base, run.t_s.len()));
+        SampleGrid { t_s: run.t_s.clone(), excitation_frequency_hz: run.excitation_frequency_hz, base, normal_force }
+    }
+
+    /// Whether `run` was sampled on this grid (bit for bit the same times and frequency).
+    fn serves(&self, run: &Run) -> bool {
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+        same(run.excitation_frequency_hz, self.excitation_frequency_hz)
+            && run.t_s.len() == self.t_s.len()
+            && run.t_s.iter().zip(&self.t_s).all(|(&a, &b)| same(a, b))
+    }
+}
+
 /// Computes every feature of `run`.
 pub fn run_features(run: &Run) -> RunFeatures {
-    // The base's (cos Ωt, sin Ωt) at every sample, with the record's own t.
-    let omega = std::f64::consts::TAU * run.excitation_frequency_hz;
-    let base: Vec<(f64, f64)> = run
-        .t_s
-        .iter()
-        .map(|&t| {
-            let (s, c) = (omega * t).sin_cos();
-            (c, s)
-        })
-        .collect();
+    features_on_grid(run, &SampleGrid::of(run))
+}
+
+/// Computes every feature of `run` with what `grid` holds where `run` was
+/// sampled on it (else as [`run_features`] does).
+pub fn run_features_on(run: &Run, grid: &SampleGrid) -> RunFeatures {
+    if grid.serves(run) { features_on_grid(run, grid) } else { run_features(run) }
+}
+
+fn features_on_grid(run: &Run, grid: &SampleGrid) -> RunFeatures {
+    let base = &grid.base;
     RunFeatures {
-        peaks: record::peak_features(run, &base),
-        normal_force: run.normal_force.as_deref().and_then(|n| record::normal_force_features(run, n, &base)),
+        peaks: record::peak_features(run, base),
+        normal_force: run
+            .normal_force
+            .as_deref()
+            .and_then(|n| record::normal_force_features(run, n, base, grid.normal_force.as_ref())),
         friction: match (&run.v_m_per_s, &run.friction_force, &run.normal_force) {
             (Some(v), Some(f), Some(n)) => friction::friction_features(v, f, n),
             _ => None,

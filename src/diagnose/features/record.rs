@@ -1,7 +1,7 @@
 //! Features of the whole record: per-period peaks, the normal force, and
 //! the share of time at rest.
 
-use super::stats::{least_squares, moments, shape, slope};
+use super::stats::{Design, moments, shape, slope};
 use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, SLOW_DEGREE, STICK_SPEED_FRACTION};
 use crate::diagnose::measure::{self, Run};
 use crate::engine::reduce::circular_mean_var;
@@ -108,53 +108,96 @@ impl FundamentalSums {
     }
 }
 
-/// Normal-force features (see [`NormalForceFeatures`]).
-pub(super) fn normal_force_features(run: &Run, force: &[f64], base: &[(f64, f64)]) -> Option<NormalForceFeatures> {
+/// The normal-force fit's design for `n` samples of a record: Legendre
+/// polynomials of its time and the harmonics of the excitation below
+/// [`HARMONIC_RATE_LIMIT`] × the sample rate. It depends on the sample times
+/// and the frequency only, so records sampled alike share one.
+#[derive(Clone, Debug)]
+pub(super) struct ForceDesign {
+    /// The harmonics fitted (1-based multiples of the excitation frequency).
+    fitted: Vec<usize>,
+    /// Time from the first sample to the last, s.
+    span_s: f64,
+    design: Design,
+}
+
+impl ForceDesign {
+    /// For the first `n` samples of `run`, whose base trig is `base`; `None`
+    /// when the samples span no time or are fewer than the columns.
+    pub(super) fn of(run: &Run, base: &[(f64, f64)], n: usize) -> Option<ForceDesign> {
+        let n = n.min(run.t_s.len()).min(base.len());
+        if n < 2 {
+            return None;
+        }
+        let t = &run.t_s[..n];
+        let f = run.excitation_frequency_hz;
+        let rate = measure::sample_rate_hz(run);
+        let fitted: Vec<usize> = (1..=HARMONICS)
+            .filter(|&k| f.is_finite() && f > 0.0 && k as f64 * f < HARMONIC_RATE_LIMIT * rate)
+            .collect();
+        let t0 = t[0];
+        let span_s = t[n - 1] - t0;
+        let centre = 0.5 * (t[n - 1] + t0);
+        // The slow part: Legendre polynomials P0 … P_SLOW_DEGREE of the record's
+        // time scaled to [−1, 1], so that a drift that is not a straight line
+        // (wear that saturates, heating that comes and goes) is not read as
+        // noise; P1's coefficient is the straight-line drift.
+        let slow = 1 + SLOW_DEGREE;
+        let p = slow + 2 * fitted.len();
+        // cos kΩt and sin kΩt from the fundamental's by the multiple-angle
+        // recurrence (one sin/cos per sample, computed once per record).
+        let fill_row = |i: usize, row: &mut [f64]| {
+            let s = 2.0 * (t[i] - centre) / span_s;
+            legendre(s, &mut row[..slow]);
+            let (c1, s1) = base[i];
+            let (mut ck, mut sk) = (1.0, 0.0);
+            let mut k_done = 0;
+            for (j, &k) in fitted.iter().enumerate() {
+                while k_done < k {
+                    (ck, sk) = (ck * c1 - sk * s1, sk * c1 + ck * s1);
+                    k_done += 1;
+                }
+                row[slow + 2 * j] = ck;
+                row[slow + 1 + 2 * j] = sk;
+            }
+        };
+        let design = if span_s > 0.0 { Design::new(n, p, fill_row)? } else { return None };
+        Some(ForceDesign { fitted, span_s, design })
+    }
+}
+
+/// Normal-force features (see [`NormalForceFeatures`]), with the fit's
+/// design `prepared` where it was made for this many samples (else made here).
+pub(super) fn normal_force_features(
+    run: &Run,
+    force: &[f64],
+    base: &[(f64, f64)],
+    prepared: Option<&ForceDesign>,
+) -> Option<NormalForceFeatures> {
     let n = force.len().min(run.t_s.len()).min(base.len());
     if n < 2 || force[..n].iter().any(|v| !v.is_finite()) {
         return None;
     }
     let force = &force[..n];
-    let t = &run.t_s[..n];
     let (mean, m2, _, _) = moments(force);
     let var_n2 = m2 * n as f64 / (n - 1) as f64;
 
-    let f = run.excitation_frequency_hz;
-    let rate = measure::sample_rate_hz(run);
-    let fitted: Vec<usize> =
-        (1..=HARMONICS).filter(|&k| f.is_finite() && f > 0.0 && k as f64 * f < HARMONIC_RATE_LIMIT * rate).collect();
-    let t0 = t[0];
-    let span = t[n - 1] - t0;
-    let centre = 0.5 * (t[n - 1] + t0);
-    // The slow part: Legendre polynomials P0 … P_SLOW_DEGREE of the record's
-    // time scaled to [−1, 1], so that a drift that is not a straight line
-    // (wear that saturates, heating that comes and goes) is not read as
-    // noise; P1's coefficient is the straight-line drift.
-    let slow = 1 + SLOW_DEGREE;
-    let p = slow + 2 * fitted.len();
-    // cos kΩt and sin kΩt from the fundamental's by the multiple-angle
-    // recurrence (one sin/cos per sample, computed once per record).
-    let fill_row = |i: usize, row: &mut [f64]| {
-        let s = 2.0 * (t[i] - centre) / span;
-        legendre(s, &mut row[..slow]);
-        let (c1, s1) = base[i];
-        let (mut ck, mut sk) = (1.0, 0.0);
-        let mut k_done = 0;
-        for (j, &k) in fitted.iter().enumerate() {
-            while k_done < k {
-                (ck, sk) = (ck * c1 - sk * s1, sk * c1 + ck * s1);
-                k_done += 1;
-            }
-            row[slow + 2 * j] = ck;
-            row[slow + 1 + 2 * j] = sk;
+    let made_here;
+    let design = match prepared {
+        Some(d) if d.design.rows() == n => Some(d),
+        _ => {
+            made_here = ForceDesign::of(run, base, n);
+            made_here.as_ref()
         }
     };
-    let fit = (span > 0.0).then(|| least_squares(n, p, fill_row, |i| force[i] - mean)).flatten();
+    let slow = 1 + SLOW_DEGREE;
+    let fit = design.and_then(|d| Some((d, d.design.solve(|i| force[i] - mean)?)));
     let mut harmonic_amplitude_n = [None; HARMONICS];
     let mut harmonic_phase_rad = [None; HARMONICS];
     let (mut residual_var_n2, mut drift_n_per_s, mut curvature_n_per_s2) = (None, None, None);
-    if let Some((coef, ssr)) = fit {
-        for (j, &k) in fitted.iter().enumerate() {
+    if let Some((d, (coef, ssr))) = fit {
+        let (p, span) = (coef.len(), d.span_s);
+        for (j, &k) in d.fitted.iter().enumerate() {
             let (a, b) = (coef[slow + 2 * j], coef[slow + 1 + 2 * j]);
             harmonic_amplitude_n[k - 1] = Some(a.hypot(b));
             // a cos kΩt + b sin kΩt = A cos(kΩt + φ) with φ = atan2(−b, a).

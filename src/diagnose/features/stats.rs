@@ -49,7 +49,7 @@ pub(super) fn slope(x: &[f64], y: &[f64]) -> Option<f64> {
 /// (`fill(i, row)` writes row `i` of the design matrix) against `y` in one
 /// pass, and solves them by Cholesky. Returns the coefficients and the
 /// residual sum of squares (from the normal equations), or `None` when the
-/// design is (numerically) singular. Up to 12 columns.
+/// design is (numerically) singular. Up to [`MAX_COLUMNS`] columns.
 pub(crate) fn least_squares(
     n: usize,
     p: usize,
@@ -102,6 +102,84 @@ fn fixed<const P: usize>(
     solve_normal(&ata, &aty, yty)
 }
 
+/// The most columns a [`Design`] (and [`least_squares`]) takes.
+const MAX_COLUMNS: usize = 14;
+
+/// A least-squares design kept for many right-hand sides: its rows and the
+/// lower triangle of its normal matrix `AᵀA`, accumulated in the order
+/// [`least_squares`] accumulates them, so that [`Design::solve`] returns
+/// exactly what `least_squares` would for the same rows.
+#[derive(Clone, Debug)]
+pub(super) struct Design {
+    n: usize,
+    p: usize,
+    /// Row `i` at `rows[i * p .. (i + 1) * p]`.
+    rows: Vec<f64>,
+    ata: [[f64; MAX_COLUMNS]; MAX_COLUMNS],
+}
+
+impl Design {
+    /// The `n` rows of `p` columns that `fill(i, row)` writes; `None` with
+    /// more than [`MAX_COLUMNS`] columns or fewer rows than columns.
+    pub(super) fn new(n: usize, p: usize, fill: impl Fn(usize, &mut [f64])) -> Option<Design> {
+        if p == 0 || p > MAX_COLUMNS || n < p {
+            return None;
+        }
+        let mut rows = vec![0.0; n * p];
+        let mut ata = [[0.0f64; MAX_COLUMNS]; MAX_COLUMNS];
+        for (i, row) in rows.chunks_exact_mut(p).enumerate() {
+            fill(i, row);
+            for a in 0..p {
+                for b in 0..=a {
+                    ata[a][b] += row[a] * row[b];
+                }
+            }
+        }
+        Some(Design { n, p, rows, ata })
+    }
+
+    /// Number of rows.
+    pub(super) fn rows(&self) -> usize {
+        self.n
+    }
+
+    /// The coefficients against `y` and the residual sum of squares, as
+    /// [`least_squares`] returns them.
+    pub(super) fn solve(&self, y: impl Fn(usize) -> f64) -> Option<(Vec<f64>, f64)> {
+        match self.p {
+            1 => self.solve_fixed::<1>(y),
+            2 => self.solve_fixed::<2>(y),
+            3 => self.solve_fixed::<3>(y),
+            4 => self.solve_fixed::<4>(y),
+            5 => self.solve_fixed::<5>(y),
+            6 => self.solve_fixed::<6>(y),
+            7 => self.solve_fixed::<7>(y),
+            8 => self.solve_fixed::<8>(y),
+            9 => self.solve_fixed::<9>(y),
+            10 => self.solve_fixed::<10>(y),
+            11 => self.solve_fixed::<11>(y),
+            12 => self.solve_fixed::<12>(y),
+            13 => self.solve_fixed::<13>(y),
+            14 => self.solve_fixed::<14>(y),
+            _ => None,
+        }
+    }
+
+    fn solve_fixed<const P: usize>(&self, y: impl Fn(usize) -> f64) -> Option<(Vec<f64>, f64)> {
+        let mut aty = [0.0f64; P];
+        let mut yty = 0.0;
+        for (i, row) in self.rows.chunks_exact(P).enumerate() {
+            let yi = y(i);
+            yty += yi * yi;
+            for a in 0..P {
+                aty[a] += row[a] * yi;
+            }
+        }
+        let ata: [[f64; P]; P] = std::array::from_fn(|a| std::array::from_fn(|b| self.ata[a][b]));
+        solve_normal(&ata, &aty, yty)
+    }
+}
+
 /// Solves normal equations accumulated like [`least_squares`] does (`ata`'s
 /// lower triangle, `aty`, `yty`) by Cholesky: the coefficients and the
 /// residual sum of squares, or `None` when they are (numerically) singular.
@@ -141,4 +219,41 @@ pub(super) fn solve_normal<const P: usize>(ata: &[[f64; P]; P], aty: &[f64; P], 
     // The residual sum of squares without a second pass: yᵀy − ‖L⁻¹Aᵀy‖².
     let ssr = (yty - z.iter().map(|v| v * v).sum::<f64>()).max(0.0);
     coef.iter().all(|c| c.is_finite()).then_some((coef, ssr))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A kept design answers every right-hand side exactly (bit for bit) as a
+    /// one-pass [`least_squares`] over the same rows does, at every width.
+    #[test]
+    fn a_kept_design_solves_exactly_as_least_squares() {
+        let n = 500;
+        let fill = |p: usize| {
+            move |i: usize, row: &mut [f64]| {
+                let s = i as f64 / n as f64;
+                for (j, r) in row.iter_mut().enumerate().take(p) {
+                    *r = (s * (j + 1) as f64 * 2.3).sin() + if j == 0 { 1.0 } else { 0.0 };
+                }
+            }
+        };
+        for p in 1..=MAX_COLUMNS {
+            let design = Design::new(n, p, fill(p)).expect("a full-rank design");
+            assert_eq!(design.rows(), n);
+            for k in 0..3 {
+                let y = |i: usize| ((i * 7919 + k * 104_729) % 1013) as f64 / 1013.0 - 0.3 * k as f64;
+                let (coef, ssr) = least_squares(n, p, fill(p), y).expect("solvable");
+                let (kept, kept_ssr) = design.solve(y).expect("solvable");
+                assert_eq!(
+                    coef.iter().map(|c| c.to_bits()).collect::<Vec<_>>(),
+                    kept.iter().map(|c| c.to_bits()).collect::<Vec<_>>(),
+                    "p = {p}"
+                );
+                assert_eq!(ssr.to_bits(), kept_ssr.to_bits(), "p = {p}");
+            }
+        }
+        assert!(Design::new(n, MAX_COLUMNS + 1, fill(MAX_COLUMNS + 1)).is_none());
+        assert!(Design::new(3, 4, fill(4)).is_none(), "fewer rows than columns");
+    }
 }
