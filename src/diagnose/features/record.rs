@@ -137,6 +137,9 @@ impl ForceDesign {
             .collect();
         let t0 = t[0];
         let span_s = t[n - 1] - t0;
+        if span_s.is_nan() || span_s <= 0.0 {
+            return None;
+        }
         let centre = 0.5 * (t[n - 1] + t0);
         // The slow part: Legendre polynomials P0 … P_SLOW_DEGREE of the record's
         // time scaled to [−1, 1], so that a drift that is not a straight line
@@ -145,7 +148,7 @@ impl ForceDesign {
         let slow = 1 + SLOW_DEGREE;
         let p = slow + 2 * fitted.len();
         // cos kΩt and sin kΩt from the fundamental's by the multiple-angle
-        // recurrence (one sin/cos per sample, computed once per record).
+        // recurrence (the base's one sin/cos per sample, made once per grid).
         let fill_row = |i: usize, row: &mut [f64]| {
             let s = 2.0 * (t[i] - centre) / span_s;
             legendre(s, &mut row[..slow]);
@@ -161,7 +164,7 @@ impl ForceDesign {
                 row[slow + 1 + 2 * j] = sk;
             }
         };
-        let design = if span_s > 0.0 { Design::new(n, p, fill_row)? } else { return None };
+        let design = Design::new(n, p, fill_row)?;
         Some(ForceDesign { fitted, span_s, design })
     }
 }
