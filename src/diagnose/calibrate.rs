@@ -527,7 +527,7 @@ const MAX_D_S2_PER_M2: f64 = 3.0;
 
 impl FrictionLaw {
     /// The model's law (no anchors).
-    fn of(model: &Model) -> FrictionLaw {
+    pub(crate) fn of(model: &Model) -> FrictionLaw {
         let f = &model.friction;
         FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
     }
