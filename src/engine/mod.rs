@@ -272,9 +272,11 @@ pub trait Backend: Send + Sync {
 pub enum BackendChoice {
     /// A hardware GPU, else the CPU reference. A software Vulkan adapter
     /// (lavapipe) is not taken: it runs the WGSL kernel on the same CPU cores
-    /// more slowly than the f64 reference does (main job on the 2-core
-    /// machine, `benches/RESULTS.md`), so it is only used when asked for
-    /// with `--backend gpu`.
+    /// no faster than the f64 reference does (the main job on the 2-core
+    /// machine: 9.6 s on lavapipe against 9.1 s, with the kernel specialised
+    /// for no effects; any effect takes the general kernel, about half as
+    /// fast; `benches/RESULTS.md`), so it is only used when asked for with
+    /// `--backend gpu`.
     Auto,
     /// A GPU adapter (hardware or software); an error when there is none.
     Gpu,

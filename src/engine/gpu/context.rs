@@ -3,6 +3,7 @@
 //! (as wgpu's compute examples take `&Device, &Queue`), so tests can pass a
 //! device of their own.
 
+use crate::engine::gpu::shared::EffectParams;
 use crate::engine::gpu::source;
 use crate::error::{Error, Result};
 
@@ -11,6 +12,9 @@ pub struct Kernels {
     pub(crate) ensemble_layout: wgpu::BindGroupLayout,
     pub(crate) init_paths: wgpu::ComputePipeline,
     pub(crate) run_cycles: wgpu::ComputePipeline,
+    /// `run_cycles` of the kernel specialised for models without effects
+    /// (`source::ensemble_wgsl_without_effects`), compiled on first use.
+    run_cycles_without_effects: std::sync::OnceLock<wgpu::ComputePipeline>,
     pub(crate) check_layout: wgpu::BindGroupLayout,
     pub(crate) philox_check: wgpu::ComputePipeline,
 }
@@ -93,10 +97,26 @@ impl Kernels {
         Kernels {
             init_paths: compute_pipeline(device, &ensemble_layout, &ensemble, "init_paths"),
             run_cycles: compute_pipeline(device, &ensemble_layout, &ensemble, "run_cycles"),
+            run_cycles_without_effects: std::sync::OnceLock::new(),
             philox_check: compute_pipeline(device, &check_layout, &check, "philox_check"),
             ensemble_layout,
             check_layout,
         }
+    }
+
+    /// The `run_cycles` pipeline for a dispatch whose effects' uniform is
+    /// `effects`: the one specialised for no effects where it applies.
+    pub(crate) fn run_cycles_for(&self, device: &wgpu::Device, effects: &EffectParams) -> &wgpu::ComputePipeline {
+        if !effects.is_without_effects() {
+            return &self.run_cycles;
+        }
+        self.run_cycles_without_effects.get_or_init(|| {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("ensemble.wgsl without effects"),
+                source: wgpu::ShaderSource::Wgsl(source::ensemble_wgsl_without_effects().into()),
+            });
+            compute_pipeline(device, &self.ensemble_layout, &module, "run_cycles")
+        })
     }
 }
 

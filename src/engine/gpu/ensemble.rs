@@ -228,9 +228,11 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
         params.sample_slots = u32::try_from(sample_slots)
             .map_err(|_| Error::setting("sample interval", "too many noise boundaries per period for the GPU"))?;
         let grid: Vec<GridPoint> = chunk.iter().zip(chunk_oscillators).map(|(p, o)| GridPoint::new(p, o)).collect();
+        let effects = EffectParams::from_oscillator(&chunk_oscillators[0]);
+        let run_cycles = kernels.run_cycles_for(device, &effects);
         let effects_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("effects"),
-            contents: bytemuck::bytes_of(&EffectParams::from_oscillator(&chunk_oscillators[0])),
+            contents: bytemuck::bytes_of(&effects),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let points_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -315,7 +317,7 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
             let cycles = cycles_per_dispatch.min(total_cycles - first_cycle);
             params.first_cycle = first_cycle;
             params.cycles = cycles;
-            dispatch(&kernels.run_cycles, &params);
+            dispatch(run_cycles, &params);
             let measured_from = plan.warmup_cycles.saturating_sub(first_cycle).min(cycles);
             if record_peaks && measured_from < cycles {
                 let bytes = read_back(device, queue, &peaks, 2 * u64::from(invocations) * u64::from(cycles) * 4)?;

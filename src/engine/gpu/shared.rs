@@ -6,7 +6,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::RunPlan;
-use crate::engine::effects::Form;
+use crate::engine::effects::{self, Effects, Form};
 use crate::engine::oscillator::{Oscillator, Point};
 use crate::engine::rng;
 
@@ -107,7 +107,11 @@ impl EffectParams {
     /// The uniform for an oscillator's effects (the per-point ones are in
     /// [`GridPoint`]).
     pub fn from_oscillator(o: &Oscillator) -> EffectParams {
-        let e = &o.effects;
+        Self::from_effects(&o.effects, o.noise_interval_s)
+    }
+
+    /// The uniform for flattened effects and a noise hold interval, s.
+    fn from_effects(e: &effects::EffectParams, noise_interval_s: f64) -> EffectParams {
         EffectParams {
             harmonic_form: e.harmonic_form.code(),
             harmonic_shape: e.harmonic_shape as f32,
@@ -133,11 +137,24 @@ impl EffectParams {
             stiction_dwell_s: e.stiction_dwell_s as f32,
             drift_form: e.drift_form.code(),
             drift_rate_per_s: e.drift_rate_per_s as f32,
-            noise_interval_s: o.noise_interval_s as f32,
+            noise_interval_s: noise_interval_s as f32,
             drift_curvature_per_s2: e.drift_curvature_per_s2 as f32,
             _pad2: 0,
             _pad3: 0,
         }
+    }
+
+    /// The uniform of a model without effects, its noise interval 0: what
+    /// the kernel specialised for that case has compiled in
+    /// (`source::ensemble_wgsl_without_effects`).
+    pub fn without_effects() -> EffectParams {
+        Self::from_effects(&effects::EffectParams::new(&Effects::default(), 0.0, 0.0, 0.0), 0.0)
+    }
+
+    /// Whether this uniform is [`EffectParams::without_effects`] but for
+    /// the noise interval (which that kernel still reads).
+    pub fn is_without_effects(&self) -> bool {
+        EffectParams { noise_interval_s: 0.0, ..*self } == Self::without_effects()
     }
 }
 
