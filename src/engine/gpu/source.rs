@@ -40,7 +40,6 @@ pub fn ensemble_wgsl() -> String {
     [constants().as_str(), RNG, EFFECTS, OSCILLATOR, REDUCE, ENSEMBLE].join("\n")
 }
 
-/// The generator check kernel: constants, noise and a kernel writing raw words.
 /// The declaration of the effects' uniform in `ensemble.wgsl`.
 const EFFECTS_BINDING: &str = "@group(0) @binding(6) var<uniform> effects: EffectParams;";
 
@@ -86,6 +85,7 @@ fn struct_fields(source: &str, name: &str) -> Vec<(String, String)> {
         .collect()
 }
 
+/// The generator check kernel: constants, noise and a kernel writing raw words.
 pub fn check_wgsl() -> String {
     [constants().as_str(), RNG, CHECK].join("\n")
 }
