@@ -16,7 +16,7 @@ use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, S
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
 use crate::error::{Error, Result};
-use oscillator::{Path, Sampler, phase_of};
+use oscillator::{HALF_LANES, LANES, Path, Sampler, phase_of, run_period};
 
 /// Most realisations integrated between two progress reports (and held in
 /// memory at once when only sums are kept).
@@ -59,14 +59,13 @@ impl Backend for CpuBackend {
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
                 let end = (start + chunk).min(total_paths);
-                let records: Vec<Vec<Sample>> = (start..end)
+                let records: Vec<Vec<Sample>> = lane_groups(job, start, end)
                     .into_par_iter()
-                    .map(|i| {
-                        let (p, r) = task(i);
-                        sample_record(
+                    .flat_map_iter(|(p, realisations)| {
+                        sample_records(
                             &oscillators[p],
                             job.seed,
-                            r,
+                            &realisations,
                             job.plan.warmup_cycles,
                             duration_s,
                             interval_s,
@@ -90,11 +89,10 @@ impl Backend for CpuBackend {
         let mut done = 0u64;
         for start in (0..total_paths).step_by(chunk) {
             let end = (start + chunk).min(total_paths);
-            let paths: Vec<PathResult> = (start..end)
+            let paths: Vec<PathResult> = lane_groups(job, start, end)
                 .into_par_iter()
-                .map(|i| {
-                    let (p, r) = task(i);
-                    simulate_path(&oscillators[p], job.seed, r, job.plan, job.points[p].initial, None)
+                .flat_map_iter(|(p, realisations)| {
+                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, job.points[p].initial, None)
                 })
                 .collect();
             for (i, path) in (start..end).zip(&paths) {
@@ -146,7 +144,7 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
     }
 }
 
-/// One realisation sampled like a measured record: `seconds` of samples
+/// Realisations (at most [`LANES`], stepped together) sampled like a measured record: `seconds` of samples
 /// every `sample_interval_s`, starting after `warmup_cycles` periods, with
 /// times measured from the end of the warm-up. With `at_noise_boundaries`
 /// and samples as far apart as the noise intervals (as a diagnosis's
@@ -154,31 +152,42 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
 /// the warm-up's end (so the first sample's time is within one interval of
 /// 0): samples then split no steps.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn sample_record(
+pub(crate) fn sample_records(
     osc: &Oscillator,
     seed: u64,
-    realisation: u32,
+    realisations: &[u32],
     warmup_cycles: u32,
     seconds: f64,
     sample_interval_s: f64,
     at_noise_boundaries: bool,
     initial: InitialState,
-) -> Vec<Sample> {
+) -> Vec<Vec<Sample>> {
     let start_s = f64::from(warmup_cycles) * osc.period_s;
     let cycles = record_cycles(osc, seconds);
-    let mut sampler = if samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries) {
-        Sampler::at_noise_boundaries(first_sampled_interval(osc, warmup_cycles))
-    } else {
-        Sampler::new(sample_interval_s, start_s)
-    };
+    let aligned = samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries);
+    let mut samplers: Vec<Sampler> = realisations
+        .iter()
+        .map(|_| {
+            if aligned {
+                Sampler::at_noise_boundaries(first_sampled_interval(osc, warmup_cycles))
+            } else {
+                Sampler::new(sample_interval_s, start_s)
+            }
+        })
+        .collect();
     let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
-    simulate_path(osc, seed, realisation, plan, initial, Some(&mut sampler));
-    let mut samples = sampler.samples;
-    samples.truncate((seconds / sample_interval_s).round() as usize);
-    for s in &mut samples {
-        s.t_s -= start_s;
-    }
-    samples
+    simulate_paths(osc, seed, realisations, plan, initial, Some(&mut samplers));
+    samplers
+        .into_iter()
+        .map(|sampler| {
+            let mut samples = sampler.samples;
+            samples.truncate((seconds / sample_interval_s).round() as usize);
+            for s in &mut samples {
+                s.t_s -= start_s;
+            }
+            samples
+        })
+        .collect()
 }
 
 /// Whether a record sampled every `sample_interval_s` (s) is taken at the
@@ -211,27 +220,128 @@ pub(crate) fn record_cycles(osc: &Oscillator, seconds: f64) -> u32 {
     (seconds / osc.period_s).ceil() as u32 + 1
 }
 
-/// Runs one realisation and returns its per-period peaks and phases.
-pub(crate) fn simulate_path(
+/// Runs realisations `realisations` (at most [`LANES`]) of `osc`, stepped
+/// together, and returns each one's per-period peaks and phases; with
+/// `samplers` (one per realisation), samples each.
+pub(crate) fn simulate_paths(
     osc: &Oscillator,
     seed: u64,
-    realisation: u32,
+    realisations: &[u32],
     plan: RunPlan,
     initial: InitialState,
-    mut sampler: Option<&mut Sampler>,
-) -> PathResult {
-    let mut path = Path::new(osc, seed, realisation, initial);
-    let mut peaks_m = Vec::with_capacity(plan.measured_cycles as usize);
-    let mut phases_rad = Vec::with_capacity(plan.measured_cycles as usize);
-    let mut stick_time_s = 0.0;
+    mut samplers: Option<&mut [Sampler]>,
+) -> Vec<PathResult> {
+    let mut lanes: Vec<Path<'_>> = realisations.iter().map(|&r| Path::new(osc, seed, r, initial)).collect();
+    let mut results: Vec<PathResult> = realisations
+        .iter()
+        .map(|_| PathResult {
+            peaks_m: Vec::with_capacity(plan.measured_cycles as usize),
+            phases_rad: Vec::with_capacity(plan.measured_cycles as usize),
+            stick_time_s: 0.0,
+        })
+        .collect();
     for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
         let measuring = cycle >= plan.warmup_cycles;
-        path.run_period(measuring, sampler.as_deref_mut());
+        run_period(&mut lanes, measuring, samplers.as_deref_mut());
         if measuring {
-            peaks_m.push(path.period_max_x_m);
-            phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
-            stick_time_s += path.period_stick_s;
+            for (path, result) in lanes.iter().zip(&mut results) {
+                result.peaks_m.push(path.period_max_x_m);
+                result.phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
+                result.stick_time_s += path.period_stick_s;
+            }
         }
     }
-    PathResult { peaks_m, phases_rad, stick_time_s }
+    results
+}
+
+/// The job's tasks from `start` to `end` (numbered point-major,
+/// `job.realisations` each) cut into groups of realisations of one point
+/// that step together, in order: [`LANES`] while there are as many left,
+/// then [`HALF_LANES`], then the rest (they step one by one): (point,
+/// realisations).
+fn lane_groups(job: &Job<'_>, start: usize, end: usize) -> Vec<(usize, Vec<u32>)> {
+    let n = job.realisations as usize;
+    let mut groups = Vec::new();
+    let mut i = start;
+    while i < end {
+        let point = i / n;
+        let left = end.min((point + 1) * n) - i;
+        let group_end = i + if left >= LANES {
+            LANES
+        } else if left >= HALF_LANES {
+            HALF_LANES
+        } else {
+            left
+        };
+        let realisations = (i..group_end).map(|k| job.first_realisation + (k % n) as u32).collect();
+        groups.push((point, realisations));
+        i = group_end;
+    }
+    groups
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::{Condition, Model};
+
+    fn bits(values: &[f64]) -> Vec<u64> {
+        values.iter().map(|v| v.to_bits()).collect()
+    }
+
+    /// Realisations stepped together are those stepped one at a time, bit
+    /// for bit: peaks, phases, stuck time and sampled records, at a
+    /// condition that slips throughout and one that sticks much of each
+    /// period (so lanes part at events), without effects, with effects held
+    /// per interval (harmonics, coloured noise) and with a friction history
+    /// (hysteresis by slip length, and by a time lag: the lagged coefficient
+    /// is one more state of the step).
+    #[test]
+    fn realisations_stepped_together_are_those_stepped_alone() {
+        let cases: [&[&str]; 4] = [
+            &[],
+            &[
+                "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
+                "coloured_friction_noise.correlation_time_s=0.01",
+            ],
+            &["friction_hysteresis.length_m=2e-4"],
+            &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
+        ];
+        for (overrides, lanes) in cases.into_iter().flat_map(|c| [(c, LANES), (c, HALF_LANES)]) {
+            let realisations: Vec<u32> = (3..3 + lanes as u32).collect();
+            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            let model = Model::paper_rig(&overrides).expect("the paper rig");
+            for hz in [7.0, 12.0] {
+                let condition = Condition { excitation_frequency_hz: hz, normal_force_n: 16.39 };
+                let osc = Oscillator::new(&model, condition).expect("an oscillator");
+                let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
+                let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
+                let together = simulate_paths(&osc, 9, &realisations, plan, initial, None);
+                let mut stuck = 0;
+                for (r, path) in realisations.iter().zip(&together) {
+                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, None).remove(0);
+                    let what = format!("{overrides:?} at {hz} Hz, realisation {r}");
+                    assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
+                    assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
+                    assert_eq!(path.stick_time_s.to_bits(), alone.stick_time_s.to_bits(), "stuck time, {what}");
+                    stuck += usize::from(path.stick_time_s > 0.0);
+                }
+                if hz == 12.0 && overrides.is_empty() {
+                    assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
+                }
+                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial);
+                for (r, record) in realisations.iter().zip(&records) {
+                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial).remove(0);
+                    assert_eq!(record.len(), 600);
+                    let flat = |s: &[Sample]| -> Vec<u64> {
+                        s.iter()
+                            .flat_map(|s| [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n])
+                            .map(f64::to_bits)
+                            .collect()
+                    };
+                    assert_eq!(flat(record), flat(&alone), "record, {overrides:?} at {hz} Hz, realisation {r}");
+                }
+            }
+        }
+    }
 }

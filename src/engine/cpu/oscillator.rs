@@ -659,14 +659,7 @@ impl<'a> Path<'a> {
                     let half = whole.unwrap_or_else(|| Trig::turn(0.5 * w * h));
                     let step = self.rk4_slip(start, self.x_m, self.v_m_per_s, h, half, sign);
                     if sign * step.v_m_per_s > 0.0 {
-                        if measuring {
-                            self.add_slip_phase(h, &step);
-                        }
-                        self.x_m = step.x_m;
-                        self.v_m_per_s = step.v_m_per_s;
-                        self.lagged_mu = step.lagged_mu;
-                        self.period_max_x_m = self.period_max_x_m.max(step.x_m);
-                        return step.trig[2];
+                        return self.commit_slip(h, &step, measuring);
                     }
                     let (h_zero, to_zero) = self.locate_velocity_zero(start, h, sign);
                     let to_zero = to_zero.unwrap_or_else(|| {
@@ -714,68 +707,164 @@ impl<'a> Path<'a> {
         }
     }
 
-    /// Integrates one excitation period. Noise-interval boundaries, output
-    /// samples and the period's end are step boundaries: each span between
-    /// them is divided into the fewest equal steps no longer than `T / S`
-    /// (`S` = `steps_per_period`). The base's trig starts exact at the
-    /// period's start and is carried by rotation (recomputed exactly after
-    /// each event); in f64 the rotations drift by about 1e-16 each.
-    pub(crate) fn run_period(&mut self, measuring: bool, mut sampler: Option<&mut Sampler>) {
-        let o = self.osc;
-        let w = o.omega_rad_per_s;
-        let max_step_s = o.period_s / f64::from(o.steps_per_period);
-        let period_start_s = self.period as f64 * o.period_s;
-        self.period_max_x_m = self.x_m;
-        self.period_stick_s = 0.0;
-        self.period_cos_integral = 0.0;
-        self.period_sin_integral = 0.0;
-        let mut t = 0.0;
-        let mut trig = Trig { cos: 1.0, sin: 0.0 };
-        while t < o.period_s {
-            let noise_t = if self.next_boundary >> 32 == self.period {
-                (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE * o.period_s
-            } else {
-                f64::INFINITY
-            };
-            let sample_t = sampler
-                .as_ref()
-                .filter(|s| s.from_interval.is_none())
-                .map_or(f64::INFINITY, |s| s.next_time_s() - period_start_s);
-            let target = o.period_s.min(noise_t).min(sample_t).max(t);
-            let span = target - t;
-            if span > 0.0 {
-                let steps = span_steps(span, max_step_s);
-                let h = span / f64::from(steps);
-                let turn = Trig::turn(0.5 * w * h);
-                let mut step_start = t;
-                for k in 1..=steps {
-                    let step_end = if k == steps { target } else { t + f64::from(k) * h };
-                    trig = self.advance_segment(step_start, step_end, trig, Some(turn), measuring);
-                    step_start = step_end;
-                }
-            }
-            t = target;
-            let mut sample_now = sample_t <= target;
-            if noise_t <= target {
-                self.interval_phase = (self.next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
-                self.interval += 1;
-                self.next_boundary += o.noise_interval_fixed;
-                self.draw_noise();
-                // A sampler aligned with the noise samples at each boundary.
-                sample_now |= sampler.as_ref().and_then(|s| s.from_interval).is_some_and(|j| self.interval >= j);
-            }
-            if sample_now {
-                let sample = Sample {
-                    t_s: period_start_s + t,
-                    x_m: self.x_m,
-                    v_m_per_s: self.v_m_per_s,
-                    normal_force_n: self.normal_force_n,
-                    friction_force_n: self.friction_force(trig),
-                };
-                sampler.as_mut().expect("sample time implies a sampler").push(sample);
+    /// Commits a slip step over `h_s` seconds that ends still under way:
+    /// the state, the period's largest x, and the phase integrals when
+    /// `measuring`. Returns the base's trig at its end.
+    #[inline(always)]
+    fn commit_slip(&mut self, h_s: f64, step: &SlipStep, measuring: bool) -> Trig {
+        if measuring {
+            self.add_slip_phase(h_s, step);
+        }
+        self.x_m = step.x_m;
+        self.v_m_per_s = step.v_m_per_s;
+        self.lagged_mu = step.lagged_mu;
+        self.period_max_x_m = self.period_max_x_m.max(step.x_m);
+        step.trig[2]
+    }
+}
+
+/// Realisations of one oscillator stepped together, grid step by grid step.
+/// Their step grids are the same (the noise boundaries and samples fall at
+/// the same times), so each grid step's RK4 for all of them is one run of
+/// straight-line code: eight independent dependency chains the core overlaps
+/// instead of waiting out one chain's latency (one realisation at a time,
+/// the reference was latency-bound: each stage's division and sums wait on
+/// the last).
+pub(crate) const LANES: usize = 8;
+
+/// The smaller set of lanes stepped together: a diagnosis's search runs 4
+/// replicates per condition.
+pub(crate) const HALF_LANES: usize = LANES / 2;
+
+/// Advances every path in `lanes` over the grid step `[t_a, t_b]` (local
+/// times in the period; `turn` rotates by half of it), each from its base
+/// trig in `trigs`. With a full set of lanes, the slip step is taken for all
+/// of them first, as if none met an event, and kept where the lane was
+/// slipping and still is at the step's end; every other lane takes
+/// [`Path::advance_segment`] from the step's start, which repeats that same
+/// step first (so the answers are those of one path at a time, bit for bit).
+fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
+    let lag = lanes[0].lag;
+    match lanes.len() {
+        LANES if lag => slip_lanes::<LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
+        LANES => slip_lanes::<LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
+        HALF_LANES if lag => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
+        HALF_LANES => slip_lanes::<HALF_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
+        _ => {
+            for (path, trig) in lanes.iter_mut().zip(trigs.iter_mut()) {
+                *trig = path.advance_segment(t_a, t_b, *trig, Some(turn), measuring);
             }
         }
-        self.period += 1;
+    }
+}
+
+/// [`advance_lanes`] for `N` lanes, `LAG` = [`Path::lag`] (the same for
+/// all: it is the oscillator's).
+#[inline(always)]
+fn slip_lanes<const N: usize, const LAG: bool>(
+    lanes: &mut [Path<'_>],
+    trigs: &mut [Trig],
+    t_a: f64,
+    t_b: f64,
+    turn: Trig,
+    measuring: bool,
+) {
+    let lanes: &mut [Path<'_>; N] = lanes.try_into().expect("N lanes");
+    let trigs: &mut [Trig; N] = trigs.try_into().expect("a trig per lane");
+    let h = t_b - t_a;
+    let signs: [f64; N] = std::array::from_fn(|l| match lanes[l].mode {
+        Mode::Slip(s) => f64::from(s),
+        Mode::Stick => 0.0,
+    });
+    let steps: [SlipStep; N] = std::array::from_fn(|l| {
+        let p = &lanes[l];
+        p.rk4_slip_with::<LAG>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l])
+    });
+    for l in 0..N {
+        trigs[l] = if signs[l] * steps[l].v_m_per_s > 0.0 {
+            lanes[l].commit_slip(h, &steps[l], measuring)
+        } else {
+            lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring)
+        };
+    }
+}
+
+/// Integrates one excitation period of every path in `lanes` (at most
+/// [`LANES`] realisations of one oscillator, in the same period; with
+/// `samplers`, one per path). Noise-interval boundaries, output samples and
+/// the period's end are step boundaries: each span between them is divided
+/// into the fewest equal steps no longer than `T / S` (`S` =
+/// `steps_per_period`). The base's trig starts exact at the period's start
+/// and is carried by rotation (recomputed exactly after each event); in f64
+/// the rotations drift by about 1e-16 each.
+pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: Option<&mut [Sampler]>) {
+    assert!(!lanes.is_empty() && lanes.len() <= LANES, "1 to {LANES} paths step together, not {}", lanes.len());
+    let o = lanes[0].osc;
+    debug_assert!(lanes.iter().all(|p| std::ptr::eq(p.osc, o) && p.next_boundary == lanes[0].next_boundary));
+    let w = o.omega_rad_per_s;
+    let max_step_s = o.period_s / f64::from(o.steps_per_period);
+    let period_start_s = lanes[0].period as f64 * o.period_s;
+    for path in lanes.iter_mut() {
+        path.period_max_x_m = path.x_m;
+        path.period_stick_s = 0.0;
+        path.period_cos_integral = 0.0;
+        path.period_sin_integral = 0.0;
+    }
+    let mut t = 0.0;
+    let mut trigs = [Trig { cos: 1.0, sin: 0.0 }; LANES];
+    let trigs = &mut trigs[..lanes.len()];
+    while t < o.period_s {
+        let next_boundary = lanes[0].next_boundary;
+        let noise_t = if next_boundary >> 32 == lanes[0].period {
+            (next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE * o.period_s
+        } else {
+            f64::INFINITY
+        };
+        // Every path's sampler has taken as many samples: the first's
+        // times are all of theirs.
+        let sampler = samplers.as_deref().map(|s| &s[0]);
+        let sample_t =
+            sampler.filter(|s| s.from_interval.is_none()).map_or(f64::INFINITY, |s| s.next_time_s() - period_start_s);
+        let target = o.period_s.min(noise_t).min(sample_t).max(t);
+        let span = target - t;
+        if span > 0.0 {
+            let steps = span_steps(span, max_step_s);
+            let h = span / f64::from(steps);
+            let turn = Trig::turn(0.5 * w * h);
+            let mut step_start = t;
+            for k in 1..=steps {
+                let step_end = if k == steps { target } else { t + f64::from(k) * h };
+                advance_lanes(lanes, trigs, step_start, step_end, turn, measuring);
+                step_start = step_end;
+            }
+        }
+        t = target;
+        let mut sample_now = sample_t <= target;
+        if noise_t <= target {
+            for path in lanes.iter_mut() {
+                path.interval_phase = (next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
+                path.interval += 1;
+                path.next_boundary += o.noise_interval_fixed;
+                path.draw_noise();
+            }
+            // A sampler aligned with the noise samples at each boundary.
+            sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);
+        }
+        if sample_now {
+            let samplers = samplers.as_deref_mut().expect("sample time implies samplers");
+            for ((path, trig), sampler) in lanes.iter().zip(trigs.iter()).zip(samplers.iter_mut()) {
+                sampler.push(Sample {
+                    t_s: period_start_s + t,
+                    x_m: path.x_m,
+                    v_m_per_s: path.v_m_per_s,
+                    normal_force_n: path.normal_force_n,
+                    friction_force_n: path.friction_force(*trig),
+                });
+            }
+        }
+    }
+    for path in lanes.iter_mut() {
+        path.period += 1;
     }
 }
 
