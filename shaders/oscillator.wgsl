@@ -201,8 +201,10 @@ fn breakaway_force() -> f32 {
 // (acceleration, rate of the lagged friction coefficient).
 fn slip_rates(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, lagged_mu: f32, sign: f32) -> vec2<f32> {
     let mu = friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
+    // Times 1/m like the CPU reference: the reciprocal depends on the
+    // uniform only, so no stage waits on a division by the mass.
     let acceleration = (spring_force(cos_omega_t, x_m) - params.damping_n_s_per_m * v_m_per_s
-        - sign * mu * path.normal_force_n) / params.mass_kg;
+        - sign * mu * path.normal_force_n) * (1.0 / params.mass_kg);
     var lag_rate = 0.0;
     if (lag_on()) {
         lag_rate = (steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / effects.hysteresis_lag_s;
