@@ -4,8 +4,10 @@
 //!
 //! Work is done in chunks of at most [`PATHS_PER_CHUNK`] realisations, so
 //! memory stays bounded (for [`Record::Sums`]) whatever the ensemble size;
-//! within a chunk, realisations run in parallel. The sums are integers, so
-//! the result does not depend on the chunking or the number of threads.
+//! within a chunk, groups of realisations of one point run in parallel,
+//! each group stepped together (`oscillator::LANES` of them). The sums are
+//! integers, so the result does not depend on the chunking or the number
+//! of threads.
 
 pub mod effects;
 pub mod oscillator;
