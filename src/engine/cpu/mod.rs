@@ -285,7 +285,36 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize) -> Vec<(usize, Vec<u32>)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::{Condition, Model};
+    use crate::engine::{Condition, Model, Point};
+
+    /// Lane groups cover the chunk's tasks once, in order, never straddle
+    /// two points, and take eight while eight are left, then four, then
+    /// the rest (13 realisations per point: 8, 4, 1).
+    #[test]
+    fn lane_groups_cover_the_tasks_in_order_within_points() {
+        let model = Model::paper_rig(&[]).expect("the paper rig");
+        let points: Vec<Point> = [4.0, 8.0]
+            .iter()
+            .map(|&n| Point::steady(&model, Condition { excitation_frequency_hz: 7.0, normal_force_n: n }))
+            .collect();
+        let job = Job {
+            model: &model,
+            points: &points,
+            realisations: 13,
+            first_realisation: 100,
+            seed: 1,
+            plan: RunPlan { warmup_cycles: 0, measured_cycles: 1 },
+            record: Record::Sums,
+        };
+        let sizes = |start, end| lane_groups(&job, start, end).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        assert_eq!(sizes(0, 26), [LANES, HALF_LANES, 1, LANES, HALF_LANES, 1]);
+        // A chunk that starts and ends inside points.
+        let groups = lane_groups(&job, 5, 19);
+        let tasks: Vec<(usize, u32)> = groups.iter().flat_map(|(p, rs)| rs.iter().map(move |&r| (*p, r))).collect();
+        let expected: Vec<(usize, u32)> = (5..19).map(|i| (i / 13, 100 + (i % 13) as u32)).collect();
+        assert_eq!(tasks, expected);
+        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, 2]);
+    }
 
     fn bits(values: &[f64]) -> Vec<u64> {
         values.iter().map(|v| v.to_bits()).collect()
