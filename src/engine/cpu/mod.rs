@@ -61,7 +61,7 @@ impl Backend for CpuBackend {
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
                 let end = (start + chunk).min(total_paths);
-                let records: Vec<Vec<Sample>> = lane_groups(job, start, end)
+                let records: Vec<Vec<Sample>> = lane_groups(job, start, end, lane_width(end - start))
                     .into_par_iter()
                     .flat_map_iter(|(p, realisations)| {
                         sample_records(
@@ -91,7 +91,7 @@ impl Backend for CpuBackend {
         let mut done = 0u64;
         for start in (0..total_paths).step_by(chunk) {
             let end = (start + chunk).min(total_paths);
-            let paths: Vec<PathResult> = lane_groups(job, start, end)
+            let paths: Vec<PathResult> = lane_groups(job, start, end, lane_width(end - start))
                 .into_par_iter()
                 .flat_map_iter(|(p, realisations)| {
                     simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, job.points[p].initial, None)
@@ -256,25 +256,34 @@ pub(crate) fn simulate_paths(
     results
 }
 
+/// Most realisations a group of a chunk of `tasks` steps together: the
+/// widest of [`LANES`], [`HALF_LANES`] and 1 that still leaves a group for
+/// every thread, so a small run (`simulate`'s three records, one point of
+/// eight) keeps both cores busy; [`LANES`] when the run is itself one of
+/// several in parallel (a diagnosis simulates its units side by side), whose
+/// caller fills the cores.
+fn lane_width(tasks: usize) -> usize {
+    let threads = rayon::current_num_threads();
+    if rayon::current_thread_index().is_some() {
+        return LANES;
+    }
+    [LANES, HALF_LANES].into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
+}
+
 /// The job's tasks from `start` to `end` (numbered point-major,
 /// `job.realisations` each) cut into groups of realisations of one point
-/// that step together, in order: [`LANES`] while there are as many left,
-/// then [`HALF_LANES`], then the rest (they step one by one): (point,
-/// realisations).
-fn lane_groups(job: &Job<'_>, start: usize, end: usize) -> Vec<(usize, Vec<u32>)> {
+/// that step together, in order, at most `width` ([`lane_width`]) each:
+/// [`LANES`] while there are as many left, then [`HALF_LANES`], then one
+/// by one (fewer step one by one anyway, and alone they run in parallel):
+/// (point, realisations).
+fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(usize, Vec<u32>)> {
     let n = job.realisations as usize;
     let mut groups = Vec::new();
     let mut i = start;
     while i < end {
         let point = i / n;
         let left = end.min((point + 1) * n) - i;
-        let group_end = i + if left >= LANES {
-            LANES
-        } else if left >= HALF_LANES {
-            HALF_LANES
-        } else {
-            left
-        };
+        let group_end = i + [LANES, HALF_LANES].into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
         let realisations = (i..group_end).map(|k| job.first_realisation + (k % n) as u32).collect();
         groups.push((point, realisations));
         i = group_end;
@@ -288,8 +297,8 @@ mod tests {
     use crate::engine::{Condition, Model, Point};
 
     /// Lane groups cover the chunk's tasks once, in order, never straddle
-    /// two points, and take eight while eight are left, then four, then
-    /// the rest (13 realisations per point: 8, 4, 1).
+    /// two points, and take eight while eight are left, then four, then one
+    /// by one (13 realisations per point: 8, 4, 1), none wider than asked.
     #[test]
     fn lane_groups_cover_the_tasks_in_order_within_points() {
         let model = Model::paper_rig(&[]).expect("the paper rig");
@@ -306,14 +315,17 @@ mod tests {
             plan: RunPlan { warmup_cycles: 0, measured_cycles: 1 },
             record: Record::Sums,
         };
-        let sizes = |start, end| lane_groups(&job, start, end).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        let sizes = |start, end| lane_groups(&job, start, end, LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
         assert_eq!(sizes(0, 26), [LANES, HALF_LANES, 1, LANES, HALF_LANES, 1]);
+        let narrow = lane_groups(&job, 0, 13, HALF_LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        assert_eq!(narrow, [HALF_LANES, HALF_LANES, HALF_LANES, 1]);
+        assert_eq!(lane_groups(&job, 0, 3, 1).len(), 3);
         // A chunk that starts and ends inside points.
-        let groups = lane_groups(&job, 5, 19);
+        let groups = lane_groups(&job, 5, 19, LANES);
         let tasks: Vec<(usize, u32)> = groups.iter().flat_map(|(p, rs)| rs.iter().map(move |&r| (*p, r))).collect();
         let expected: Vec<(usize, u32)> = (5..19).map(|i| (i / 13, 100 + (i % 13) as u32)).collect();
         assert_eq!(tasks, expected);
-        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, 2]);
+        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, 1, 1]);
     }
 
     fn bits(values: &[f64]) -> Vec<u64> {
