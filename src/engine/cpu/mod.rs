@@ -146,13 +146,14 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
     }
 }
 
-/// Realisations (at most [`LANES`], stepped together) sampled like a measured record: `seconds` of samples
-/// every `sample_interval_s`, starting after `warmup_cycles` periods, with
-/// times measured from the end of the warm-up. With `at_noise_boundaries`
-/// and samples as far apart as the noise intervals (as a diagnosis's
-/// replicates are), they are taken at the noise boundaries themselves, from the first one at or after
-/// the warm-up's end (so the first sample's time is within one interval of
-/// 0): samples then split no steps.
+/// Realisations (at most [`LANES`], stepped together) sampled like a
+/// measured record: `seconds` of samples every `sample_interval_s`, starting
+/// after `warmup_cycles` periods, with times measured from the end of the
+/// warm-up. With `at_noise_boundaries` and samples as far apart as the noise
+/// intervals (as a diagnosis's replicates are), they are taken at the noise
+/// boundaries themselves, from the first one at or after the warm-up's end
+/// (so the first sample's time is within one interval of 0): samples then
+/// split no steps.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_records(
     osc: &Oscillator,
