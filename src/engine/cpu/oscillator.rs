@@ -760,7 +760,9 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
 }
 
 /// [`advance_lanes`] for `N` lanes, `LAG` = [`Path::lag`] (the same for
-/// all: it is the oscillator's).
+/// all: it is the oscillator's). A stuck lane takes no slip step (at 12 Hz
+/// and 16.39 N, where the block sticks much of each period, that was a
+/// tenth of the time).
 #[inline(always)]
 fn slip_lanes<const N: usize, const LAG: bool>(
     lanes: &mut [Path<'_>],
@@ -777,15 +779,14 @@ fn slip_lanes<const N: usize, const LAG: bool>(
         Mode::Slip(s) => f64::from(s),
         Mode::Stick => 0.0,
     });
-    let steps: [SlipStep; N] = std::array::from_fn(|l| {
+    let steps: [Option<SlipStep>; N] = std::array::from_fn(|l| {
         let p = &lanes[l];
-        p.rk4_slip_with::<LAG>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l])
+        (signs[l] != 0.0).then(|| p.rk4_slip_with::<LAG>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))
     });
     for l in 0..N {
-        trigs[l] = if signs[l] * steps[l].v_m_per_s > 0.0 {
-            lanes[l].commit_slip(h, &steps[l], measuring)
-        } else {
-            lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring)
+        trigs[l] = match &steps[l] {
+            Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
+            _ => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
         };
     }
 }
