@@ -18,7 +18,7 @@ use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, S
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
 use crate::error::{Error, Result};
-use oscillator::{HALF_LANES, LANES, PAIR_LANES, Path, Sampler, phase_of, run_period};
+use oscillator::{HALF_LANES, LANES, Path, Sampler, phase_of, run_period};
 
 /// Most realisations integrated between two progress reports (and held in
 /// memory at once when only sums are kept).
@@ -257,25 +257,25 @@ pub(crate) fn simulate_paths(
     results
 }
 
-/// The lane widths a group may take, widest first.
-const WIDTHS: [usize; 3] = [LANES, HALF_LANES, PAIR_LANES];
-
 /// Most realisations a group of a chunk of `tasks` steps together: the
-/// widest of [`WIDTHS`] (else 1) that still leaves a group for every
-/// thread. A small run (`simulate`'s three records, one point of eight)
-/// keeps both cores busy, and so does a diagnosis's unit whose replicates
-/// cost far more than the others' (a trial whose model chatters there): as
-/// one group of four on one thread, seed 11's set 1 took 190 s instead of
-/// 110 s.
+/// widest of [`LANES`], [`HALF_LANES`] and 1 that still leaves a group for
+/// every thread, so a small run (`simulate`'s three records, one point of
+/// eight) keeps both cores busy; [`LANES`] when the run is itself one of
+/// several in parallel (a diagnosis simulates its units side by side), whose
+/// caller fills the cores.
 fn lane_width(tasks: usize) -> usize {
     let threads = rayon::current_num_threads();
-    WIDTHS.into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
+    if rayon::current_thread_index().is_some() {
+        return LANES;
+    }
+    [LANES, HALF_LANES].into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
 }
 
 /// The job's tasks from `start` to `end` (numbered point-major,
 /// `job.realisations` each) cut into groups of realisations of one point
 /// that step together, in order, at most `width` ([`lane_width`]) each:
-/// the widest of [`WIDTHS`] there are as many left for, then one by one:
+/// [`LANES`] while there are as many left, then [`HALF_LANES`], then one
+/// by one (fewer step one by one anyway, and alone they run in parallel):
 /// (point, realisations).
 fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(usize, Vec<u32>)> {
     let n = job.realisations as usize;
@@ -284,7 +284,7 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(us
     while i < end {
         let point = i / n;
         let left = end.min((point + 1) * n) - i;
-        let group_end = i + WIDTHS.into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
+        let group_end = i + [LANES, HALF_LANES].into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
         let realisations = (i..group_end).map(|k| job.first_realisation + (k % n) as u32).collect();
         groups.push((point, realisations));
         i = group_end;
@@ -320,15 +320,13 @@ mod tests {
         assert_eq!(sizes(0, 26), [LANES, HALF_LANES, 1, LANES, HALF_LANES, 1]);
         let narrow = lane_groups(&job, 0, 13, HALF_LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
         assert_eq!(narrow, [HALF_LANES, HALF_LANES, HALF_LANES, 1]);
-        let pairs = lane_groups(&job, 0, 7, PAIR_LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
-        assert_eq!(pairs, [PAIR_LANES, PAIR_LANES, PAIR_LANES, 1]);
         assert_eq!(lane_groups(&job, 0, 3, 1).len(), 3);
         // A chunk that starts and ends inside points.
         let groups = lane_groups(&job, 5, 19, LANES);
         let tasks: Vec<(usize, u32)> = groups.iter().flat_map(|(p, rs)| rs.iter().map(move |&r| (*p, r))).collect();
         let expected: Vec<(usize, u32)> = (5..19).map(|i| (i / 13, 100 + (i % 13) as u32)).collect();
         assert_eq!(tasks, expected);
-        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, PAIR_LANES]);
+        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, 1, 1]);
     }
 
     fn bits(values: &[f64]) -> Vec<u64> {
@@ -353,7 +351,7 @@ mod tests {
             &["friction_hysteresis.length_m=2e-4"],
             &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
         ];
-        for (overrides, lanes) in cases.into_iter().flat_map(|c| WIDTHS.map(|w| (c, w))) {
+        for (overrides, lanes) in cases.into_iter().flat_map(|c| [(c, LANES), (c, HALF_LANES)]) {
             let realisations: Vec<u32> = (3..3 + lanes as u32).collect();
             let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
             let model = Model::paper_rig(&overrides).expect("the paper rig");

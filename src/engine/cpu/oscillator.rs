@@ -733,11 +733,9 @@ impl<'a> Path<'a> {
 /// the last).
 pub(crate) const LANES: usize = 8;
 
-/// The smaller sets of lanes stepped together: a diagnosis's search runs 4
-/// replicates per condition, and a set of realisations that is the only
-/// work on its thread is best split in two (see `cpu::lane_width`).
+/// The smaller set of lanes stepped together: a diagnosis's search runs 4
+/// replicates per condition.
 pub(crate) const HALF_LANES: usize = LANES / 2;
-pub(crate) const PAIR_LANES: usize = 2;
 
 /// Advances every path in `lanes` over the grid step `[t_a, t_b]` (local
 /// times in the period; `turn` rotates by half of it), each from its base
@@ -753,8 +751,6 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
         LANES => slip_lanes::<LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
         HALF_LANES if lag => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
         HALF_LANES => slip_lanes::<HALF_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
-        PAIR_LANES if lag => slip_lanes::<PAIR_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
-        PAIR_LANES => slip_lanes::<PAIR_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
         _ => {
             for (path, trig) in lanes.iter_mut().zip(trigs.iter_mut()) {
                 *trig = path.advance_segment(t_a, t_b, *trig, Some(turn), measuring);
