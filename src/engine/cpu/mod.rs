@@ -18,7 +18,7 @@ use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, S
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
 use crate::error::{Error, Result};
-use oscillator::{HALF_LANES, LANES, Path, Sampler, phase_of, run_period};
+use oscillator::{LANE_WIDTHS, LANES, Path, Sampler, phase_of, run_period};
 
 /// Most realisations integrated between two progress reports (and held in
 /// memory at once when only sums are kept).
@@ -258,7 +258,7 @@ pub(crate) fn simulate_paths(
 }
 
 /// Most realisations a group of a chunk of `tasks` steps together: the
-/// widest of [`LANES`], [`HALF_LANES`] and 1 that still leaves a group for
+/// widest of [`LANE_WIDTHS`] (else 1) that still leaves a group for
 /// every thread, so a small run (`simulate`'s three records, one point of
 /// eight) keeps both cores busy; [`LANES`] when the run is itself one of
 /// several in parallel (a diagnosis simulates its units side by side), whose
@@ -268,13 +268,13 @@ fn lane_width(tasks: usize) -> usize {
     if rayon::current_thread_index().is_some() {
         return LANES;
     }
-    [LANES, HALF_LANES].into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
+    LANE_WIDTHS.into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
 }
 
 /// The job's tasks from `start` to `end` (numbered point-major,
 /// `job.realisations` each) cut into groups of realisations of one point
 /// that step together, in order, at most `width` ([`lane_width`]) each:
-/// [`LANES`] while there are as many left, then [`HALF_LANES`], then one
+/// the widest of [`LANE_WIDTHS`] there are as many left for, then one
 /// by one (fewer step one by one anyway, and alone they run in parallel):
 /// (point, realisations).
 fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(usize, Vec<u32>)> {
@@ -284,7 +284,7 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(us
     while i < end {
         let point = i / n;
         let left = end.min((point + 1) * n) - i;
-        let group_end = i + [LANES, HALF_LANES].into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
+        let group_end = i + LANE_WIDTHS.into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
         let realisations = (i..group_end).map(|k| job.first_realisation + (k % n) as u32).collect();
         groups.push((point, realisations));
         i = group_end;
@@ -296,6 +296,7 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(us
 mod tests {
     use super::*;
     use crate::engine::{Condition, Model, Point};
+    use oscillator::HALF_LANES;
 
     /// Lane groups cover the chunk's tasks once, in order, never straddle
     /// two points, and take eight while eight are left, then four, then one
@@ -351,7 +352,7 @@ mod tests {
             &["friction_hysteresis.length_m=2e-4"],
             &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
         ];
-        for (overrides, lanes) in cases.into_iter().flat_map(|c| [(c, LANES), (c, HALF_LANES)]) {
+        for (overrides, lanes) in cases.into_iter().flat_map(|c| LANE_WIDTHS.map(|w| (c, w))) {
             let realisations: Vec<u32> = (3..3 + lanes as u32).collect();
             let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
             let model = Model::paper_rig(&overrides).expect("the paper rig");

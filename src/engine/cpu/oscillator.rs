@@ -737,13 +737,18 @@ pub(crate) const LANES: usize = 8;
 /// replicates per condition.
 pub(crate) const HALF_LANES: usize = LANES / 2;
 
+/// The group sizes that step together ([`advance_lanes`] takes each),
+/// widest first; other sizes step one realisation at a time.
+pub(crate) const LANE_WIDTHS: [usize; 2] = [LANES, HALF_LANES];
+
 /// Advances every path in `lanes` over the grid step `[t_a, t_b]` (local
 /// times in the period; `turn` rotates by half of it), each from its base
-/// trig in `trigs`. With a full set of lanes, the slip step is taken for all
-/// of them first, as if none met an event, and kept where the lane was
-/// slipping and still is at the step's end; every other lane takes
-/// [`Path::advance_segment`] from the step's start, which repeats that same
-/// step first (so the answers are those of one path at a time, bit for bit).
+/// trig in `trigs`. With a set of lanes of one of the [`LANE_WIDTHS`], the
+/// slip step is taken for every slipping lane first, as if none met an
+/// event, and kept where the lane still slips at the step's end; every other
+/// lane takes [`Path::advance_segment`] from the step's start (a slipping
+/// one repeats that same step first), so the answers are those of one path
+/// at a time, bit for bit.
 fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
     let lag = lanes[0].lag;
     match lanes.len() {
