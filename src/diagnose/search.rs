@@ -19,7 +19,8 @@
 //! further effect (added on top of a named one) is held to the comparison's
 //! own noise: it must not make that response worse at all beyond it, and
 //! it must close more of the key gap than every other effect of its round
-//! does, beyond that gap's noise ([`stands_out`]): a fall that any effect
+//! that keeps the response does, beyond that gap's noise ([`stands_out`]):
+//! a fall that any effect
 //! would give is the leftover misfit of the forms already in, not an
 //! attribution.
 
@@ -420,12 +421,13 @@ fn keeps_the_response_as(
 /// Whether a candidate taking the (fitting, key) gaps from `before` to
 /// `after` lowers both by more than their `noise` and closes at least
 /// [`MIN_LEADING_SHARE`] of what is left of the key gap above the noise
-/// floor, or, where `repairs` (a further effect that repairs the held-out
-/// response, [`repairs_the_response`]), the first two alone.
-fn closes_enough(before: (f64, f64), after: (f64, f64), noise: (f64, f64), repairs: bool) -> bool {
+/// floor, or, where `exempt` (a further effect that repairs the held-out
+/// response, [`repairs_the_response`], or fits far better,
+/// [`fits_far_better`]), the first two alone.
+fn closes_enough(before: (f64, f64), after: (f64, f64), noise: (f64, f64), exempt: bool) -> bool {
     let left = (before.1 - NULL_HUBER).max(1e-9);
     let fall = (before.0 - after.0, before.1 - after.1);
-    fall.1 > noise.1 && fall.0 > noise.0 && (fall.1 / left >= MIN_LEADING_SHARE || repairs)
+    fall.1 > noise.1 && fall.0 > noise.0 && (fall.1 / left >= MIN_LEADING_SHARE || exempt)
 }
 
 /// Whether a further effect takes the fitting gap from `before` to `after`
@@ -864,8 +866,10 @@ pub(crate) fn select(
         // The best candidate that does not worsen the response where the
         // fit did not look (see the module's documentation) and that
         // lowers both gaps beyond their noise by a real share of what is
-        // left (or, for a further effect, repairs the response). For the
-        // leading effect only the best is considered: when it fails, the
+        // left (or, for a further effect, repairs the response or fits far
+        // better); a further effect must also close more of the key gap
+        // than its rivals ([`stands_out`]). For the leading effect only the
+        // best is considered: when it fails, the
         // verdict is `none`, not a worse-fitting effect. A further effect
         // is the best one that passes: a rival that fits the held-out units
         // better but the fitting ones worse (it trades one for the other)
@@ -875,9 +879,9 @@ pub(crate) fn select(
             keeps_the_response_as(leading, &scores, &c.scores, has_heldout, settings.replicates, &ruler)
         };
         let passes = |c: &Candidate| {
-            let repairs = !leading
+            let exempt = !leading
                 && (repairs_the_response(&scores, &c.scores, has_heldout, &ruler) || fits_far_better(g_fit, c.gap_fit));
-            closes_enough((g_fit, g_key), (c.gap_fit, key(c)), (noise_fit, noise_heldout), repairs)
+            closes_enough((g_fit, g_key), (c.gap_fit, key(c)), (noise_fit, noise_heldout), exempt)
         };
         let best = if leading {
             candidates.iter().find(|c| keeps(c)).filter(|c| passes(c))
@@ -1259,8 +1263,8 @@ mod tests {
         assert!(stands_out(&round[0], &round[..1], &all, 5.37, true, 1.0));
         let ahead = [with_key(Effect::FrictionHysteresis, 5.37), with_key(Effect::Stiction, 35.3)];
         assert!(stands_out(&ahead[0], &ahead, &all, 61.6, true, 1.0));
-        let refused = |c: &Candidate| c.effect == Effect::ColouredFrictionNoise;
-        assert!(stands_out(&round[0], &round, &refused, 5.37, true, 1.0));
+        let keeps_only_the_noise = |c: &Candidate| c.effect == Effect::ColouredFrictionNoise;
+        assert!(stands_out(&round[0], &round, &keeps_only_the_noise, 5.37, true, 1.0));
     }
 
     #[test]
