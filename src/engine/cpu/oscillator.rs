@@ -26,6 +26,7 @@
 //! | time inside a period | span start + `k · h` in f64 | the same in f32, boundary position `frac · S / 2³²` by `mulhilo` | f32 cannot hold 32.32 fixed point; both switch noise at the same instants |
 //! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
+//! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; both are within 1e-15 (f64) of the direct value |
 //! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all, then events one lane at a time (`run_period`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
 //!
 //! Output samples (records) between noise boundaries split steps on the CPU
@@ -33,7 +34,7 @@
 //! kernel writes those itself.
 
 use crate::engine::cpu::effects;
-use crate::engine::effects::{ColourForm, HysteresisForm, STICTION_DECAY_M, StictionForm};
+use crate::engine::effects::{ColourForm, EffectParams, HysteresisForm, STICTION_DECAY_M, StictionForm};
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
 
@@ -87,6 +88,31 @@ impl Trig {
     fn rotated(self, by: Trig) -> Trig {
         Trig { cos: self.cos * by.cos - self.sin * by.sin, sin: self.sin * by.cos + self.cos * by.sin }
     }
+}
+
+/// The normal force's harmonics (N) at `interval_phase` (of the excitation
+/// period, –): Σ A_k w(cos((k+1)θ + φ_k)), θ = 2π · `interval_phase`, each
+/// cosine by angle addition from one `sin_cos` of θ ((k+1)θ by repeated
+/// rotation, then φ_k's stored cos and sin) instead of a `cos` per harmonic.
+fn harmonics_n(e: &EffectParams, interval_phase: f64) -> f64 {
+    if e.harmonic_amplitudes_n.iter().all(|&a| a == 0.0) {
+        return 0.0;
+    }
+    let base = Trig::at(std::f64::consts::TAU * interval_phase);
+    let mut multiple = base;
+    let mut sum_n = 0.0;
+    for k in 0..4 {
+        if k > 0 {
+            multiple = multiple.rotated(base);
+        }
+        if e.harmonic_amplitudes_n[k] != 0.0 {
+            let (cos_phase, sin_phase) = e.harmonic_phase_cos_sin[k];
+            let c = multiple.cos * cos_phase - multiple.sin * sin_phase;
+            sum_n += e.harmonic_amplitudes_n[k]
+                * effects::harmonic_wave(e.harmonic_form, c, e.harmonic_shape, e.harmonic_shape_mean);
+        }
+    }
+    sum_n
 }
 
 /// One RK4 step of the slip ODE, with what the phase quadrature needs: the
@@ -269,15 +295,7 @@ impl<'a> Path<'a> {
         let t_s = self.interval as f64 * o.noise_interval_s;
         let mean_n = o.normal_force_mean_n
             * effects::drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
-        let theta = std::f64::consts::TAU * self.interval_phase;
-        let mut harmonics_n = 0.0;
-        for k in 0..4 {
-            if e.harmonic_amplitudes_n[k] != 0.0 {
-                let c = ((k + 1) as f64 * theta + e.harmonic_phases_rad[k]).cos();
-                harmonics_n += e.harmonic_amplitudes_n[k]
-                    * effects::harmonic_wave(e.harmonic_form, c, e.harmonic_shape, e.harmonic_shape_mean);
-            }
-        }
+        let harmonics_n = harmonics_n(e, self.interval_phase);
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
             StictionForm::Noisy if e.stiction_excess != 0.0 => {
@@ -931,6 +949,30 @@ impl Sampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn harmonics_by_angle_addition_match_a_cos_per_harmonic() {
+        let effects = crate::engine::effects::Effects {
+            normal_force_harmonics: Some(crate::engine::effects::NormalForceHarmonics {
+                form: crate::engine::effects::HarmonicForm::Fourier,
+                amplitudes_n: [1.5, 0.0, 0.7, 0.3],
+                amplitudes_per_n0: [0.0, 0.01, 0.0, 0.0],
+                phases_rad: [0.4, -2.0, 3.1, -0.9],
+                shape: 2.0,
+            }),
+            ..Default::default()
+        };
+        let e = EffectParams::new(&effects, 20.0, 0.3, 1.0 / 600.0);
+        for i in 0..1000 {
+            let phase = i as f64 * 0.001_234_567;
+            let theta = std::f64::consts::TAU * phase;
+            let direct: f64 = (0..4)
+                .map(|k| e.harmonic_amplitudes_n[k] * ((k + 1) as f64 * theta + e.harmonic_phases_rad[k]).cos())
+                .sum();
+            assert!((harmonics_n(&e, phase) - direct).abs() < 1e-14, "phase {phase}");
+        }
+        assert_eq!(harmonics_n(&EffectParams::default(), 0.3), 0.0);
+    }
 
     #[test]
     fn small_turns_match_sin_cos() {

@@ -12,6 +12,9 @@ pub struct EffectParams {
     pub harmonic_amplitudes_n: [f64; 4],
     /// rad
     pub harmonic_phases_rad: [f64; 4],
+    /// (cos, sin) of each phase, so the CPU reference turns the phase by
+    /// angle addition instead of a `cos` per harmonic per noise interval.
+    pub harmonic_phase_cos_sin: [(f64, f64); 4],
     pub harmonic_shape: f64,
     /// Mean of max(0, cos)^shape over a period (bumps form).
     pub harmonic_shape_mean: f64,
@@ -65,6 +68,10 @@ impl EffectParams {
             p.harmonic_form = h.form;
             p.harmonic_amplitudes_n = std::array::from_fn(|k| h.amplitudes_n[k] + h.amplitudes_per_n0[k] * n0);
             p.harmonic_phases_rad = h.phases_rad;
+            p.harmonic_phase_cos_sin = h.phases_rad.map(|phase| {
+                let (sin, cos) = phase.sin_cos();
+                (cos, sin)
+            });
             p.harmonic_shape = h.shape;
             p.harmonic_shape_mean = bump_mean(h.shape);
         }
