@@ -20,9 +20,8 @@
 //! own noise: it must not make that response worse at all beyond it, and
 //! it must close more of the key gap than every other effect of its round
 //! that keeps the response does, beyond that gap's noise ([`stands_out`]):
-//! a fall that any effect
-//! would give is the leftover misfit of the forms already in, not an
-//! attribution.
+//! a fall that any effect would give is the leftover misfit of the forms
+//! already in, not an attribution.
 
 use std::collections::BTreeMap;
 
@@ -869,8 +868,8 @@ pub(crate) fn select(
         // left (or, for a further effect, repairs the response or fits far
         // better); a further effect must also close more of the key gap
         // than its rivals ([`stands_out`]). For the leading effect only the
-        // best is considered: when it fails, the
-        // verdict is `none`, not a worse-fitting effect. A further effect
+        // best is considered: when it fails, the verdict is `none`, not a
+        // worse-fitting effect. A further effect
         // is the best one that passes: a rival that fits the held-out units
         // better but the fitting ones worse (it trades one for the other)
         // does not end the search.

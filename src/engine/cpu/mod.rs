@@ -264,10 +264,10 @@ pub(crate) fn simulate_paths(
 /// several in parallel (a diagnosis simulates its units side by side), whose
 /// caller fills the cores.
 fn lane_width(tasks: usize) -> usize {
-    let threads = rayon::current_num_threads();
     if rayon::current_thread_index().is_some() {
         return LANES;
     }
+    let threads = rayon::current_num_threads();
     LANE_WIDTHS.into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
 }
 
