@@ -86,6 +86,10 @@ pub struct BenchmarkRow {
     /// Whether the calibrated baseline's gap was within its noise threshold
     /// of the noise floor.
     pub baseline_within_noise: bool,
+    /// For a two-effect set, how much the data weigh each hidden effect
+    /// (in `truth`'s order): [`error_against_truth`] of the truth without
+    /// that effect, over every condition. Empty otherwise.
+    pub data_weights: Vec<f64>,
     /// Time of the diagnosis, s.
     pub seconds: f64,
 }
@@ -97,36 +101,20 @@ impl BenchmarkRow {
         self.verdict.first() == self.truth.first()
     }
 
+    /// Whether the data weigh the labelled leading effect (the generator's
+    /// strong one) more than the other (see [`BenchmarkRow::data_weights`]);
+    /// `None` for a set with fewer than two effects.
+    pub fn label_agrees_with_data(&self) -> Option<bool> {
+        match self.data_weights[..] {
+            [lead, other] => Some(lead > other),
+            _ => None,
+        }
+    }
+
     /// Whether exactly the hidden effects were named.
     pub fn all_right(&self) -> bool {
         self.verdict.len() == self.truth.len() && self.truth.iter().all(|e| self.verdict.contains(e))
     }
-}
-
-/// How far an effect moves the peak statistics, in units of their noise in
-/// one measured record: the largest over conditions of |Δ mean peak| / (sd of
-/// a record's mean peak) and |Δ peak variance| / (sd of a record's variance),
-/// from ensembles of the truth with and without the effect on the same noise.
-pub fn peak_shift_in_noise_units(
-    with: &Model,
-    without: &Model,
-    conditions: &[Condition],
-    shape: SetShape,
-    engine: &Engine,
-) -> Result<f64> {
-    let a = record_path_stats(engine, with, conditions, shape.duration_s, 32, 99, 60)?;
-    let b = record_path_stats(engine, without, conditions, shape.duration_s, 32, 99, 60)?;
-    let mut worst: f64 = 0.0;
-    for (pa, pb) in a.iter().zip(&b) {
-        let (ma, mb): (Vec<f64>, Vec<f64>) =
-            (pa.iter().map(|p| p.peak_mean_m).collect(), pb.iter().map(|p| p.peak_mean_m).collect());
-        let (va, vb): (Vec<f64>, Vec<f64>) =
-            (pa.iter().map(|p| p.peak_var_m2).collect(), pb.iter().map(|p| p.peak_var_m2).collect());
-        let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
-        worst = worst.max((mean(&ma) - mean(&mb)).abs() / (sd(&mb).max(1e-15) / runs));
-        worst = worst.max((mean(&va) - mean(&vb)).abs() / (sd(&vb).max(1e-30) / runs));
-    }
-    Ok(worst)
 }
 
 /// The error of `model` against `truth` at `conditions`: the mean over
@@ -262,6 +250,22 @@ pub fn run_benchmark(
             let fitted = error_against_truth(&d.fitted, &truth, &withheld, shape, engine)?;
             ((base > 0.0).then(|| 1.0 - fitted / base), moved > 4.0)
         };
+        // How far the data move without each of two hidden effects: the
+        // generator's "strong" and "moderate" are levels of different
+        // effects, and the data may weigh the moderate one more.
+        let data_weights = if planned.hidden.len() >= 2 {
+            planned
+                .hidden
+                .iter()
+                .map(|h| {
+                    let mut without = truth.clone();
+                    without.effects.remove(h.effect);
+                    error_against_truth(&without, &truth, &conditions, shape, engine)
+                })
+                .collect::<Result<Vec<f64>>>()?
+        } else {
+            Vec::new()
+        };
         let key0 = report.gap.heldout_baseline.unwrap_or(report.gap.baseline);
         let baseline_within_noise = key0 - NULL_HUBER <= report.gap.noise_threshold;
         let name = |v: &[Effect]| {
@@ -272,7 +276,7 @@ pub fn run_benchmark(
         let forms: Vec<String> =
             planned.hidden.iter().map(|h| format!("{}{}", h.form, if h.level == 1 { "s" } else { "m" })).collect();
         line(&format!(
-            "set {i:3}: truth {:<40} [{}{}] -> {:<40} conf {:.2} held-out shrink {} truth shrink {} ({seconds:.0} s)",
+            "set {i:3}: truth {:<40} [{}{}] -> {:<40} conf {:.2} held-out shrink {} truth shrink {}{} ({seconds:.0} s)",
             name(&truth_effects),
             forms.join(","),
             if planned.phase_only { " phase-only" } else { "" },
@@ -281,6 +285,14 @@ pub fn run_benchmark(
             report.gap.heldout_shrink.map_or("n/a".into(), |h| format!("{h:+.2}")),
             truth_shrink
                 .map_or("n/a".into(), |h| format!("{h:+.2}{}", if moves_statistics { "" } else { " (within noise)" })),
+            if data_weights.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " data weights {}",
+                    data_weights.iter().map(|w| format!("{w:.1}")).collect::<Vec<_>>().join("/")
+                )
+            },
         ));
         rows.push(BenchmarkRow {
             truth: truth_effects,
@@ -291,6 +303,7 @@ pub fn run_benchmark(
             truth_shrink,
             moves_statistics,
             baseline_within_noise,
+            data_weights,
             seconds,
         });
     }
@@ -369,6 +382,24 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         percent(both, pairs.len()),
         pairs.len(),
         percent(lead, pairs.len())
+    ));
+    // The label says which effect the generator made strong; the data may
+    // weigh the other more. Both readings, so that neither hides the other.
+    let agreeing: Vec<&BenchmarkRow> =
+        pairs.iter().copied().filter(|r| r.label_agrees_with_data() == Some(true)).collect();
+    let heavier_right = count(&pairs, &|r| {
+        let heavier = match r.data_weights[..] {
+            [a, b] if b > a => r.truth.get(1),
+            _ => r.truth.first(),
+        };
+        r.verdict.first() == heavier
+    });
+    text.push_str(&format!(
+        "two-effect sets whose data weigh the labelled leader more ({}): leading right {}/{}; every two-effect set, leading the effect the data weigh more: {heavier_right}/{} (data weight: the truth's error without the effect, mean squared z of peak mean, variance and phase over every condition)\n",
+        agreeing.len(),
+        count(&agreeing, &|r| r.leading_right()),
+        agreeing.len(),
+        pairs.len(),
     ));
     let (fp, within) = (count(&nulls, &|r| !r.verdict.is_empty()), count(&nulls, &|r| r.baseline_within_noise));
     text.push_str(&format!(

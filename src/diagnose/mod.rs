@@ -332,6 +332,11 @@ pub fn diagnose_set(
     let key0 = if has_heldout { gaps.1 } else { gaps.0 };
     let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
     let weights = search::response_weights(&selection.steps, &baseline_scores, &data, settings, engine)?;
+    if std::env::var_os("STICKSLIP_DEBUG").is_some() {
+        for (s, w) in selection.steps.iter().zip(&weights) {
+            eprintln!("response weight of {}: {w:?}", s.candidate.effect);
+        }
+    }
     let mut effects: Vec<NamedEffect> = selection
         .steps
         .iter()
