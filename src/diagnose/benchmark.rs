@@ -101,12 +101,12 @@ impl BenchmarkRow {
         self.verdict.first() == self.truth.first()
     }
 
-    /// Whether the data weigh the labelled leading effect (the generator's
-    /// strong one) more than the other (see [`BenchmarkRow::data_weights`]);
-    /// `None` for a set with fewer than two effects.
-    pub fn label_agrees_with_data(&self) -> Option<bool> {
+    /// The hidden effect the data weigh more (see
+    /// [`BenchmarkRow::data_weights`]; the labelled leader where they weigh
+    /// both alike); `None` for a set with fewer than two effects.
+    pub fn heavier_effect(&self) -> Option<Effect> {
         match self.data_weights[..] {
-            [lead, other] => Some(lead > other),
+            [lead, other] => self.truth.get(usize::from(other > lead)).copied(),
             _ => None,
         }
     }
@@ -386,14 +386,8 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     // The label says which effect the generator made strong; the data may
     // weigh the other more. Both readings, so that neither hides the other.
     let agreeing: Vec<&BenchmarkRow> =
-        pairs.iter().copied().filter(|r| r.label_agrees_with_data() == Some(true)).collect();
-    let heavier_right = count(&pairs, &|r| {
-        let heavier = match r.data_weights[..] {
-            [a, b] if b > a => r.truth.get(1),
-            _ => r.truth.first(),
-        };
-        r.verdict.first() == heavier
-    });
+        pairs.iter().copied().filter(|r| r.heavier_effect().as_ref() == r.truth.first()).collect();
+    let heavier_right = count(&pairs, &|r| r.heavier_effect().is_some_and(|e| r.verdict.first() == Some(&e)));
     text.push_str(&format!(
         "two-effect sets whose data weigh the labelled leader more ({}): leading right {}/{}; every two-effect set, leading the effect the data weigh more: {heavier_right}/{} (data weight: the truth's error without the effect, mean squared z of peak mean, variance and phase over every condition)\n",
         agreeing.len(),
