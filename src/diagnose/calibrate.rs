@@ -12,12 +12,12 @@
 use rayon::prelude::*;
 
 use crate::diagnose::data::Data;
-use crate::diagnose::features::least_squares;
 use crate::diagnose::features::run_features;
+use crate::diagnose::features::solve_normal;
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
-use crate::diagnose::simulate::{PathStats, ensemble_path_stats, replicates_of};
+use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fitting_records};
 use crate::diagnose::{DiagnoseSettings, mean};
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
@@ -329,7 +329,7 @@ pub(crate) fn calibrate_and_score(
     if let Some(measured) = data.measured_law {
         let mut m = model.clone();
         for _ in 0..if law_steps == 0 { LAW_STEPS } else { law_steps } {
-            let Some(simulated) = simulated_law(engine, &m, &measured, data, settings)? else { break };
+            let Some(simulated) = simulated_law(engine, &m, data, settings)? else { break };
             step_law(&mut m, &measured, &simulated);
         }
         let scores = score(engine, &m, data, settings, scope)?;
@@ -408,19 +408,16 @@ pub(crate) fn converge_law(
 /// normal force it lacks, in the benchmark), the simulated residual at that
 /// `c` stays above the measured one whatever σ_μ is, and the step drives
 /// σ_μ to its floor; searching `c` on both sides avoided that and did no
-/// better over the benchmark (`benches/RESULTS.md`).
+/// better over the benchmark (`benches/RESULTS.md`). The records are the
+/// ones the model's score on the fitting units reads ([`fitting_records`]):
+/// simulated once for both.
 fn simulated_law(
     engine: &Engine,
     model: &Model,
-    measured: &FrictionLaw,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
 ) -> Result<Option<FrictionLaw>> {
-    let units: Vec<usize> =
-        (0..data.units.len()).filter(|&i| !data.units[i].heldout && data.units[i].summary.is_none()).collect();
-    let runs: Vec<Run> = replicates_of(engine, model, data, settings, &units)?.into_iter().flatten().collect();
-    let runs: Vec<&Run> = runs.iter().collect();
-    Ok(SlipSamples::of(&runs, data.sensor.v_m_per_s).and_then(|samples| samples.fit_at(measured.c)))
+    Ok(fitting_records(engine, model, data, settings)?.law)
 }
 
 /// One step of the indirect inference, in curve space: the model's law
@@ -592,6 +589,9 @@ fn speed_deciles(speed: &[f64]) -> [f64; 10] {
     ranks.map(|rank| values[rank])
 }
 
+/// No friction law is fitted to fewer slipping samples than this.
+pub(crate) const MIN_SLIP_SAMPLES: usize = 50;
+
 /// A sample counts as slipping only beyond this many standard deviations of
 /// the velocity sensor's noise (and beyond 5% of its record's largest
 /// speed): a stuck block's measured speed is that noise alone, and its
@@ -601,96 +601,184 @@ fn speed_deciles(speed: &[f64]) -> [f64; 10] {
 /// friction has while slipping).
 const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
 
+/// The samples of one run that count as slipping: speed |v| (m/s) and
+/// μ = |F|/N, where |v| is above 5% of the run's largest and above
+/// [`SLIP_SPEED_NOISE_SDS`] standard deviations of the velocity sensor's
+/// white noise `v_noise_m_per_s` (m/s; the data's estimate, which the
+/// simulated records carry too, so both sides pick alike), the friction
+/// opposes the motion and N > 0. Empty without force channels.
+fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
+    let (mut speed, mut mu) = (Vec::new(), Vec::new());
+    let (Some(v), Some(f), Some(n)) = (&run.v_m_per_s, &run.friction_force, &run.normal_force) else {
+        return (speed, mu);
+    };
+    let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
+    for i in 0..v.len().min(f.len()).min(n.len()) {
+        if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] > 0.0 {
+            speed.push(v[i].abs());
+            mu.push(f[i].abs() / n[i]);
+        }
+    }
+    (speed, mu)
+}
+
+/// What the within-record fit of eq. 7 at one Stribeck rate `c` reads from
+/// slipping samples ([`SlipSamples::fit_at`]), as sums that add over
+/// records: the samples' count and sums of μ, s² and g(s) = 1/(1 + c s)
+/// (for the mean level `a`), and the cross products of the columns s², g
+/// and μ, each centred on its own record's mean (so a friction level that
+/// differs between records is not read as a curve). Records summed
+/// separately (in parallel, say) give the fit all of them give at once.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LawMoments {
+    count: usize,
+    /// Records with at least one sample.
+    records: usize,
+    sum_mu: f64,
+    sum_s2: f64,
+    sum_g: f64,
+    dd: f64,
+    dg: f64,
+    gg: f64,
+    dy: f64,
+    gy: f64,
+    yy: f64,
+}
+
+impl LawMoments {
+    /// The moments of one record's slipping samples (`speed`, m/s; `mu`, –)
+    /// at Stribeck rate `c` (s/m).
+    fn of_record(speed: &[f64], mu: &[f64], c: f64) -> LawMoments {
+        let n = speed.len();
+        if n == 0 {
+            return LawMoments::default();
+        }
+        let g = |s: f64| 1.0 / (1.0 + c * s);
+        let (sum_mu, sum_s2, sum_g) =
+            speed.iter().zip(mu).fold((0.0, 0.0, 0.0), |(m, d, q), (&s, &y)| (m + y, d + s * s, q + g(s)));
+        let (mean_mu, mean_s2, mean_g) = (sum_mu / n as f64, sum_s2 / n as f64, sum_g / n as f64);
+        let mut m = LawMoments { count: n, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
+        for (&s, &y) in speed.iter().zip(mu) {
+            let (d, q, y) = (s * s - mean_s2, g(s) - mean_g, y - mean_mu);
+            m.dd += d * d;
+            m.dg += d * q;
+            m.gg += q * q;
+            m.dy += d * y;
+            m.gy += q * y;
+            m.yy += y * y;
+        }
+        m
+    }
+
+    /// The moments of one run's slipping samples ([`slipping_samples`]) at
+    /// Stribeck rate `c` (s/m).
+    pub(crate) fn of_run(run: &Run, v_noise_m_per_s: f64, c: f64) -> LawMoments {
+        let (speed, mu) = slipping_samples(run, v_noise_m_per_s);
+        LawMoments::of_record(&speed, &mu, c)
+    }
+
+    /// How many samples the moments are of.
+    pub(crate) fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Adds another record's (or records') moments.
+    pub(crate) fn add(&mut self, other: &LawMoments) {
+        self.count += other.count;
+        self.records += other.records;
+        for (a, b) in [
+            (&mut self.sum_mu, other.sum_mu),
+            (&mut self.sum_s2, other.sum_s2),
+            (&mut self.sum_g, other.sum_g),
+            (&mut self.dd, other.dd),
+            (&mut self.dg, other.dg),
+            (&mut self.gg, other.gg),
+            (&mut self.dy, other.dy),
+            (&mut self.gy, other.gy),
+            (&mut self.yy, other.yy),
+        ] {
+            *a += b;
+        }
+    }
+
+    /// The least-squares law at Stribeck rate `c` (s/m, the rate the
+    /// moments were taken at) with `anchors_m_per_s`: linear in (b, d)
+    /// with basis (1/(1 + c s), s²) within records; `a` is the samples'
+    /// mean level, μ's mean less the curve's. At `c = 0` the Stribeck term
+    /// is part of `a` (reported as b = 0). Where |d| comes out beyond
+    /// [`MAX_D_S2_PER_M2`] (b and d trading off along a direction the
+    /// speeds cannot resolve) d is held at that bound and b refitted.
+    /// Otherwise not constrained: as a statistic of simulated records it
+    /// must be the same function as on the measured ones. `None` where the
+    /// fit is singular.
+    pub(crate) fn law(&self, c: f64, anchors_m_per_s: [f64; 10]) -> Option<FrictionLaw> {
+        let stribeck = c != 0.0;
+        // (b, d, residual sum of squares, fitted columns) with d free or
+        // held at `fixed_d` (μ less d s² fitted then).
+        let solve = |fixed_d: Option<f64>| -> Option<(f64, f64, f64, usize)> {
+            let fd = fixed_d.unwrap_or(0.0);
+            let (gy, yy) = (self.gy - fd * self.dg, self.yy - 2.0 * fd * self.dy + fd * fd * self.dd);
+            match (fixed_d, stribeck) {
+                (None, true) => {
+                    let (coef, rss) =
+                        solve_normal(&[[self.dd, 0.0], [self.dg, self.gg]], &[self.dy, self.gy], self.yy)?;
+                    Some((coef[1], coef[0], rss, 2))
+                }
+                (None, false) => {
+                    let (coef, rss) = solve_normal(&[[self.dd]], &[self.dy], self.yy)?;
+                    Some((0.0, coef[0], rss, 1))
+                }
+                (Some(_), true) => {
+                    let (coef, rss) = solve_normal(&[[self.gg]], &[gy], yy)?;
+                    Some((coef[0], fd, rss, 1))
+                }
+                (Some(_), false) => Some((0.0, fd, yy.max(0.0), 0)),
+            }
+        };
+        let (mut b, mut d, mut rss, mut p) = solve(None)?;
+        if d.abs() > MAX_D_S2_PER_M2 {
+            (b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
+        }
+        let n = self.count as f64;
+        let a = self.sum_mu / n - d * self.sum_s2 / n - b * self.sum_g / n;
+        let sigma = (rss.max(0.0) / (self.count.saturating_sub(p + self.records)).max(1) as f64).sqrt();
+        Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s })
+    }
+}
+
 impl SlipSamples {
-    /// The slipping samples of `runs`, whose velocity channel carries white
-    /// sensor noise of `v_noise_m_per_s` (m/s; the data's estimate, which
-    /// the simulated records carry too, so both sides pick alike).
+    /// The slipping samples of `runs` ([`slipping_samples`]), whose
+    /// velocity channel carries white sensor noise of `v_noise_m_per_s`
+    /// (m/s); `None` with fewer than 50.
     fn of(runs: &[&Run], v_noise_m_per_s: f64) -> Option<SlipSamples> {
         let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
         for (k, r) in runs.iter().enumerate() {
-            let (Some(v), Some(f), Some(n)) = (&r.v_m_per_s, &r.friction_force, &r.normal_force) else { continue };
-            let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
-            for i in 0..v.len().min(f.len()).min(n.len()) {
-                if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] > 0.0 {
-                    speed.push(v[i].abs());
-                    mu.push(f[i].abs() / n[i]);
-                    record.push(k);
-                }
-            }
+            let (s, m) = slipping_samples(r, v_noise_m_per_s);
+            record.extend(std::iter::repeat_n(k, s.len()));
+            speed.extend(s);
+            mu.extend(m);
         }
-        if mu.len() < 50 {
+        if mu.len() < MIN_SLIP_SAMPLES {
             return None;
         }
         let anchors_m_per_s = speed_deciles(&speed);
         Some(SlipSamples { speed, mu, record, anchors_m_per_s })
     }
 
-    /// Least squares at a given `c`, within records: linear in (b, d) with
-    /// basis (1/(1 + c s), s²) and one level per record (each record's means
-    /// of μ and of the basis removed, so a friction level that differs
-    /// between records — with the load, over a drift — is not read as a
-    /// Stribeck curve: the curve comes from how μ varies with speed inside
-    /// each record). `a` is the samples' mean level, μ's mean less the
-    /// curve's. At `c = 0` the Stribeck term is part of `a` (reported as
-    /// b = 0). Where |d| comes out beyond [`MAX_D_S2_PER_M2`] (b and d
-    /// trading off along a direction the speeds cannot resolve) d is held at
-    /// that bound and b refitted. Otherwise not constrained: as a statistic
-    /// of simulated records it must be the same function as on the measured
-    /// ones. With one record this is the ordinary fit with an intercept.
+    /// The within-record least-squares law at a given `c` (s/m; see
+    /// [`LawMoments::law`]), with these samples' anchors. With one record
+    /// this is the ordinary fit with an intercept.
     fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
-        let n = self.mu.len();
-        let stribeck = c != 0.0;
-        let g = |s: f64| 1.0 / (1.0 + c * s);
-        // Per-record means of μ, s² and g(s).
-        let records = self.record.iter().max().map_or(0, |&k| k + 1);
-        let mut means = vec![[0.0f64; 3]; records];
-        let mut counts = vec![0usize; records];
-        for i in 0..n {
-            let (k, s) = (self.record[i], self.speed[i]);
-            let m = &mut means[k];
-            m[0] += self.mu[i];
-            m[1] += s * s;
-            m[2] += g(s);
-            counts[k] += 1;
+        let mut moments = LawMoments::default();
+        let mut start = 0;
+        // Samples are grouped by record (in the order they were collected).
+        while start < self.record.len() {
+            let end = start + self.record[start..].iter().take_while(|&&k| k == self.record[start]).count();
+            moments.add(&LawMoments::of_record(&self.speed[start..end], &self.mu[start..end], c));
+            start = end;
         }
-        for (m, &count) in means.iter_mut().zip(&counts) {
-            m.iter_mut().for_each(|x| *x /= count.max(1) as f64);
-        }
-        let used = counts.iter().filter(|&&c| c > 0).count();
-        let solve = |fixed_d: Option<f64>| -> Option<(f64, f64, f64, usize)> {
-            let p = usize::from(stribeck) + usize::from(fixed_d.is_none());
-            let basis = |i: usize, row: &mut [f64]| {
-                let (m, s) = (&means[self.record[i]], self.speed[i]);
-                let mut j = 0;
-                if fixed_d.is_none() {
-                    row[j] = s * s - m[1];
-                    j += 1;
-                }
-                if stribeck {
-                    row[j] = g(s) - m[2];
-                }
-            };
-            let fd = fixed_d.unwrap_or(0.0);
-            let y = |i: usize| {
-                let (m, s) = (&means[self.record[i]], self.speed[i]);
-                (self.mu[i] - m[0]) - fd * (s * s - m[1])
-            };
-            let (coef, rss) =
-                if p == 0 { (Vec::new(), (0..n).map(|i| y(i).powi(2)).sum()) } else { least_squares(n, p, basis, y)? };
-            let d = fixed_d.unwrap_or_else(|| coef[0]);
-            let b = if stribeck { coef[p - 1] } else { 0.0 };
-            Some((b, d, rss, p))
-        };
-        let (mut b, mut d, mut rss, mut p) = solve(None)?;
-        if d.abs() > MAX_D_S2_PER_M2 {
-            (b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
-        }
-        // The mean level: μ's sample mean less the curve's (b = 0 at c = 0).
-        let total = |j: usize| means.iter().zip(&counts).map(|(m, &k)| m[j] * k as f64).sum::<f64>() / n as f64;
-        let a = total(0) - d * total(1) - b * total(2);
-        let sigma = (rss.max(0.0) / (n - p - used).max(1) as f64).sqrt();
-        Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s: self.anchors_m_per_s })
+        moments.law(c, self.anchors_m_per_s)
     }
 
     /// The law with the smallest residual: over [`law_c_grid`], then by
@@ -741,6 +829,7 @@ pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<Fr
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::features::least_squares;
     use crate::engine::Sample;
     use rand::rngs::StdRng;
     use rand::{RngExt, SeedableRng};
@@ -862,6 +951,50 @@ mod tests {
         // The level is the two records' mean (they hold about as many
         // slipping samples each).
         assert!((mu(&law, 0.1) - mu(&truth, 0.1)).abs() < 0.01, "{law:?}");
+    }
+
+    /// The law from moments summed record by record (as the diagnosis sums
+    /// its replicates' in parallel) is the ordinary least-squares fit of
+    /// μ − its record's mean on the centred columns (s², g(s)), solved here
+    /// directly on the pooled rows, with and without the Stribeck term.
+    #[test]
+    fn moments_added_by_record_give_the_pooled_least_squares_fit() {
+        let runs = [record_d(0.22, 0.1, 20.0, 0.3, 0.03, 7), record_at(0.30, 0.1, 20.0, 0.3, 0.02, 8, 0.2)];
+        for c in [0.0, 20.0] {
+            let mut moments = LawMoments::default();
+            runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, 0.0, c)));
+            let law = moments.law(c, [0.0; 10]).unwrap();
+            let records: Vec<(Vec<f64>, Vec<f64>)> = runs.iter().map(|r| slipping_samples(r, 0.0)).collect();
+            let g = |s: f64| 1.0 / (1.0 + c * s);
+            let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+            let mut rows = Vec::new();
+            for (speed, mu) in &records {
+                let (s2, gs): (Vec<f64>, Vec<f64>) = speed.iter().map(|&s| (s * s, g(s))).unzip();
+                let (m_mu, m_s2, m_g) = (mean(mu), mean(&s2), mean(&gs));
+                rows.extend((0..mu.len()).map(|i| (s2[i] - m_s2, gs[i] - m_g, mu[i] - m_mu)));
+            }
+            let p = if c == 0.0 { 1 } else { 2 };
+            let (coef, rss) = least_squares(
+                rows.len(),
+                p,
+                |i, row| {
+                    row[0] = rows[i].0;
+                    if p == 2 {
+                        row[1] = rows[i].1;
+                    }
+                },
+                |i| rows[i].2,
+            )
+            .unwrap();
+            let b = if p == 2 { coef[1] } else { 0.0 };
+            assert!((law.d - coef[0]).abs() < 1e-9 && (law.b - b).abs() < 1e-9, "c {c}: {law:?} against {coef:?}");
+            let sigma = (rss / (rows.len() - p - records.len()) as f64).sqrt();
+            assert!((law.sigma / sigma - 1.0).abs() < 1e-9, "c {c}: {law:?} against sigma {sigma}");
+            // At the records' own c the fit finds their curve.
+            if c == 20.0 {
+                assert!((law.d - 0.3).abs() < 0.05, "the fit should find the records' d, {law:?}");
+            }
+        }
     }
 
     /// A stuck block's measured speed is the velocity sensor's noise, and

@@ -11,6 +11,7 @@ use crate::diagnose::calibrate::{self, FrictionLaw};
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::measure::{MeasurementSet, Run};
 use crate::diagnose::observable::Observable;
+use crate::diagnose::simulate::RecordCache;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::cpu::effects::drift_factor;
@@ -53,6 +54,9 @@ pub(crate) struct Data<'a> {
     /// realisation): the same for every model, so drawn once per diagnosis
     /// (they were a tenth of its time).
     pub(crate) sensor_draws: SensorDraws,
+    /// What the last models' replicate records of the fitting units gave
+    /// (features, the law's moments): each record simulated once.
+    pub(crate) fitting_records: RecordCache,
 }
 
 /// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,
@@ -359,6 +363,7 @@ impl<'a> Data<'a> {
             sensor,
             hold_out,
             sensor_draws: SensorDraws::default(),
+            fitting_records: RecordCache::default(),
         })
     }
 

@@ -6,9 +6,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::diagnose::data::Data;
-use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
+use crate::diagnose::features::RunFeatures;
 use crate::diagnose::observable::Observable;
-use crate::diagnose::simulate::{path_stats_per_condition, replicates};
+use crate::diagnose::simulate::{features_of, fitting_records, path_stats_per_condition, replicates};
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
@@ -188,11 +188,13 @@ pub(crate) fn score(
             }
         }
     }
-    // Time series: simulated replicate records through the same feature code.
-    let run_units: Vec<usize> = (0..data.units.len())
-        .filter(|&i| data.units[i].summary.is_none() && (scope == Scope::All || !data.units[i].heldout))
-        .collect();
-    scores.extend(record_scores(engine, model, data, settings, &run_units)?);
+    // Time series: simulated replicate records through the same feature
+    // code, the fitting units' as the law's calibration reads them too.
+    let fitting = fitting_records(engine, model, data, settings)?;
+    scores.extend(scores_of_records(data, &fitting.units, &fitting.features));
+    if scope == Scope::All {
+        scores = add_heldout(engine, model, data, settings, scores)?;
+    }
     Ok(scores)
 }
 
@@ -204,17 +206,17 @@ fn record_scores(
     settings: &DiagnoseSettings,
     run_units: &[usize],
 ) -> Result<Vec<Score>> {
-    let mut scores = Vec::new();
     let simulated: Vec<Vec<RunFeatures>> = run_units
         .par_iter()
-        .map(|&u| {
-            let runs = replicates(engine, model, data, settings, u)?;
-            // The replicates of a unit are sampled alike: one grid serves them.
-            let Some(first) = runs.first() else { return Ok(Vec::new()) };
-            let grid = SampleGrid::of(first);
-            Ok(runs.iter().map(|r| run_features_on(r, &grid)).collect())
-        })
+        .map(|&u| Ok(features_of(&replicates(engine, model, data, settings, u, 0..settings.replicates)?)))
         .collect::<Result<_>>()?;
+    Ok(scores_of_records(data, run_units, &simulated))
+}
+
+/// The scores of record units `run_units` given their simulated replicates'
+/// features (`simulated[k]` for unit `run_units[k]`).
+fn scores_of_records(data: &Data<'_>, run_units: &[usize], simulated: &[Vec<RunFeatures>]) -> Vec<Score> {
+    let mut scores = Vec::new();
     for (&i, sims) in run_units.iter().zip(simulated) {
         let u = &data.units[i];
         let n_meas = u.runs.len() as f64;
@@ -243,5 +245,5 @@ fn record_scores(
             });
         }
     }
-    Ok(scores)
+    scores
 }

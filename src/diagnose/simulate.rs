@@ -3,9 +3,14 @@
 //! are the same for every model, so differences between models are not
 //! noise), and per-path peak statistics of small ensembles.
 
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
 use rayon::prelude::*;
 
+use crate::diagnose::calibrate::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
 use crate::diagnose::data::Data;
+use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
@@ -24,7 +29,8 @@ const REPLICATE_STRIDE: u32 = 1000;
 /// 7 Hz on the paper's rig).
 const REPLICATE_STEPS_PER_PERIOD: u32 = 32;
 
-/// Replicates `0..settings.replicates` of unit `unit` under `model`: records
+/// Replicates `numbers` (of `0..settings.replicates`, say) of unit `unit`
+/// under `model`: records
 /// as long as the unit's, sampled like the data (at the noise boundaries,
 /// the noise interval being the data's sample interval), with the
 /// measurement noise estimated on the data added.
@@ -34,16 +40,22 @@ pub(crate) fn replicates(
     data: &Data<'_>,
     settings: &DiagnoseSettings,
     unit: usize,
+    numbers: std::ops::Range<u32>,
 ) -> Result<Vec<Run>> {
+    if numbers.is_empty() {
+        return Ok(Vec::new());
+    }
     let mut model = model.clone();
     model.solver.steps_per_period = model.solver.steps_per_period.min(REPLICATE_STEPS_PER_PERIOD);
     let condition = data.simulated_condition(&data.units[unit], &model, settings.warmup_cycles);
     let points = [Point::steady(&model, condition)];
-    let first_realisation = REPLICATE_STRIDE * unit as u32;
+    // Each replicate's noise is keyed by its realisation number alone, so a
+    // replicate is the same record whichever others are simulated with it.
+    let first_realisation = REPLICATE_STRIDE * unit as u32 + numbers.start;
     let job = Job {
         model: &model,
         points: &points,
-        realisations: settings.replicates,
+        realisations: numbers.len() as u32,
         first_realisation,
         seed: settings.seed,
         plan: RunPlan { warmup_cycles: settings.warmup_cycles, measured_cycles: 0 },
@@ -87,16 +99,127 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
     }
 }
 
-/// The replicates of several units, unit by unit (in `units`' order), with
-/// the units simulated in parallel.
-pub(crate) fn replicates_of(
+/// The features of a unit's replicate records (sampled alike: one grid
+/// serves them all).
+pub(crate) fn features_of(runs: &[Run]) -> Vec<RunFeatures> {
+    let Some(first) = runs.first() else { return Vec::new() };
+    let grid = SampleGrid::of(first);
+    runs.iter().map(|r| run_features_on(r, &grid)).collect()
+}
+
+/// What the diagnosis reads from one replicate record: its features, and
+/// the moments of its slipping samples for the friction law's fit at the
+/// measured law's Stribeck rate (where there is a measured law).
+#[derive(Clone, Debug)]
+struct RecordReading {
+    features: RunFeatures,
+    moments: Option<LawMoments>,
+}
+
+/// What the diagnosis reads from a model's replicate records of the data's
+/// fitting units (time-series units that are not held out): each record's
+/// features, and the friction law fitted to their slipping samples.
+pub(crate) struct FittingRecords {
+    /// The fitting units, in unit order.
+    pub(crate) units: Vec<usize>,
+    /// Per unit of `units`, its replicates' features.
+    pub(crate) features: Vec<Vec<RunFeatures>>,
+    /// The law of eq. 7 fitted within records to all of their slipping
+    /// samples at the measured law's Stribeck rate `c` (`None` without a
+    /// measured law or with fewer than 50 slipping samples). It carries no
+    /// anchors: a simulated law is read through `mu` and `sigma` alone.
+    pub(crate) law: Option<FrictionLaw>,
+}
+
+/// How many models' readings a diagnosis keeps.
+const KEPT_MODELS: usize = 64;
+
+/// The readings of the fitting units' replicate records ([`RecordReading`],
+/// per unit, replicates `0..n` in order) of the last [`KEPT_MODELS`] models,
+/// by (model, noise seed, warm-up). A law step reads the records of the
+/// model it steps from, which were simulated to score that model a moment
+/// before (or the reverse), and a form's best model, searched on half the
+/// replicates, is then calibrated on all of them: every step of a law's
+/// convergence simulated each model twice, and the first half of a search's
+/// best model's replicates were simulated again. A replicate record is
+/// determined by (model, seed, warm-up, unit, replicate number), so each is
+/// simulated once.
+#[derive(Default)]
+pub(crate) struct RecordCache(Mutex<VecDeque<KeptReadings>>);
+
+/// A model's readings, with the noise seed and warm-up periods they were
+/// simulated with.
+type KeptReadings = (Model, u64, u32, Vec<Vec<RecordReading>>);
+
+impl RecordCache {
+    /// The readings kept for `model` under `settings` (per fitting unit,
+    /// the replicates simulated so far), if any.
+    fn get(&self, model: &Model, settings: &DiagnoseSettings) -> Option<Vec<Vec<RecordReading>>> {
+        let kept = self.0.lock().expect("record cache lock");
+        kept.iter()
+            .find(|(m, seed, warmup, _)| m == model && *seed == settings.seed && *warmup == settings.warmup_cycles)
+            .map(|(_, _, _, readings)| readings.clone())
+    }
+
+    /// Keeps `readings` for `model` under `settings` (replacing what was
+    /// kept for it).
+    fn insert(&self, model: &Model, settings: &DiagnoseSettings, readings: Vec<Vec<RecordReading>>) {
+        let mut kept = self.0.lock().expect("record cache lock");
+        kept.retain(|(m, seed, warmup, _)| {
+            !(m == model && *seed == settings.seed && *warmup == settings.warmup_cycles)
+        });
+        if kept.len() == KEPT_MODELS {
+            kept.pop_front();
+        }
+        kept.push_back((model.clone(), settings.seed, settings.warmup_cycles, readings));
+    }
+}
+
+/// The [`FittingRecords`] of `model`'s replicates `0..settings.replicates`
+/// of every fitting unit (the units simulated in parallel), each record
+/// simulated once per diagnosis ([`RecordCache`]).
+pub(crate) fn fitting_records(
     engine: &Engine,
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
-    units: &[usize],
-) -> Result<Vec<Vec<Run>>> {
-    units.par_iter().map(|&u| replicates(engine, model, data, settings, u)).collect()
+) -> Result<Arc<FittingRecords>> {
+    let units: Vec<usize> =
+        (0..data.units.len()).filter(|&i| data.units[i].summary.is_none() && !data.units[i].heldout).collect();
+    let wanted = settings.replicates as usize;
+    let mut readings = data.fitting_records.get(model, settings).unwrap_or_else(|| vec![Vec::new(); units.len()]);
+    if readings.iter().any(|r| r.len() < wanted) {
+        let c = data.measured_law.map(|law| law.c);
+        let sensor_v = data.sensor.v_m_per_s;
+        let more: Vec<Vec<RecordReading>> = units
+            .par_iter()
+            .zip(&readings)
+            .map(|(&u, kept)| {
+                let runs = replicates(engine, model, data, settings, u, kept.len() as u32..settings.replicates)?;
+                let features = features_of(&runs);
+                Ok(runs
+                    .iter()
+                    .zip(features)
+                    .map(|(run, features)| RecordReading {
+                        features,
+                        moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
+                    })
+                    .collect())
+            })
+            .collect::<Result<_>>()?;
+        for (kept, more) in readings.iter_mut().zip(more) {
+            kept.extend(more);
+        }
+        data.fitting_records.insert(model, settings, readings.clone());
+    }
+    let features = readings.iter().map(|r| r[..wanted].iter().map(|x| x.features.clone()).collect()).collect();
+    let law = data.measured_law.and_then(|measured| {
+        let mut moments = LawMoments::default();
+        readings.iter().flat_map(|r| &r[..wanted]).filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
+        // As few slipping samples as the measured law is refused for.
+        (moments.count() >= MIN_SLIP_SAMPLES).then(|| moments.law(measured.c, [0.0; 10])).flatten()
+    });
+    Ok(Arc::new(FittingRecords { units, features, law }))
 }
 
 /// One realisation's statistics over its measured periods.
@@ -228,5 +351,33 @@ mod tests {
         // Not what one length for all would give.
         let one_length = ensemble_path_stats(&engine, &model, &conditions[1..2], 30, 3, 5, 4).expect("runs");
         assert_ne!(together[1], one_length[0]);
+    }
+    /// A model's fitting records read with replicates 0..2 kept and 2..4
+    /// simulated on top are those of all four simulated at once (in a
+    /// fresh diagnosis): features record by record and the friction law.
+    #[test]
+    fn records_kept_and_added_are_those_simulated_at_once() {
+        let dir = std::env::temp_dir().join(format!("stickslip-records-kept-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let truth = Model::paper_rig(&[]).expect("the paper rig");
+        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
+        let shape =
+            crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 3.0, sample_rate_hz: 600.0 };
+        crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 3).expect("set");
+        let set = crate::diagnose::measure::read_measurement_set(&dir).expect("read");
+        let _ = std::fs::remove_dir_all(&dir);
+        let engine = Engine::cpu("test");
+        let settings = |replicates| DiagnoseSettings { replicates, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let stepwise = Data::new(&set).expect("data");
+        fitting_records(&engine, &truth, &stepwise, &settings(2)).expect("two");
+        let added = fitting_records(&engine, &truth, &stepwise, &settings(4)).expect("four");
+        let at_once = fitting_records(&engine, &truth, &Data::new(&set).expect("data"), &settings(4)).expect("four");
+        assert!(!added.units.is_empty() && added.features.iter().all(|f| f.len() == 4));
+        assert_eq!(added.features, at_once.features);
+        let (law, law_at_once) = (added.law.expect("a law"), at_once.law.expect("a law"));
+        assert_eq!((law.a, law.b, law.d, law.sigma), (law_at_once.a, law_at_once.b, law_at_once.d, law_at_once.sigma));
+        // Fewer replicates read the first ones' records.
+        let two = fitting_records(&engine, &truth, &stepwise, &settings(2)).expect("two");
+        assert!(two.features.iter().zip(&at_once.features).all(|(a, b)| a[..] == b[..2]));
     }
 }

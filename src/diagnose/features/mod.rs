@@ -23,7 +23,7 @@ mod friction;
 mod record;
 mod stats;
 
-pub(crate) use stats::least_squares;
+pub(crate) use stats::{least_squares, solve_normal};
 
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;

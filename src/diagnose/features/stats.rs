@@ -183,7 +183,7 @@ impl Design {
 /// Solves normal equations accumulated like [`least_squares`] does (`ata`'s
 /// lower triangle, `aty`, `yty`) by Cholesky: the coefficients and the
 /// residual sum of squares, or `None` when they are (numerically) singular.
-pub(super) fn solve_normal<const P: usize>(ata: &[[f64; P]; P], aty: &[f64; P], yty: f64) -> Option<(Vec<f64>, f64)> {
+pub(crate) fn solve_normal<const P: usize>(ata: &[[f64; P]; P], aty: &[f64; P], yty: f64) -> Option<(Vec<f64>, f64)> {
     // Cholesky: ata = L Lᵀ.
     let mut l = [[0.0f64; P]; P];
     for a in 0..P {
