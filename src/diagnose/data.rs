@@ -11,7 +11,7 @@ use crate::diagnose::calibrate::{self, FrictionLaw};
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::measure::{MeasurementSet, Run};
 use crate::diagnose::observable::Observable;
-use crate::diagnose::simulate::RecordCache;
+use crate::diagnose::simulate::{RecordCache, UnitGrids};
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::cpu::effects::drift_factor;
@@ -57,6 +57,8 @@ pub(crate) struct Data<'a> {
     /// What the last models' replicate records of the fitting units gave
     /// (features, the law's moments): each record simulated once.
     pub(crate) fitting_records: RecordCache,
+    /// Each unit's simulated records' sample grid, made once.
+    pub(crate) grids: UnitGrids,
 }
 
 /// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,
@@ -364,6 +366,7 @@ impl<'a> Data<'a> {
             hold_out,
             sensor_draws: SensorDraws::default(),
             fitting_records: RecordCache::default(),
+            grids: UnitGrids::default(),
         })
     }
 

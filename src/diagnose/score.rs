@@ -208,7 +208,7 @@ fn record_scores(
 ) -> Result<Vec<Score>> {
     let simulated: Vec<Vec<RunFeatures>> = run_units
         .par_iter()
-        .map(|&u| Ok(features_of(&replicates(engine, model, data, settings, u, 0..settings.replicates)?)))
+        .map(|&u| Ok(features_of(data, u, &replicates(engine, model, data, settings, u, 0..settings.replicates)?)))
         .collect::<Result<_>>()?;
     Ok(scores_of_records(data, run_units, &simulated))
 }

@@ -3,7 +3,7 @@
 //! are the same for every model, so differences between models are not
 //! noise), and per-path peak statistics of small ensembles.
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
@@ -99,12 +99,33 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
     }
 }
 
-/// The features of a unit's replicate records (sampled alike: one grid
-/// serves them all).
-pub(crate) fn features_of(runs: &[Run]) -> Vec<RunFeatures> {
+/// The features of unit `unit`'s replicate records, on the unit's
+/// [`SampleGrid`] (made once per diagnosis: every model's records of a unit
+/// are sampled at the same times, and the grid's base trigonometry and
+/// normal-force design were a tenth of a diagnosis's time when made for
+/// every model).
+pub(crate) fn features_of(data: &Data<'_>, unit: usize, runs: &[Run]) -> Vec<RunFeatures> {
     let Some(first) = runs.first() else { return Vec::new() };
-    let grid = SampleGrid::of(first);
+    let grid = data.grids.of(unit, first);
     runs.iter().map(|r| run_features_on(r, &grid)).collect()
+}
+
+/// The [`SampleGrid`] of each unit's simulated records, made from the first
+/// record that needs it (and again should a record be sampled otherwise).
+#[derive(Default)]
+pub(crate) struct UnitGrids(Mutex<HashMap<usize, Arc<SampleGrid>>>);
+
+impl UnitGrids {
+    /// Unit `unit`'s grid, one that serves `run`.
+    fn of(&self, unit: usize, run: &Run) -> Arc<SampleGrid> {
+        let kept = self.0.lock().expect("grids lock").get(&unit).cloned();
+        if let Some(grid) = kept.filter(|g| g.serves(run)) {
+            return grid;
+        }
+        let grid = Arc::new(SampleGrid::of(run));
+        self.0.lock().expect("grids lock").insert(unit, Arc::clone(&grid));
+        grid
+    }
 }
 
 /// What the diagnosis reads from one replicate record: its features, and
@@ -196,7 +217,7 @@ pub(crate) fn fitting_records(
             .zip(&readings)
             .map(|(&u, kept)| {
                 let runs = replicates(engine, model, data, settings, u, kept.len() as u32..settings.replicates)?;
-                let features = features_of(&runs);
+                let features = features_of(data, u, &runs);
                 Ok(runs
                     .iter()
                     .zip(features)

@@ -8,9 +8,12 @@ use super::{
     MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
 };
 
+/// How many Stribeck rates the friction baseline tries.
+const STRIBECK_RATES: usize = 11;
+
 /// Grid of Stribeck rates `c` (in units of 1 / max|v|) tried by the friction baseline.
-fn stribeck_grid() -> impl Iterator<Item = f64> {
-    (0..11).map(|i| 0.3 * 10f64.powf(i as f64 * 0.4))
+fn stribeck_grid() -> [f64; STRIBECK_RATES] {
+    std::array::from_fn(|i| 0.3 * 10f64.powf(i as f64 * 0.4))
 }
 
 /// Friction-coefficient features (see [`FrictionFeatures`]).
@@ -38,9 +41,11 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
     // order, as a pass per fit).
     let m = mu.len();
     let y = |i: usize| mu[i] - mu_mean;
-    let rates: Vec<f64> = stribeck_grid().collect();
+    let rates: [f64; STRIBECK_RATES] = stribeck_grid();
     let mut quadratic = ([[0.0f64; 3]; 3], [0.0f64; 3], 0.0f64);
-    let mut stribeck = vec![([0.0f64; 4], 0.0f64); rates.len()];
+    // Per rate: the sums of g·1, g·s, g·s², g² and g·y, g = 1/(1 + c s),
+    // each an array over the rates (the rates' divisions side by side).
+    let mut stribeck = [[0.0f64; STRIBECK_RATES]; 5];
     for (i, &s) in speed.iter().enumerate() {
         let yi = y(i);
         let row = [1.0, s, s * s];
@@ -52,13 +57,14 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
                 ata[a][b] += row[a] * row[b];
             }
         }
-        for (&c, (extra, extra_y)) in rates.iter().zip(stribeck.iter_mut()) {
-            let g = 1.0 / (1.0 + c * s);
-            *extra_y += g * yi;
-            for b in 0..3 {
-                extra[b] += g * row[b];
-            }
-            extra[3] += g * g;
+        let g: [f64; STRIBECK_RATES] = std::array::from_fn(|k| 1.0 / (1.0 + rates[k] * s));
+        let [g_one, g_s, g_s2, g_g, g_y] = &mut stribeck;
+        for k in 0..STRIBECK_RATES {
+            g_y[k] += g[k] * yi;
+            g_one[k] += g[k] * row[0];
+            g_s[k] += g[k] * row[1];
+            g_s2[k] += g[k] * row[2];
+            g_g[k] += g[k] * g[k];
         }
     }
     let mut best: Option<(Vec<f64>, f64, Option<f64>)> = if m >= 3 {
@@ -66,16 +72,18 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
     } else {
         None
     };
-    for (&c, (extra, extra_y)) in rates.iter().zip(&stribeck) {
+    for (k, &c) in rates.iter().enumerate() {
         if m < 4 {
             break;
         }
+        let [g_one, g_s, g_s2, g_g, g_y] = &stribeck;
+        let (extra, extra_y) = ([g_one[k], g_s[k], g_s2[k], g_g[k]], g_y[k]);
         let mut ata = [[0.0f64; 4]; 4];
         for (row, shared) in ata.iter_mut().zip(&quadratic.0) {
             row[..3].copy_from_slice(shared);
         }
-        ata[3] = *extra;
-        let aty = [quadratic.1[0], quadratic.1[1], quadratic.1[2], *extra_y];
+        ata[3] = extra;
+        let aty = [quadratic.1[0], quadratic.1[1], quadratic.1[2], extra_y];
         if let Some((coef, ssr)) = solve_normal(&ata, &aty, quadratic.2) {
             if best.as_ref().is_none_or(|b| ssr < b.1) {
                 best = Some((coef, ssr, Some(c)));

@@ -206,7 +206,7 @@ impl SampleGrid {
     }
 
     /// Whether `run` was sampled on this grid (bit for bit the same times and frequency).
-    fn serves(&self, run: &Run) -> bool {
+    pub(crate) fn serves(&self, run: &Run) -> bool {
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
         same(run.excitation_frequency_hz, self.excitation_frequency_hz)
             && run.t_s.len() == self.t_s.len()
