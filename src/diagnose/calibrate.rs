@@ -632,17 +632,27 @@ fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
 /// separately (in parallel, say) give the fit all of them give at once.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct LawMoments {
+    /// Samples.
     count: usize,
     /// Records with at least one sample.
     records: usize,
+    /// Σμ, –.
     sum_mu: f64,
+    /// Σs², m²/s².
     sum_s2: f64,
+    /// Σg, –.
     sum_g: f64,
+    /// Σ(s² − its record's mean)², m⁴/s⁴.
     dd: f64,
+    /// Σ(s² − mean)(g − mean), m²/s².
     dg: f64,
+    /// Σ(g − mean)², –.
     gg: f64,
+    /// Σ(s² − mean)(μ − mean), m²/s².
     dy: f64,
+    /// Σ(g − mean)(μ − mean), –.
     gy: f64,
+    /// Σ(μ − mean)², –.
     yy: f64,
 }
 

@@ -30,10 +30,9 @@ const REPLICATE_STRIDE: u32 = 1000;
 const REPLICATE_STEPS_PER_PERIOD: u32 = 32;
 
 /// Replicates `numbers` (of `0..settings.replicates`, say) of unit `unit`
-/// under `model`: records
-/// as long as the unit's, sampled like the data (at the noise boundaries,
-/// the noise interval being the data's sample interval), with the
-/// measurement noise estimated on the data added.
+/// under `model`: records as long as the unit's, sampled like the data (at
+/// the noise boundaries, the noise interval being the data's sample
+/// interval), with the measurement noise estimated on the data added.
 pub(crate) fn replicates(
     engine: &Engine,
     model: &Model,
@@ -102,8 +101,8 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
 /// The features of unit `unit`'s replicate records, on the unit's
 /// [`SampleGrid`] (made once per diagnosis: every model's records of a unit
 /// are sampled at the same times, and the grid's base trigonometry and
-/// normal-force design were a tenth of a diagnosis's time when made for
-/// every model).
+/// normal-force design, made for every model, cost several percent of a
+/// diagnosis).
 pub(crate) fn features_of(data: &Data<'_>, unit: usize, runs: &[Run]) -> Vec<RunFeatures> {
     let Some(first) = runs.first() else { return Vec::new() };
     let grid = data.grids.of(unit, first);
@@ -233,10 +232,11 @@ pub(crate) fn fitting_records(
         }
         data.fitting_records.insert(model, settings, readings.clone());
     }
-    let features = readings.iter().map(|r| r[..wanted].iter().map(|x| x.features.clone()).collect()).collect();
+    let features = readings.iter().map(|r| r.iter().take(wanted).map(|x| x.features.clone()).collect()).collect();
     let law = data.measured_law.and_then(|measured| {
         let mut moments = LawMoments::default();
-        readings.iter().flat_map(|r| &r[..wanted]).filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
+        let kept = readings.iter().flat_map(|r| r.iter().take(wanted));
+        kept.filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
         // As few slipping samples as the measured law is refused for.
         (moments.count() >= MIN_SLIP_SAMPLES).then(|| moments.law(measured.c, [0.0; 10])).flatten()
     });
@@ -373,6 +373,7 @@ mod tests {
         let one_length = ensemble_path_stats(&engine, &model, &conditions[1..2], 30, 3, 5, 4).expect("runs");
         assert_ne!(together[1], one_length[0]);
     }
+
     /// A model's fitting records read with replicates 0..2 kept and 2..4
     /// simulated on top are those of all four simulated at once (in a
     /// fresh diagnosis): features record by record and the friction law.
