@@ -203,7 +203,7 @@ pub(crate) fn fitting_records(
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
-) -> Result<Arc<FittingRecords>> {
+) -> Result<FittingRecords> {
     let units: Vec<usize> =
         (0..data.units.len()).filter(|&i| data.units[i].summary.is_none() && !data.units[i].heldout).collect();
     let wanted = settings.replicates as usize;
@@ -240,7 +240,7 @@ pub(crate) fn fitting_records(
         // As few slipping samples as the measured law is refused for.
         (moments.count() >= MIN_SLIP_SAMPLES).then(|| moments.law(measured.c, [0.0; 10])).flatten()
     });
-    Ok(Arc::new(FittingRecords { units, features, law }))
+    Ok(FittingRecords { units, features, law })
 }
 
 /// One realisation's statistics over its measured periods.
