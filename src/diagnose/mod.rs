@@ -121,10 +121,11 @@ pub struct NamedEffect {
     pub share: f64,
     /// –, in [0, 1].
     pub confidence: f64,
-    /// How much the fitted model's response loss (peaks and phases at the
-    /// held-out units, in the calibrated baseline's scale; –) rises when
-    /// this effect alone is taken out of it; `None` with a single effect,
-    /// or where the model does not run without it.
+    /// How far the fitted model's simulated response (peak and phase means
+    /// and variances at the fitting units) moves when this effect alone is
+    /// taken out of it: the mean squared move in the scores' spreads, –;
+    /// `None` with a single effect, or where the model does not run
+    /// without it.
     pub response_weight: Option<f64>,
 }
 
@@ -331,7 +332,7 @@ pub fn diagnose_set(
     let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;
     let key0 = if has_heldout { gaps.1 } else { gaps.0 };
     let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
-    let weights = search::response_weights(&selection.steps, &baseline_scores, &data, settings, engine)?;
+    let weights = search::response_weights(&selection.steps, &data, settings, engine)?;
     if std::env::var_os("STICKSLIP_DEBUG").is_some() {
         for (s, w) in selection.steps.iter().zip(&weights) {
             eprintln!("response weight of {}: {w:?}", s.candidate.effect);

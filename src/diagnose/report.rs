@@ -68,10 +68,11 @@ pub struct VerdictEffect {
     pub confidence: f64,
     /// The share of the baseline's explainable gap this effect closed, –.
     pub share_of_gap: f64,
-    /// How much the fitted model's response loss (held-out peaks and
-    /// phases, baseline's scale; –) rises without this effect; absent with
-    /// a single effect. The leading effect is the first added unless
-    /// another one's weight beats it beyond noise.
+    /// How far the fitted model's simulated response (peaks and phases at
+    /// the fitting units) moves without this effect, as a mean squared move
+    /// in the scores' spreads, –; absent with a single effect. The leading
+    /// effect is the first added unless another one's weight beats it
+    /// beyond noise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub response_weight: Option<f64>,
     /// The fitted parameters by name (names carry units).
@@ -431,7 +432,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     if d.effects.is_empty() {
         s.push_str("<p>The calibrated baseline model explains the data: no unmodelled effect lowered the gap on the held-out units by more than noise does.</p>");
     } else {
-        s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>response loss its removal adds</th><th>fitted parameters (unit, meaning)</th></tr>");
+        s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>response weight (move without it)</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
             s.push_str(&format!(
                 "<tr><td><b>{}</b></td><td style=\"text-align:left\">{}</td><td>{}</td><td>{:.2}</td><td>{:.0}%</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
@@ -440,11 +441,11 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
                 escape(e.form),
                 e.confidence,
                 100.0 * e.share,
-                e.response_weight.map_or("–".to_string(), |w| format!("{w:+.2}")),
+                e.response_weight.map_or("–".to_string(), |w| format!("{w:.2}")),
                 params(&e.parameters)
             ));
         }
-        s.push_str("</table><p class=\"note\">Confidence runs from 0 to 1. The share of the gap closed is the part of the baseline's gap above the noise floor that adding the effect removed. With several effects, the response loss its removal adds is how much worse the fitted model predicts the held-out peaks and phases without that effect (in the baseline's scale); the effect the response needs most, beyond noise, leads. <code>fitted-model.toml</code> holds the effect with these values.</p>");
+        s.push_str("</table><p class=\"note\">Confidence runs from 0 to 1. The share of the gap closed is the part of the baseline's gap above the noise floor that adding the effect removed. With several effects, the response weight is how far the fitted model's peaks and phases move at the fitted conditions when that effect alone is taken out (mean squared move, in spreads); the effect that moves the response most, beyond noise, leads. <code>fitted-model.toml</code> holds the effect with these values.</p>");
     }
     s.push_str(&format!(
         "<p>Left unexplained: {:.0}% of the baseline's gap above the noise floor. Held out of every fit: {}.</p>",

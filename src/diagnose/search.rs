@@ -1080,29 +1080,41 @@ fn pair_ahead(
     }))
 }
 
-/// What each named effect carries of the fitted model's response where
-/// the fit did not look: the rise of the response loss (held-out units
-/// where there are any, in the calibrated baseline's yardstick) when that
-/// effect alone is taken out of the fitted model, nothing else changed,
-/// and the standard deviation of that rise ([`response_rise`]), in the
-/// steps' order. `None` for an effect without which the model does not
-/// run. Empty for fewer than two effects: there is nothing to weigh.
+/// What each named effect carries of the fitted model's response: how far
+/// the simulated response statistics (peak and phase means and variances)
+/// at the fitting units move when that effect alone is taken out of the
+/// fitted model, nothing else changed, as a mean squared move in each
+/// score's own spread ([`response_move`]), with the standard deviation of
+/// that mean, in the steps' order. `None` for an effect without which the
+/// model does not run. Empty for fewer than two effects: there is nothing
+/// to weigh.
+///
+/// The fitting units, not the held-out ones: an effect is weighed where the
+/// fit saw it act. A load dependence is fitted about the data's mean load,
+/// which is the held-out interior load level, so taking it out moves
+/// nothing there however much the friction changes across the loads; on
+/// the blind benchmark's load dependence under a coloured noise the
+/// held-out response then kept the coloured noise first on seeds 15 and 26
+/// (its removal raised the held-out loss 229 ± 4 against the load
+/// dependence's 3 ± 6 on seed 26), while at the fitting units the load
+/// dependence moved the response 47.9 against 34.1. Against the data the
+/// comparison would be blurred by the fit itself; against the model, what
+/// is weighed is only what each effect does to the response.
 pub(crate) fn response_weights(
     steps: &[Step],
-    baseline_scores: &[Score],
     data: &Data<'_>,
     settings: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<Vec<Option<(f64, f64)>>> {
     let Some(last) = steps.last().filter(|_| steps.len() >= 2) else { return Ok(Vec::new()) };
-    let ruler = yardstick(baseline_scores);
+    let fitted = score(engine, &last.candidate.model, data, settings, Scope::Fitting)?;
     steps
         .iter()
         .map(|s| {
             let mut without = last.candidate.model.clone();
             without.effects.remove(s.candidate.effect);
-            match score(engine, &without, data, settings, Scope::All) {
-                Ok(scores) => Ok(Some(response_rise(&last.candidate.scores, &scores, data.has_heldout(), &ruler))),
+            match score(engine, &without, data, settings, Scope::Fitting) {
+                Ok(scores) => Ok(Some(response_move(&fitted, &scores))),
                 Err(Error::Diverged { .. }) => Ok(None),
                 Err(e) => Err(e),
             }
@@ -1110,24 +1122,46 @@ pub(crate) fn response_weights(
         .collect()
 }
 
+/// The mean over the fitting units' response observables of
+/// ((simulated without − simulated with) / spread)², the spread being the
+/// `fitted` score's, and the standard deviation of that mean from the
+/// simulated means' own noise: each move δ is seen as δ + e with e of
+/// variance at most 2s (s the simulated mean's share of the spread², for
+/// each model; less, as the two share their replicates' seeds), so each
+/// squared move varies by sqrt(8 s δ² + 8 s²). Unitless; (0, 0) where no
+/// response observable is scored.
+pub(crate) fn response_move(fitted: &[Score], without: &[Score]) -> (f64, f64) {
+    let moved: BTreeMap<ScoreKey, f64> = without
+        .iter()
+        .filter(|s| !s.heldout && s.observable.is_response())
+        .map(|s| ((s.unit, s.observable), s.simulated))
+        .collect();
+    let (mut sum, mut variance, mut k) = (0.0, 0.0, 0usize);
+    for s in fitted.iter().filter(|s| !s.heldout && s.observable.is_response() && s.scale > 0.0) {
+        let Some(&other) = moved.get(&(s.unit, s.observable)) else { continue };
+        let square = ((other - s.simulated) / s.scale).powi(2);
+        if !square.is_finite() {
+            continue;
+        }
+        let share = s.simulated_share;
+        sum += square;
+        variance += 8.0 * share * square + 8.0 * share * share;
+        k += 1;
+    }
+    if k == 0 { (0.0, 0.0) } else { (sum / k as f64, variance.sqrt() / k as f64) }
+}
+
 /// How many standard deviations of the difference another effect's
 /// response weight must exceed the first added one's by to lead
 /// ([`response_leader`]). The standard deviation is that of
-/// [`response_rise`], which overstates the noise (the replicates share
-/// their seeds between the models compared), so one of them is already a
-/// real difference. Three kept the first added where the response plainly
-/// said otherwise: on the blind benchmark's load dependence under a
-/// coloured noise (seed 12 set 15) the load dependence's removal cost the
-/// held-out response 40 ± 26, the coloured noise's −10 ± 18 (without it
-/// the response was *better*), and the noise stayed first; beside a drift
-/// (seed 13 set 17) a stiction's 11.2 ± 1.3 against the drift's 8.2 ± 1.2.
-/// In both the generator made the effect the response needs more the
-/// stronger one.
+/// [`response_move`], which overstates the noise (the two models compared
+/// share their replicates' seeds), so one of them is already a real
+/// difference.
 const RESPONSE_LEAD_SDS: f64 = 1.0;
 
 /// Which of several named effects leads, by index into the steps: the
 /// first added (it closed the most of the key gap) unless another one's
-/// removal costs the fitted model's response more, by more than
+/// removal moves the fitted model's response more, by more than
 /// [`RESPONSE_LEAD_SDS`] standard deviations of the difference
 /// ([`response_weights`]).
 ///
@@ -1135,10 +1169,13 @@ const RESPONSE_LEAD_SDS: f64 = 1.0;
 /// of them with little noise: a normal-force harmonic of a tenth of N0 is
 /// plain in the normal-force channel and closes most of the key gap, while
 /// a hysteresis beside it is what moves the peaks (seed 11 set 16 of the
-/// benchmark: the harmonics alone raise the held-out response loss from 46
-/// to 59, the hysteresis alone lowers it to 25, both to 5). What a
-/// researcher asks of the leading effect is what shapes the frequency
-/// response, so where the response tells them apart it decides.
+/// benchmark: taking the harmonics out moves the fitting units' response
+/// by 74 squared spreads, the hysteresis by 2 359). And the key gap is
+/// held out at an interior load, where a load dependence shows least (seed
+/// 26 set 15: a coloured noise closed it from 109 to 8 first; at the
+/// fitting units the load dependence moves the response 48, the noise 34).
+/// What a researcher asks of the leading effect is what shapes the
+/// frequency response, so where the response tells them apart it decides.
 pub(crate) fn response_leader(weights: &[Option<(f64, f64)>]) -> usize {
     let Some(&Some((first, first_sd))) = weights.first() else { return 0 };
     let (mut lead, mut most) = (0, first);
@@ -1427,20 +1464,52 @@ mod tests {
     #[test]
     fn the_effect_the_response_needs_most_leads() {
         // Seed 11 set 16: harmonics first by the key gap; without the
-        // hysteresis the response loss rises by 54 (sd 1), without the
-        // harmonics by 20 (sd 1): the hysteresis leads.
-        assert_eq!(response_leader(&[Some((20.0, 1.0)), Some((54.0, 1.0))]), 1);
+        // hysteresis the fitting units' response moves by 2 359 (sd 11),
+        // without the harmonics by 74 (sd 2): the hysteresis leads.
+        assert_eq!(response_leader(&[Some((74.4, 2.0)), Some((2359.2, 11.4))]), 1);
         // Within one sd of the difference the first added keeps the lead.
         assert_eq!(response_leader(&[Some((20.0, 1.0)), Some((21.2, 1.0))]), 0);
-        // Seed 12 set 15: the coloured noise first by the key gap, its
-        // removal −10 ± 18, the load dependence's 40 ± 26: the load leads.
-        assert_eq!(response_leader(&[Some((-9.9, 18.5)), Some((40.1, 25.9))]), 1);
+        // Seed 26 set 15: the coloured noise first by the key gap, its
+        // removal 34.1 ± 1.1, the load dependence's 47.9 ± 1.3: the load leads.
+        assert_eq!(response_leader(&[Some((34.1, 1.1)), Some((47.9, 1.3))]), 1);
         // Of two that beat the first, the larger leads.
         assert_eq!(response_leader(&[Some((1.0, 0.1)), Some((30.0, 1.0)), Some((50.0, 1.0))]), 2);
         // Nothing to weigh (one effect, or the first's weight unknown).
         assert_eq!(response_leader(&[]), 0);
         assert_eq!(response_leader(&[None, Some((50.0, 1.0))]), 0);
         assert_eq!(response_leader(&[Some((1.0, 0.1)), None]), 0);
+    }
+
+    #[test]
+    fn an_effect_weighs_what_its_removal_moves_the_fitted_response_at_the_fitting_units() {
+        use crate::diagnose::score::test_score;
+        let at = |unit, observable, heldout, simulated| Score {
+            simulated,
+            scale: 2.0,
+            simulated_share: 0.1,
+            ..test_score(unit, observable, 0.0, heldout)
+        };
+        let fitted = [
+            at(0, Observable::PeakMeanM, false, 1.0),
+            at(1, Observable::PhaseMeanDeg, false, 1.0),
+            at(2, Observable::PeakMeanM, true, 1.0),
+            at(0, Observable::FrictionMuMean, false, 1.0),
+        ];
+        // The peak mean moves by two spreads, the phase not at all; the
+        // held-out unit and the friction feature are not counted.
+        let without = [
+            at(0, Observable::PeakMeanM, false, 5.0),
+            at(1, Observable::PhaseMeanDeg, false, 1.0),
+            at(2, Observable::PeakMeanM, true, 100.0),
+            at(0, Observable::FrictionMuMean, false, 100.0),
+        ];
+        let (weight, sd) = response_move(&fitted, &without);
+        assert!((weight - 2.0).abs() < 1e-12, "{weight}");
+        // sqrt(8·0.1·4 + 8·0.01 + 8·0.01) / 2.
+        assert!((sd - 3.36f64.sqrt() / 2.0).abs() < 1e-12, "{sd}");
+        // Nothing moved, nothing weighed; nothing scored, nothing either.
+        assert_eq!(response_move(&fitted, &fitted).0, 0.0);
+        assert_eq!(response_move(&fitted, &[]), (0.0, 0.0));
     }
 
     #[test]
