@@ -332,7 +332,7 @@ pub fn diagnose_set(
     let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;
     let key0 = if has_heldout { gaps.1 } else { gaps.0 };
     let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
-    let weights = search::response_weights(&selection.steps, &data, settings, engine)?;
+    let weights = search::response_weights(&selection.steps, &baseline_scores, &data, settings, engine)?;
     if std::env::var_os("STICKSLIP_DEBUG").is_some() {
         for (s, w) in selection.steps.iter().zip(&weights) {
             eprintln!("response weight of {}: {w:?}", s.candidate.effect);
@@ -348,7 +348,7 @@ pub fn diagnose_set(
             parameters: s.candidate.parameters.clone(),
             share: ((s.before.1 - s.after_key) / explainable).clamp(0.0, 1.0),
             confidence: search::confidence(s, selection.noise_heldout, explainable),
-            response_weight: weights.get(i).copied().flatten().map(|(rise, _)| rise),
+            response_weight: weights.get(i).copied().flatten().map(|w| w.moved),
         })
         .collect();
     // The leading effect first; the others in the order they were added.
