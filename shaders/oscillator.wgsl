@@ -152,9 +152,19 @@ fn spring_force(cos_omega_t: f32, x_m: f32) -> f32 {
     return params.stiffness_n_per_m * (params.base_amplitude_m * cos_omega_t - x_m);
 }
 
+// The law's Stribeck factor 1/(1 + c s), and for s < 0 (an RK4 stage past
+// a velocity zero) its first-order continuation 1 − c s: the law's pole at
+// s = −1/c is never reached (the CPU reference's `stribeck_factor`).
+fn stribeck_factor(c_s_per_m: f32, speed_m_per_s: f32) -> f32 {
+    if (speed_m_per_s >= 0.0) {
+        return 1.0 / (1.0 + c_s_per_m * speed_m_per_s);
+    }
+    return 1.0 - c_s_per_m * speed_m_per_s;
+}
+
 fn steady_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
     return params.friction_a + point.friction_offset
-        + params.friction_b / (1.0 + params.friction_c_s_per_m * speed_m_per_s)
+        + params.friction_b * stribeck_factor(params.friction_c_s_per_m, speed_m_per_s)
         + params.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
         + path.friction_noise;
 }

@@ -105,3 +105,40 @@ fn cpu_and_gpu_agree_as_ensembles() {
         assert!(ratio > lo && ratio < hi, "{f} Hz, {n} N: variance ratio {ratio} outside [{lo}, {hi}]");
     }
 }
+
+/// A steep Stribeck law with b < 0 (c = 948 s/m: the baseline a diagnosis
+/// calibrated on blind seed 29 set 12, at one of its conditions), on both
+/// backends. The law `b/(1 + c s)` has a pole at speed s = −1/c, 1 mm/s past
+/// a velocity zero, where an RK4 stage of a step across the zero evaluates
+/// it (a slip's sign is held over its steps). Before the law was continued
+/// past zero speed, 4 of the CPU reference's first 8 paths ran away (x up to
+/// 1e12 m, v up to 112 m/s; the stationary peaks are 2.9 mm).
+#[test]
+fn a_steep_stribeck_law_keeps_every_path_bounded() {
+    let overrides: Vec<String> = [
+        "rig.mass_kg=1.486",
+        "rig.natural_frequency_hz=11.576",
+        "rig.damping_ratio=0.005556",
+        "excitation.amplitude_m=0.0027848",
+        "friction.a=0.16745",
+        "friction.b=-0.0551",
+        "friction.c=947.74",
+        "friction.d=0.16607",
+        "friction.sigma=0.062",
+        "normal_force.sigma=0.3107",
+        "solver.steps_per_period=32",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let model = Model::paper_rig(&overrides).unwrap();
+    let cond = Condition { excitation_frequency_hz: 7.524, normal_force_n: 84.19 };
+    let initial = InitialState::steady(&model, cond);
+    let plan = RunPlan { warmup_cycles: 60, measured_cycles: 150 };
+    for (backend, engine) in [("CPU", common::cpu()), ("GPU", common::gpu())] {
+        let paths = common::paths(engine, &model, cond, initial, 1, 64, plan);
+        let largest = paths.iter().flat_map(|p| &p.peaks_m).fold(0.0f64, |m, &x| m.max(x.abs()));
+        println!("{backend}: the largest peak of 64 paths × 150 periods is {:.2} mm", 1e3 * largest);
+        assert!(largest < 0.01, "{backend}: a path ran away (peak {largest} m; the stationary peaks are 2.9 mm)");
+    }
+}
