@@ -1148,8 +1148,10 @@ pub(crate) fn response_weights(
 
 /// The mean over the fitting units' response observables of
 /// ((simulated without − simulated with) / spread)², the spread being the
-/// `fitted` score's, and the standard deviation of that mean from the
-/// simulated means' own noise: each move δ is seen as δ + e with e of
+/// `fitted` score's and a phase's move taken on the circle (as the scores'
+/// comparison takes its differences: −179° to 179° is a move of 2°, not
+/// 358°), and the standard deviation of that mean from the simulated
+/// means' own noise: each move δ is seen as δ + e with e of
 /// variance at most 2s (s the simulated mean's share of the spread², for
 /// each model; less, as the two share their replicates' seeds), so each
 /// squared move varies by sqrt(8 s δ² + 8 s²). Unitless; (0, 0) where no
@@ -1163,7 +1165,12 @@ pub(crate) fn response_move(fitted: &[Score], without: &[Score]) -> (f64, f64) {
     let (mut sum, mut variance, mut k) = (0.0, 0.0, 0usize);
     for s in fitted.iter().filter(|s| !s.heldout && s.observable.is_response() && s.scale > 0.0) {
         let Some(&other) = moved.get(&(s.unit, s.observable)) else { continue };
-        let square = ((other - s.simulated) / s.scale).powi(2);
+        let move_by = if s.observable.is_angle_deg() {
+            crate::engine::reduce::wrap_angle((other - s.simulated).to_radians()).to_degrees()
+        } else {
+            other - s.simulated
+        };
+        let square = (move_by / s.scale).powi(2);
         if !square.is_finite() {
             continue;
         }
@@ -1555,6 +1562,10 @@ mod tests {
         // sqrt(8·0.1·4 + 8·0.01 + 8·0.01) / 2.
         assert!((sd - 3.36f64.sqrt() / 2.0).abs() < 1e-12, "{sd}");
         // Nothing moved, nothing weighed; nothing scored, nothing either.
+        // A phase moves on the circle: from 179° to −179° is 2°, one spread.
+        let (near, across) =
+            ([at(1, Observable::PhaseMeanDeg, false, 179.0)], [at(1, Observable::PhaseMeanDeg, false, -179.0)]);
+        assert!((response_move(&near, &across).0 - 1.0).abs() < 1e-9, "{:?}", response_move(&near, &across));
         assert_eq!(response_move(&fitted, &fitted).0, 0.0);
         assert_eq!(response_move(&fitted, &[]), (0.0, 0.0));
     }
