@@ -213,7 +213,9 @@ fn solve_friction_level(
                 around.push(tried.iter().copied().find(|t| t.0 == best).unwrap_or((best, f64::INFINITY)));
             }
         }
-        best = scan_best(&mut around, &residual)?;
+        // The parabola's vertex is tried and kept in `around`; the best
+        // of everything tried is taken below.
+        scan_best(&mut around, &residual)?;
         tried.extend(around);
         best = tried.iter().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(best, |t| t.0);
     }

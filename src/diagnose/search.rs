@@ -879,8 +879,7 @@ pub(crate) fn select(
         };
         let repairs = |c: &Candidate| repairs_the_response(&scores, &c.scores, has_heldout, &ruler);
         let passes = |c: &Candidate| {
-            let exempt = !leading
-                && (repairs_the_response(&scores, &c.scores, has_heldout, &ruler) || fits_far_better(g_fit, c.gap_fit));
+            let exempt = !leading && (repairs(c) || fits_far_better(g_fit, c.gap_fit));
             closes_enough((g_fit, g_key), (c.gap_fit, key(c)), (noise_fit, noise_heldout), exempt)
         };
         let best = if leading {
