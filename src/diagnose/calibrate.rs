@@ -876,6 +876,14 @@ pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<Fr
     SlipSamples::of(runs, v_noise_m_per_s)?.fit()
 }
 
+/// The law of eq. 7 at the Stribeck rate `c` (s/m) on the slipping samples
+/// of `runs` (see [`fit_friction_law`]); `None` without force channels,
+/// with fewer than 50 slipping samples, or where that law is not one a rig
+/// could have.
+pub(crate) fn fit_friction_law_at(runs: &[&Run], v_noise_m_per_s: f64, c: f64) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, v_noise_m_per_s)?.fit_at(c).filter(|l| l.plausible())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

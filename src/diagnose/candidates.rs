@@ -112,9 +112,7 @@ pub(crate) fn signature(effect: Effect) -> &'static [Observable] {
             Observable::NormalForceHarmonic4N,
             Observable::NormalForceResidualVarN2,
         ],
-        Effect::NonGaussianFriction => {
-            &[Observable::FrictionResidualSkewness, Observable::FrictionResidualExcessKurtosis]
-        }
+        Effect::NonGaussianFriction => &[Observable::FrictionResidualSkewness, Observable::FrictionResidualTailWeight],
         Effect::FrictionHysteresis => &[
             Observable::FrictionHysteresis,
             Observable::FrictionLowSpeedMuMean,
@@ -432,9 +430,23 @@ fn harmonic_estimates(ctx: &Context<'_>) -> Vec<(f64, [(f64, f64); 4])> {
             }) else {
                 continue;
             };
+            // A record with a free time origin gives each harmonic's phase
+            // relative to its own response's fundamental, turned into the
+            // model's frame with the response lag of a linear oscillator
+            // there (friction shifts it; the search then turns every
+            // harmonic by a common phase shift).
+            let omega_ratio = u.condition.excitation_frequency_hz / ctx.model.rig.natural_frequency_hz;
+            let linear_lag = (2.0 * ctx.model.rig.damping_ratio * omega_ratio).atan2(1.0 - omega_ratio * omega_ratio);
             let phases: Vec<f64> = data.features[i]
                 .iter()
-                .filter_map(|f| f.normal_force.as_ref().and_then(|n| n.harmonic_phase_rad[k]))
+                .filter_map(|f| {
+                    let phase = f.normal_force.as_ref().and_then(|n| n.harmonic_phase_rad[k])?;
+                    if f.absolute_phase {
+                        return Some(phase);
+                    }
+                    let lag = f.peaks.as_ref()?.phase_mean_deg.to_radians();
+                    Some(phase + (k + 1) as f64 * (lag - linear_lag))
+                })
                 .collect();
             let amplitude = data.measured[i].get(&o).copied().unwrap_or(0.0);
             if phases.is_empty() {
@@ -475,33 +487,44 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 std::array::from_fn(|k| mean(&estimates.iter().map(|e| e.1[k].0 / e.0.max(1e-3)).collect::<Vec<_>>()));
             let newtons: [f64; 4] =
                 std::array::from_fn(|k| mean(&estimates.iter().map(|e| e.1[k].0).collect::<Vec<_>>()));
-            let harmonics = move |form: HarmonicForm, amplitudes_n: [f64; 4], per_n0: [f64; 4]| NormalForceHarmonics {
-                form,
+            // Each harmonic k turned by k × `shift` (rad): the common phase
+            // that records with a free time origin leave unknown.
+            let harmonics = move |amplitudes_n: [f64; 4], per_n0: [f64; 4], shift: f64| NormalForceHarmonics {
+                form: HarmonicForm::Fourier,
                 amplitudes_n,
                 amplitudes_per_n0: per_n0,
-                phases_rad: phases,
+                phases_rad: std::array::from_fn(|k| phases[k] + (k + 1) as f64 * shift),
                 shape: 2.0,
             };
+            let free = ctx.data.features.iter().flatten().any(|f| !f.absolute_phase);
+            let params = || {
+                let mut p = vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)];
+                if free {
+                    p.push(Param::linear("phase_shift_rad", 0.0, std::f64::consts::PI / 8.0, -3.2, 3.2));
+                }
+                p
+            };
+            let shift = |p: &[f64]| p.get(1).copied().unwrap_or(0.0);
             vec![
                 Variant {
                     effect,
                     form: "fourier (amplitudes a share of N0)",
-                    params: vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)],
+                    params: params(),
                     apply: Box::new(move |m, p| {
                         let mut m = m.clone();
                         let per = shares.map(|a| a * p[0]);
-                        m.effects.normal_force_harmonics = Some(harmonics(HarmonicForm::Fourier, [0.0; 4], per));
+                        m.effects.normal_force_harmonics = Some(harmonics([0.0; 4], per, shift(p)));
                         m
                     }),
                 },
                 Variant {
                     effect,
                     form: "fourier (amplitudes in N)",
-                    params: vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)],
+                    params: params(),
                     apply: Box::new(move |m, p| {
                         let mut m = m.clone();
                         let n = newtons.map(|a| a * p[0]);
-                        m.effects.normal_force_harmonics = Some(harmonics(HarmonicForm::Fourier, n, [0.0; 4]));
+                        m.effects.normal_force_harmonics = Some(harmonics(n, [0.0; 4], shift(p)));
                         m
                     }),
                 },
@@ -524,7 +547,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                     effect,
                     form: "skew",
                     params: vec![
-                        Param::log("strength", sign * 0.4, 1.8, -3.0, 3.0),
+                        Param::log("strength", sign * 0.4, 1.8, -30.0, 30.0),
                         Param::linear("load_exponent", 0.0, 1.0, -3.0, 3.0),
                     ],
                     apply: Box::new(move |m, p| {
@@ -745,6 +768,11 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
             ]
         }
         Effect::NormalForceDrift => {
+            // A drift shows only over time: in a record's normal force or
+            // its peaks' trend, never in a summary row's statistics.
+            if !(ctx.has(Observable::NormalForceDriftPerS) || ctx.has(Observable::PeakTrendPerS)) {
+                return Vec::new();
+            }
             let rate = ctx
                 .excess(Observable::NormalForceDriftPerS)
                 .or_else(|| ctx.excess(Observable::PeakTrendPerS).map(|t| -t))
@@ -815,6 +843,11 @@ pub(crate) fn signature_excess(effect: Effect, scores: &[Score]) -> f64 {
         })
         .fold(0.0, f64::max)
 }
+
+/// A family's signature stands out of the noise when its excess
+/// ([`signature_excess`]) is beyond this many noise units: the report then
+/// points at the family even where no form of it was named.
+pub(crate) const SIGNATURE_STANDS_OUT: f64 = 3.0;
 
 /// The mean Huber loss of a z-score under pure noise with the replicate
 /// spread estimated from 8 replicates (z then about t with 7 degrees of

@@ -29,7 +29,12 @@ pub(crate) struct Unit {
     pub(crate) heldout: bool,
 }
 
-/// The measured data and how it is split.
+/// The measured data as one view of its folds sees it: every unit, with
+/// the ones this view holds out marked, and the friction law fitted to the
+/// force channels of the units it fits. [`Data::new`] makes the view that
+/// holds nothing out (every model's full-data fit); [`Data::view`] the view
+/// of one fold. Views share the simulation caches.
+#[derive(Clone)]
 pub(crate) struct Data<'a> {
     pub(crate) set: &'a MeasurementSet,
     pub(crate) units: Vec<Unit>,
@@ -44,19 +49,34 @@ pub(crate) struct Data<'a> {
     pub(crate) measured_normal_force_n: BTreeMap<(i64, i64), f64>,
     /// Longest record, s.
     pub(crate) longest_record_s: f64,
-    /// The friction law fitted to the fitting units' force channels.
+    /// The friction law fitted to the fitting units' force channels, at the
+    /// Stribeck rate `c` of the law fitted to every unit's (one rate for
+    /// every view, so the simulated records' law moments serve them all).
     pub(crate) measured_law: Option<FrictionLaw>,
+    /// The Stribeck rate of the law fitted to every unit's force channels,
+    /// s/m: the rate at which every view's measured law, and the law
+    /// moments of every simulated record, are taken.
+    pub(crate) law_c: Option<f64>,
     /// The measurement noise on the records' channels.
     pub(crate) sensor: SensorNoise,
-    /// Which units are held out.
-    pub(crate) hold_out: HoldOut,
+    /// The folds of the set.
+    pub(crate) folds: Folds,
+    /// The fold this view holds out (`None`: every unit is fitted).
+    pub(crate) fold: Option<usize>,
+    /// What every view shares: the simulation caches.
+    pub(crate) caches: Arc<Caches>,
+}
+
+/// Simulation caches of a diagnosis, shared by every view of its data.
+#[derive(Default)]
+pub(crate) struct Caches {
     /// The sensor-noise draws of simulated replicate records, by (seed,
     /// realisation): the same for every model, so drawn once per diagnosis
     /// (they were a tenth of its time).
     pub(crate) sensor_draws: SensorDraws,
-    /// What the last models' replicate records of the fitting units gave
+    /// What the last models' replicate records gave, unit by unit
     /// (features, the law's moments): each record simulated once.
-    pub(crate) fitting_records: RecordCache,
+    pub(crate) records: RecordCache,
     /// Each unit's simulated records' sample grid, made once.
     pub(crate) grids: UnitGrids,
 }
@@ -111,17 +131,21 @@ pub(crate) fn condition_key(c: Condition) -> (i64, i64) {
     ((c.excitation_frequency_hz * 1e6).round() as i64, (c.normal_force_n * 1e6).round() as i64)
 }
 
-/// How a set is split into fitting and held-out units: whole normal-force
-/// levels where there are three or more (so the held-out gap measures the
-/// fitted model at a load no fit saw), else whole frequencies, else
-/// alternate runs or conditions.
+/// How a set is cut into folds for cross-validation: each fold is a group
+/// of units that a model is fitted without and then asked to predict.
+/// Whole normal-force levels where there are three or more loads at some
+/// frequency (every level in turn, the lightest and the heaviest included:
+/// a fitted model is used beyond the loads it saw); else whole frequency
+/// groups; else alternate runs of every condition; else alternate
+/// conditions; else nothing (one unit: no cross-validation).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum HoldOut {
-    /// These nominal normal forces are held out, N.
-    LoadLevels(Vec<f64>),
-    /// These excitation frequencies are held out, Hz.
-    Frequencies(Vec<f64>),
+pub enum FoldKind {
+    /// The k-th lightest load at each frequency (with a load grid shared by
+    /// every frequency, one load level).
+    LoadLevels,
+    /// Groups of neighbouring excitation frequencies.
+    Frequencies,
     /// Alternate runs of every condition.
     AlternateRuns,
     /// Alternate conditions.
@@ -130,28 +154,48 @@ pub enum HoldOut {
     Nothing,
 }
 
-impl HoldOut {
+/// One fold: the units it holds out, and what they are in words.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Fold {
+    /// What is held out, e.g. "normal force 8 N" or "7.0–7.5 Hz".
+    pub label: String,
+    /// Indices of the held-out units.
+    #[serde(skip)]
+    pub units: Vec<usize>,
+    /// Their conditions (nominal), each once.
+    #[serde(skip)]
+    pub conditions: Vec<Condition>,
+}
+
+/// The folds of a set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Folds {
+    pub kind: FoldKind,
+    pub folds: Vec<Fold>,
+}
+
+impl Folds {
     /// In words, for the report.
     pub fn describe(&self) -> String {
-        let list = |v: &[f64], unit: &str| v.iter().map(|x| format!("{x} {unit}")).collect::<Vec<_>>().join(", ");
-        match self {
-            HoldOut::LoadLevels(v) => format!("the normal-force level(s) {} (every condition there)", list(v, "N")),
-            HoldOut::Frequencies(v) => format!("the frequency(ies) {} (every condition there)", list(v, "Hz")),
-            HoldOut::AlternateRuns => "alternate runs of every condition".into(),
-            HoldOut::AlternateConditions => "alternate conditions".into(),
-            HoldOut::Nothing => "nothing (too little data)".into(),
+        let labels = self.folds.iter().map(|f| f.label.as_str()).collect::<Vec<_>>().join("; ");
+        match self.kind {
+            FoldKind::LoadLevels => format!("each normal-force level in turn ({labels})"),
+            FoldKind::Frequencies => format!("each frequency group in turn ({labels})"),
+            FoldKind::AlternateRuns => "alternate runs of every condition, each half in turn".into(),
+            FoldKind::AlternateConditions => format!("alternate conditions, each half in turn ({labels})"),
+            FoldKind::Nothing => "nothing (too little data to hold any out)".into(),
         }
+    }
+
+    /// Whether there is anything to cross-validate.
+    pub fn any(&self) -> bool {
+        !self.folds.is_empty()
     }
 }
 
-/// The interior levels of a sorted list taken alternately (index 1, 3, …,
-/// never the extremes), from three levels up.
-fn interior_alternates(levels: &[f64]) -> Vec<f64> {
-    if levels.len() < 3 {
-        return Vec::new();
-    }
-    levels.iter().enumerate().filter(|(i, _)| i % 2 == 1 && *i + 1 < levels.len()).map(|(_, v)| *v).collect()
-}
+/// At most this many folds: levels or frequencies beyond it are grouped
+/// (every fold costs a refit of each model it judges).
+pub const MAX_FOLDS: usize = 5;
 
 /// Whether two nominal levels (N or Hz) are the same one: equal to 1e-6.
 fn same_level(a: f64, b: f64) -> bool {
@@ -166,56 +210,89 @@ pub(crate) fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
     v
 }
 
-/// The load levels to hold out: at each frequency, the interior levels of
-/// that frequency's own loads taken alternately, so that every held-out
-/// condition lies between two fitted loads at its frequency (the fit is
-/// asked to interpolate in load, and in the sliding speeds that load sets,
-/// not to extrapolate past the fastest or slowest motion it saw). Where the
-/// loads form a grid shared by every frequency this is the grid's interior
-/// alternates; where no frequency has three loads of its own, the interior
-/// alternates of all loads.
-fn held_out_loads(conditions: &[Condition], loads: &[f64], frequencies: &[f64]) -> Vec<f64> {
-    let mut held: Vec<f64> = frequencies
-        .iter()
-        .flat_map(|&f| {
-            let at_f = levels(
-                conditions.iter().filter(|c| same_level(c.excitation_frequency_hz, f)).map(|c| c.normal_force_n),
-            );
-            interior_alternates(&at_f)
-        })
-        .collect();
-    held = levels(held.into_iter());
-    if held.is_empty() { interior_alternates(loads) } else { held }
+/// `n` items cut into at most [`MAX_FOLDS`] contiguous groups of nearly
+/// equal size: the group of each item.
+fn groups(n: usize) -> Vec<usize> {
+    let k = n.min(MAX_FOLDS).max(1);
+    (0..n).map(|i| i * k / n.max(1)).collect()
 }
 
-/// Chooses the split for conditions with these (frequency, load) pairs.
-fn choose_hold_out(conditions: &[Condition], runs_per_condition: &[usize]) -> HoldOut {
-    let loads = levels(conditions.iter().map(|c| c.normal_force_n));
+/// A list of values with a unit, for fold labels: "8 N", "7–7.5 Hz".
+fn span_label(values: &[f64], unit: &str) -> String {
+    let show = |x: f64| crate::engine::model::fmt_value(x);
+    match values {
+        [] => String::new(),
+        [one] => format!("{} {unit}", show(*one)),
+        [first, .., last] => format!("{}–{} {unit}", show(*first), show(*last)),
+    }
+}
+
+/// The folds of units at these conditions (`conditions[i]` of unit i). With
+/// `run_index` (units of one run each, `run_index[i]` the unit's index among
+/// its condition's runs) and neither loads nor frequencies to hold out,
+/// alternate runs.
+fn choose_folds(conditions: &[Condition], run_index: Option<&[usize]>) -> Folds {
     let frequencies = levels(conditions.iter().map(|c| c.excitation_frequency_hz));
-    if loads.len() >= 3 {
-        HoldOut::LoadLevels(held_out_loads(conditions, &loads, &frequencies))
-    } else if frequencies.len() >= 3 {
-        HoldOut::Frequencies(interior_alternates(&frequencies))
-    } else if !runs_per_condition.is_empty() && runs_per_condition.iter().all(|&r| r >= 2) {
-        HoldOut::AlternateRuns
-    } else if conditions.len() > 1 {
-        HoldOut::AlternateConditions
-    } else {
-        HoldOut::Nothing
+    let loads_at = |f: f64| {
+        levels(conditions.iter().filter(|c| same_level(c.excitation_frequency_hz, f)).map(|c| c.normal_force_n))
+    };
+    let ranks = frequencies.iter().map(|&f| loads_at(f).len()).max().unwrap_or(0);
+    let make = |kind: FoldKind, group_of: &dyn Fn(usize) -> usize, label_of: &dyn Fn(&[usize]) -> String| {
+        let count = (0..conditions.len()).map(group_of).max().map_or(0, |m| m + 1);
+        let folds = (0..count)
+            .map(|g| {
+                let units: Vec<usize> = (0..conditions.len()).filter(|&i| group_of(i) == g).collect();
+                let mut held: Vec<Condition> = units.iter().map(|&i| conditions[i]).collect();
+                held.dedup_by_key(|c| condition_key(*c));
+                Fold { label: label_of(&units), units, conditions: held }
+            })
+            .filter(|f| !f.units.is_empty())
+            .collect();
+        Folds { kind, folds }
+    };
+    if ranks >= 3 {
+        // The k-th lightest load at each frequency (grouped beyond MAX_FOLDS).
+        let rank_group = groups(ranks);
+        let rank_of = |i: usize| {
+            let c = conditions[i];
+            let at_f = loads_at(c.excitation_frequency_hz);
+            at_f.iter().position(|&n| same_level(n, c.normal_force_n)).unwrap_or(0)
+        };
+        let group_of = |i: usize| rank_group[rank_of(i)];
+        let label_of = |units: &[usize]| {
+            let loads = levels(units.iter().map(|&i| conditions[i].normal_force_n));
+            if loads.len() <= 2 {
+                format!("normal force {}", loads.iter().map(|&n| span_label(&[n], "N")).collect::<Vec<_>>().join(", "))
+            } else {
+                format!("normal forces {}", span_label(&loads, "N"))
+            }
+        };
+        return make(FoldKind::LoadLevels, &group_of, &label_of);
     }
-}
-
-impl HoldOut {
-    /// Whether a condition (the `index`-th of its kind) is held out.
-    fn holds(&self, c: Condition, index: usize) -> bool {
-        let near = |list: &[f64], x: f64| list.iter().any(|&v| same_level(v, x));
-        match self {
-            HoldOut::LoadLevels(v) => near(v, c.normal_force_n),
-            HoldOut::Frequencies(v) => near(v, c.excitation_frequency_hz),
-            HoldOut::AlternateRuns | HoldOut::AlternateConditions => index % 2 == 1,
-            HoldOut::Nothing => false,
-        }
+    if frequencies.len() >= 2 {
+        let frequency_group = groups(frequencies.len());
+        let group_of = |i: usize| {
+            let f = conditions[i].excitation_frequency_hz;
+            frequency_group[frequencies.iter().position(|&x| same_level(x, f)).unwrap_or(0)]
+        };
+        let label_of =
+            |units: &[usize]| span_label(&levels(units.iter().map(|&i| conditions[i].excitation_frequency_hz)), "Hz");
+        return make(FoldKind::Frequencies, &group_of, &label_of);
     }
+    if let Some(run_index) = run_index {
+        let group_of = |i: usize| run_index[i] % 2;
+        let label_of =
+            |units: &[usize]| if run_index[units[0]] % 2 == 0 { "even runs".into() } else { "odd runs".into() };
+        return make(FoldKind::AlternateRuns, &group_of, &label_of);
+    }
+    if conditions.len() >= 3 {
+        let group_of = |i: usize| i % 2;
+        let label_of = |units: &[usize]| {
+            if units[0] % 2 == 0 { "even conditions".into() } else { "odd conditions".into() }
+        };
+        return make(FoldKind::AlternateConditions, &group_of, &label_of);
+    }
+    Folds { kind: FoldKind::Nothing, folds: Vec::new() }
 }
 
 /// Standard deviation of the white measurement noise on a uniformly sampled
@@ -279,28 +356,40 @@ impl<'a> Data<'a> {
                 normal_force_n: row.normal_force_mean_n,
             })
             .collect();
-        // Time series decide the split when there are any; a summary-only
-        // set is split by its rows.
-        let hold_out = if set.runs.is_empty() {
-            let h = choose_hold_out(&summary_conditions, &[]);
-            // Two summary rows leave nothing worth holding out.
-            if h == HoldOut::AlternateConditions && summary_conditions.len() <= 2 { HoldOut::Nothing } else { h }
-        } else {
-            choose_hold_out(&conditions, &runs_per_condition)
-        };
-        let mut units = Vec::new();
-        for (ci, (c, runs)) in by_condition.values().enumerate() {
-            if hold_out == HoldOut::AlternateRuns {
-                for (k, r) in runs.iter().enumerate() {
-                    units.push(Unit { condition: *c, runs: vec![*r], summary: None, heldout: k % 2 == 1 });
-                }
-            } else {
-                units.push(Unit { condition: *c, runs: runs.clone(), summary: None, heldout: hold_out.holds(*c, ci) });
-            }
+        // Time series decide the folds when there are any; a summary-only
+        // set is cut by its rows. Units hold every run of a condition,
+        // unless nothing but alternate runs can be held out.
+        let mut units: Vec<Unit> = by_condition
+            .values()
+            .map(|(c, runs)| Unit { condition: *c, runs: runs.clone(), summary: None, heldout: false })
+            .collect();
+        let mut folds =
+            if set.runs.is_empty() { choose_folds(&summary_conditions, None) } else { choose_folds(&conditions, None) };
+        let only_alternates = matches!(folds.kind, FoldKind::Nothing | FoldKind::AlternateConditions);
+        if !set.runs.is_empty() && only_alternates && runs_per_condition.iter().all(|&r| r >= 2) {
+            units = by_condition
+                .values()
+                .flat_map(|(c, runs)| {
+                    runs.iter().map(|&r| Unit { condition: *c, runs: vec![r], summary: None, heldout: false })
+                })
+                .collect();
+            let run_index: Vec<usize> = by_condition.values().flat_map(|(_, runs)| 0..runs.len()).collect();
+            let per_run: Vec<Condition> = units.iter().map(|u| u.condition).collect();
+            folds = choose_folds(&per_run, Some(&run_index));
         }
-        for (i, c) in summary_conditions.iter().enumerate() {
-            let heldout = set.runs.is_empty() && hold_out.holds(*c, i);
-            units.push(Unit { condition: *c, runs: Vec::new(), summary: Some(i), heldout });
+        let record_units = units.len();
+        for c in &summary_conditions {
+            units.push(Unit { condition: *c, runs: Vec::new(), summary: None, heldout: false });
+        }
+        for (i, u) in units[record_units..].iter_mut().enumerate() {
+            u.summary = Some(i);
+        }
+        // Record folds hold out the record units; a summary table beside
+        // records is fitted in every fold.
+        if !set.runs.is_empty() {
+            for f in &mut folds.folds {
+                f.units.retain(|&i| i < record_units);
+            }
         }
         if units.is_empty() {
             return Err(Error::Measurement {
@@ -348,10 +437,9 @@ impl<'a> Data<'a> {
         }
         let measured_normal_force_n = forces.into_iter().map(|(k, v)| (k, mean(&v))).collect();
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
-        let fit_runs: Vec<&Run> =
-            units.iter().filter(|u| !u.heldout).flat_map(|u| u.runs.iter().map(|&r| &set.runs[r])).collect();
+        let all_runs: Vec<&Run> = set.runs.iter().collect();
         let sensor = SensorNoise::estimate(&set.runs);
-        let measured_law = calibrate::fit_friction_law(&fit_runs, sensor.v_m_per_s);
+        let measured_law = calibrate::fit_friction_law(&all_runs, sensor.v_m_per_s);
         Ok(Data {
             set,
             units,
@@ -362,12 +450,40 @@ impl<'a> Data<'a> {
             measured_normal_force_n,
             longest_record_s,
             measured_law,
+            law_c: measured_law.map(|l| l.c),
             sensor,
-            hold_out,
-            sensor_draws: SensorDraws::default(),
-            fitting_records: RecordCache::default(),
-            grids: UnitGrids::default(),
+            folds,
+            fold: None,
+            caches: Arc::new(Caches::default()),
         })
+    }
+
+    /// The view of fold `fold` (`None`: nothing held out): its units marked,
+    /// and the friction law fitted to the force channels of the units it
+    /// fits, at the full data's Stribeck rate (`None` where those runs give
+    /// no law).
+    pub(crate) fn view(&self, fold: Option<usize>) -> Data<'a> {
+        let mut view = self.clone();
+        let held: &[usize] = fold.and_then(|k| self.folds.folds.get(k)).map_or(&[], |f| &f.units[..]);
+        for (i, u) in view.units.iter_mut().enumerate() {
+            u.heldout = held.contains(&i);
+        }
+        view.fold = fold;
+        if let Some(all) = self.measured_law.filter(|_| fold.is_some()) {
+            let runs: Vec<&Run> = view
+                .units
+                .iter()
+                .filter(|u| !u.heldout)
+                .flat_map(|u| u.runs.iter().map(|&r| &self.set.runs[r]))
+                .collect();
+            view.measured_law = calibrate::fit_friction_law_at(&runs, self.sensor.v_m_per_s, all.c);
+        }
+        view
+    }
+
+    /// Every fold's view, in fold order.
+    pub(crate) fn fold_views(&self) -> Vec<Data<'a>> {
+        (0..self.folds.folds.len()).map(|k| self.view(Some(k))).collect()
     }
 
     /// Whether the data state the normal force's noise: a recorded N
@@ -418,25 +534,48 @@ mod tests {
         pairs.iter().map(|&(f, n)| Condition { excitation_frequency_hz: f, normal_force_n: n }).collect()
     }
 
-    /// A load grid shared by every frequency: its interior levels, taken
-    /// alternately, are held out at every frequency.
+    /// The loads held out by each fold, by unit.
+    fn fold_loads(folds: &Folds, c: &[Condition]) -> Vec<Vec<f64>> {
+        folds.folds.iter().map(|f| levels(f.units.iter().map(|&i| c[i].normal_force_n))).collect()
+    }
+
+    /// A load grid shared by every frequency: every level is a fold, the
+    /// lightest and the heaviest included.
     #[test]
-    fn a_shared_load_grid_holds_out_its_interior_levels() {
-        let c: Vec<(f64, f64)> =
-            [5.0, 6.0, 7.0].iter().flat_map(|&f| [10.0, 20.0, 30.0, 40.0, 50.0].map(|n| (f, n))).collect();
-        assert_eq!(choose_hold_out(&grid(&c), &[1; 15]), HoldOut::LoadLevels(vec![20.0, 40.0]));
+    fn a_shared_load_grid_holds_out_each_level_in_turn() {
+        let c: Vec<(f64, f64)> = [5.0, 6.0, 7.0].iter().flat_map(|&f| [4.0, 8.0, 16.0].map(|n| (f, n))).collect();
+        let folds = choose_folds(&grid(&c), None);
+        assert_eq!(folds.kind, FoldKind::LoadLevels);
+        assert_eq!(fold_loads(&folds, &grid(&c)), vec![vec![4.0], vec![8.0], vec![16.0]]);
+        assert!(folds.folds.iter().all(|f| f.units.len() == 3));
+        assert_eq!(folds.folds[0].label, "normal force 4 N");
     }
 
     /// Loads that differ by frequency (each a share of that frequency's own
-    /// threshold): the middle load at each frequency is held out, never two
-    /// loads of one frequency that leave its fastest motion unfitted.
+    /// threshold): fold k holds the k-th lightest load of every frequency.
     #[test]
-    fn loads_that_differ_by_frequency_are_held_out_within_each_frequency() {
+    fn loads_that_differ_by_frequency_are_held_out_by_rank() {
         let c = grid(&[(8.0, 20.4), (8.0, 33.2), (8.0, 45.9), (10.0, 26.3), (10.0, 42.8), (10.0, 59.2)]);
-        assert_eq!(choose_hold_out(&c, &[1; 6]), HoldOut::LoadLevels(vec![33.2, 42.8]));
-        // No frequency with three loads of its own: the interior alternates
-        // of all the loads.
-        let c = grid(&[(8.0, 10.0), (9.0, 20.0), (10.0, 30.0), (11.0, 40.0)]);
-        assert_eq!(choose_hold_out(&c, &[1; 4]), HoldOut::LoadLevels(vec![20.0]));
+        let folds = choose_folds(&c, None);
+        assert_eq!(fold_loads(&folds, &c), vec![vec![20.4, 26.3], vec![33.2, 42.8], vec![45.9, 59.2]]);
+        // Many levels are grouped into at most MAX_FOLDS folds.
+        let many: Vec<(f64, f64)> = (0..9).map(|i| (7.0, 2.0 + f64::from(i))).collect();
+        assert_eq!(choose_folds(&grid(&many), None).folds.len(), MAX_FOLDS);
+    }
+
+    /// Two loads: whole frequencies are held out instead (a load dependence
+    /// needs both loads in every fit); one condition, alternate runs.
+    #[test]
+    fn few_loads_hold_out_frequencies_and_one_condition_alternate_runs() {
+        let c = grid(&[(6.0, 4.0), (6.0, 8.0), (7.0, 4.0), (7.0, 8.0), (8.0, 4.0), (8.0, 8.0)]);
+        let folds = choose_folds(&c, None);
+        assert_eq!(folds.kind, FoldKind::Frequencies);
+        assert_eq!(folds.folds.len(), 3);
+        assert!(folds.folds.iter().all(|f| f.units.len() == 2));
+        let one = grid(&[(7.0, 8.0); 4]);
+        let folds = choose_folds(&one, Some(&[0, 1, 2, 3]));
+        assert_eq!(folds.kind, FoldKind::AlternateRuns);
+        assert_eq!(folds.folds.iter().map(|f| f.units.clone()).collect::<Vec<_>>(), vec![vec![0, 2], vec![1, 3]]);
+        assert_eq!(choose_folds(&grid(&[(7.0, 8.0)]), None).kind, FoldKind::Nothing);
     }
 }

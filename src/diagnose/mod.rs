@@ -28,6 +28,7 @@ pub mod candidates;
 mod chart;
 pub mod data;
 pub mod features;
+mod frame;
 pub mod measure;
 pub mod observable;
 pub mod report;
@@ -43,10 +44,10 @@ use serde::Serialize;
 
 use crate::engine::{Condition, Effect, Engine, Model};
 use crate::error::Result;
-use data::{Data, HoldOut, condition_key};
+use data::{Data, Folds, condition_key};
 use measure::{MeasurementSet, read_measurement_set};
 use observable::Observable;
-use score::{Scope, Score, gap_of};
+use score::{Scope, Score};
 
 /// Settings of a diagnosis.
 #[derive(Clone, Copy, Debug)]
@@ -80,24 +81,33 @@ pub struct Unexplained {
     pub z: f64,
 }
 
-/// A candidate's result: the best form of one effect, fitted on top of the
-/// model of its round.
+/// One effect family as a round of the selection tried it: its best form
+/// fitted to every unit, what that closes of the gap in sample, what the
+/// family closes out of sample, and how often it won the contest.
 #[derive(Clone, Debug)]
 pub struct Candidate {
     pub effect: Effect,
     /// The form that fitted best, in the model file's words.
     pub form: &'static str,
-    /// How far the effect's signature stood above noise when it was
-    /// screened, in noise units.
-    pub signature_excess: f64,
-    /// Gap on the fitting units after fitting this effect.
+    /// Gap over every unit after fitting this effect (in sample), –.
     pub gap_fit: f64,
-    /// Gap on the held-out units.
-    pub gap_heldout: f64,
-    /// Relative fall of the fitting gap, –.
+    /// Relative fall of that gap from the model it was added to, –.
     pub shrink: f64,
-    /// Relative fall of the held-out gap, –; `None` without held-out units.
-    pub heldout_shrink: Option<f64>,
+    /// The share of that model's explainable gap (its gap less the noise
+    /// floor) the best fit closes in sample, –.
+    pub in_sample_share: f64,
+    /// The share of that model's explainable out-of-sample gap the family
+    /// closes, each fold predicted by the family member that fits the
+    /// other folds best, –.
+    pub cv_share: f64,
+    /// The relative fall of that model's out-of-sample gap the family
+    /// gives: `(before − after) / before`, –.
+    pub heldout_shrink: f64,
+    /// The share of bootstrap resamples of the conditions the family won
+    /// (see [`search::cv::contest`]), –.
+    pub wins: f64,
+    /// Whether the family was searched in full (else only its coarse fit).
+    pub refined: bool,
     /// The fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
     /// What the candidate still leaves: its five largest |z|.
@@ -116,17 +126,37 @@ pub struct NamedEffect {
     pub form: &'static str,
     /// Its fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
-    /// The share of the baseline's explainable gap (its key gap less the
-    /// noise floor) that adding this effect closed, –.
+    /// The share of what the model before it left of the out-of-sample gap
+    /// (above the noise floor) that adding it closed, from the refits
+    /// without each fold, –.
     pub share: f64,
-    /// –, in [0, 1].
+    /// What its form leaves of that gap: 1 − `share` (an effect is named
+    /// for its family; no rig matches a candidate's shape exactly), –.
+    pub form_misfit: f64,
+    /// The share of bootstrap resamples of the conditions it won, –, in
+    /// [0, 1].
     pub confidence: f64,
-    /// How far the fitted model's simulated response (peak and phase means
-    /// and variances at the fitting units) moves when this effect alone is
-    /// taken out of it: the mean squared move in the scores' spreads, –;
-    /// `None` with a single effect, or where the model does not run
-    /// without it.
-    pub response_weight: Option<f64>,
+    /// Per fold: the gap at the fold's units of the model before it and
+    /// with it, both fitted without the fold.
+    pub folds: Vec<FoldGap>,
+}
+
+/// The gap at one fold's units of two models fitted without it.
+#[derive(Clone, Debug, Serialize)]
+pub struct FoldGap {
+    /// What the fold holds out.
+    pub label: String,
+    /// –
+    pub before: f64,
+    /// –
+    pub after: f64,
+}
+
+impl FoldGap {
+    /// (before − after) / before, –; 0 for a zero gap.
+    pub fn shrink(&self) -> f64 {
+        if self.before > 0.0 { (self.before - self.after) / self.before } else { 0.0 }
+    }
 }
 
 /// Where the calibrated baseline misfits in a way no effect explains.
@@ -145,8 +175,11 @@ pub struct MisfitObservable {
     pub observable: Observable,
     /// Mean z over the fitting units (sign: measured above simulated), –.
     pub mean_z: f64,
-    /// Mean Huber loss over the fitting units, –.
+    /// Mean loss ln(1 + z²) over the units, –.
     pub mean_loss: f64,
+    /// How many units it is scored at.
+    #[serde(skip)]
+    pub count: usize,
 }
 
 /// Everything a diagnosis found.
@@ -156,31 +189,41 @@ pub struct Diagnosis {
     pub fitted: Model,
     /// The leading effect named; `None` when the baseline explains the data.
     pub verdict: Option<Effect>,
-    /// Every effect named, best first.
+    /// Every effect named, in the order they were added.
     pub effects: Vec<NamedEffect>,
     /// –, in [0, 1].
     pub confidence: f64,
+    /// The baseline's and the fitted model's scores on every unit.
     pub baseline_scores: Vec<Score>,
     pub fitted_scores: Vec<Score>,
-    /// The baseline's gap on the fitting units.
+    /// The baseline's gap over every unit (in sample), –.
     pub gap_fit: f64,
-    /// The baseline's gap on the held-out units.
-    pub gap_heldout: f64,
-    /// The fitted model's gaps (fitting, held-out).
-    pub gap_after: (f64, f64),
-    /// The share of the baseline's explainable gap left after the named
-    /// effects, –.
+    /// The fitted model's gap over every unit (in sample), –.
+    pub gap_after: f64,
+    /// Out of sample: the gaps of the baseline and of the fitted model, each
+    /// fold predicted by the model refitted without it, –; `None` without
+    /// folds.
+    pub cv_gaps: Option<(f64, f64)>,
+    /// Per fold: those two gaps at the fold's units.
+    pub fold_gaps: Vec<FoldGap>,
+    /// The share of the baseline's explainable out-of-sample gap left after
+    /// the named effects, –.
     pub unexplained_share: f64,
-    /// Every candidate of the first round, best first.
+    /// Every family of the first round, most wins first.
     pub candidates: Vec<Candidate>,
-    /// Threshold the held-out improvement had to beat.
+    /// The out-of-sample gap's noise threshold, –.
     pub noise_threshold: f64,
-    pub has_heldout: bool,
-    /// How the set was split.
-    pub hold_out: HoldOut,
+    /// How the set was cut into folds.
+    pub folds: Folds,
     /// Where the baseline misfits beyond what the named effects explain.
     pub misfit: Option<Misfit>,
     pub conditions: Vec<Condition>,
+    /// The baseline and the fitted model refitted without each fold (for
+    /// checks against a known truth at a withheld level).
+    pub fold_models: Vec<(Model, Model)>,
+    /// What the reader of the report should know about how the data were
+    /// read (time frames, observables set aside).
+    pub notes: Vec<String>,
 }
 
 impl Diagnosis {
@@ -221,7 +264,7 @@ fn misfit_hint(o: Observable) -> &'static str {
         O::FrictionResidualAutocorrLag1 | O::FrictionResidualAutocorrLag10 => {
             "friction that remembers beyond one noise interval: coloured friction noise or a friction memory"
         }
-        O::FrictionResidualSkewness | O::FrictionResidualExcessKurtosis => {
+        O::FrictionResidualSkewness | O::FrictionResidualTailWeight => {
             "the friction noise's distribution (skew or heavy tails: non_gaussian_friction)"
         }
         O::NormalForceHarmonic1N | O::NormalForceHarmonic2N | O::NormalForceHarmonic3N | O::NormalForceHarmonic4N => {
@@ -234,8 +277,12 @@ fn misfit_hint(o: Observable) -> &'static str {
     }
 }
 
-/// The baseline's misfit by observable, when it is beyond noise.
-fn misfit_of(scores: &[Score], noise: f64) -> Option<Misfit> {
+/// The fitted model's misfit by observable, when it is beyond `noise`,
+/// with a hint for each of the worst observables and one for every effect
+/// family whose form-agnostic signature still stands out of the noise
+/// ([`candidates::signature_excess`]): where to look when no candidate's
+/// form explained the gap.
+fn misfit_of(scores: &[Score], null: search::cv::NullLoss, named: &[Effect]) -> Option<Misfit> {
     let mut by: BTreeMap<Observable, Vec<f64>> = BTreeMap::new();
     for s in scores.iter().filter(|s| !s.heldout) {
         by.entry(s.observable).or_default().push(s.z);
@@ -245,16 +292,24 @@ fn misfit_of(scores: &[Score], noise: f64) -> Option<Misfit> {
         .map(|(observable, z)| MisfitObservable {
             observable,
             mean_z: mean(&z),
-            mean_loss: mean(&z.iter().map(|&z| score::huber(z)).collect::<Vec<_>>()),
+            mean_loss: mean(&z.iter().map(|&z| search::cv::loss(z)).collect::<Vec<_>>()),
+            count: z.len(),
         })
-        .filter(|m| m.mean_loss - candidates::NULL_HUBER > noise)
+        .filter(|m| m.mean_loss - null.mean > null.noise(m.count))
         .collect();
-    if worst.is_empty() {
+    let mut families: Vec<(Effect, f64)> = Effect::ALL
+        .into_iter()
+        .filter(|e| !named.contains(e))
+        .map(|e| (e, candidates::signature_excess(e, scores)))
+        .filter(|(_, x)| *x > candidates::SIGNATURE_STANDS_OUT)
+        .collect();
+    families.sort_by(|a, b| b.1.total_cmp(&a.1));
+    if worst.is_empty() && families.is_empty() {
         return None;
     }
     worst.sort_by(|a, b| b.mean_loss.total_cmp(&a.mean_loss));
     worst.truncate(6);
-    let hints = worst
+    let mut hints: Vec<String> = worst
         .iter()
         .map(|m| {
             format!(
@@ -265,6 +320,11 @@ fn misfit_of(scores: &[Score], noise: f64) -> Option<Misfit> {
             )
         })
         .collect();
+    hints.extend(
+        families
+            .iter()
+            .map(|(e, x)| format!("the signature of {e} stands {x:.0} noise units out of the noise: {}", e.meaning())),
+    );
     Some(Misfit { observables: worst, hints })
 }
 
@@ -293,21 +353,6 @@ pub fn diagnose(
     diagnose_set(&set, settings, engine, progress)
 }
 
-/// How sure a verdict of "none" is, from the baseline's key gap `key0`,
-/// the best first-round candidate's (`None` when no effect was fitted) and
-/// the key gap's noise threshold: high when nothing was left to explain or
-/// no candidate came near the noise threshold (0.95 less half the best
-/// candidate's fall in thresholds). A baseline whose key gap stands m
-/// thresholds above the noise floor (m > 1) misfits: "none" then says that
-/// no candidate explains the misfit, not that there is nothing to explain,
-/// and the confidence is divided by √m (a gap 25 thresholds up leaves a
-/// fifth of it). In [0.05, 0.95].
-fn none_confidence(key0: f64, best_key: Option<f64>, noise: f64) -> f64 {
-    let best_gain = best_key.map_or(0.0, |k| (key0 - k) / noise);
-    let misfit = ((key0 - candidates::NULL_HUBER) / noise).max(1.0);
-    ((0.95 - 0.5 * best_gain.max(0.0)) / misfit.sqrt()).clamp(0.05, 0.95)
-}
-
 /// Runs the whole diagnosis on a measurement set already read.
 pub fn diagnose_set(
     set: &MeasurementSet,
@@ -315,8 +360,9 @@ pub fn diagnose_set(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Diagnosis> {
-    let data = Data::new(set)?;
-    progress(&format!("calibrating the baseline (held out: {})", data.hold_out.describe()));
+    let mut data = Data::new(set)?;
+    let mut notes = frame::frame_notes(&data);
+    progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
     let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(
         &calibrate::initial_baseline(&data)?,
         &data,
@@ -326,114 +372,125 @@ pub fn diagnose_set(
         0,
         Scope::All,
     )?;
-    let (baseline, baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
-    let has_heldout = data.has_heldout();
-    let gaps = (gap_of(&baseline_scores, false), gap_of(&baseline_scores, true));
-    let selection = search::select(&baseline, &baseline_scores, slope, &data, settings, engine, progress)?;
-    let key0 = if has_heldout { gaps.1 } else { gaps.0 };
-    let explainable = (key0 - candidates::NULL_HUBER).max(1e-9);
-    let weights = search::response_weights(&selection.steps, &baseline_scores, &data, settings, engine)?;
-    if std::env::var_os("STICKSLIP_DEBUG").is_some() {
-        for (s, w) in selection.steps.iter().zip(&weights) {
-            eprintln!("response weight of {}: {w:?}", s.candidate.effect);
-        }
+    let (baseline, mut baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
+    if let Some(note) = frame::check_phases(&mut data, &baseline_scores) {
+        progress("the records' phases look as if their time origin were free; their phase means are set aside");
+        notes.push(note);
+        baseline_scores.retain(|s| data.measured[s.unit].contains_key(&s.observable));
     }
-    let mut effects: Vec<NamedEffect> = selection
+    let selection = search::select(&baseline, slope, &data, settings, engine, progress)?;
+    let effects: Vec<NamedEffect> = selection
         .steps
         .iter()
-        .enumerate()
-        .map(|(i, s)| NamedEffect {
+        .map(|s| NamedEffect {
             effect: s.candidate.effect,
             form: s.candidate.form,
             parameters: s.candidate.parameters.clone(),
-            share: ((s.before.1 - s.after_key) / explainable).clamp(0.0, 1.0),
-            confidence: search::confidence(s, selection.noise_heldout, explainable),
-            response_weight: weights.get(i).copied().flatten().map(|w| w.moved),
+            share: s.share,
+            form_misfit: (1.0 - s.share).clamp(0.0, 1.0),
+            confidence: s.confidence,
+            folds: data
+                .folds
+                .folds
+                .iter()
+                .zip(&s.folds)
+                .map(|(f, r)| FoldGap { label: f.label.clone(), before: r.gap_before, after: r.gap_after })
+                .collect(),
         })
         .collect();
-    // The leading effect first; the others in the order they were added.
-    let lead = search::response_leader(&weights);
-    if lead > 0 {
-        let leading = effects.remove(lead);
-        effects.insert(0, leading);
-    }
     let (fitted, fitted_scores) = match selection.steps.last() {
         Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),
     };
-    let gap_after = (gap_of(&fitted_scores, false), gap_of(&fitted_scores, true));
-    let key_after = if has_heldout { gap_after.1 } else { gap_after.0 };
-    let unexplained_share = ((key_after - candidates::NULL_HUBER).max(0.0) / explainable).clamp(0.0, 1.0);
-    let misfit = misfit_of(&fitted_scores, selection.noise_fit);
+    let fitted_folds = selection.fitted_folds();
+    let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())
+        .map(|k| {
+            let units = data.folds.folds[k].units.iter().copied();
+            let (before, after) =
+                search::pair_gaps(&selection.baseline_folds[k].scores, &fitted_folds[k].scores, &data, units);
+            FoldGap { label: data.folds.folds[k].label.clone(), before, after }
+        })
+        .collect();
+    let cv_gaps = data.folds.any().then(|| {
+        // Every unit is held out once: weighted by each fold's scores.
+        let counts: Vec<f64> = data
+            .folds
+            .folds
+            .iter()
+            .map(|f| f.units.iter().map(|&u| data.measured[u].len() as f64).sum::<f64>())
+            .collect();
+        let total: f64 = counts.iter().sum::<f64>().max(1.0);
+        let weighted =
+            |g: fn(&FoldGap) -> f64| fold_gaps.iter().zip(&counts).map(|(f, n)| g(f) * n).sum::<f64>() / total;
+        (weighted(|f| f.before), weighted(|f| f.after))
+    });
+    let floor = selection.null.mean;
+    let in_sample = search::pair_gaps(&baseline_scores, &fitted_scores, &data, 0..data.units.len());
+    let unexplained_share = match cv_gaps {
+        Some((before, after)) => ((after - floor).max(0.0) / (before - floor).max(1e-9)).clamp(0.0, 1.0),
+        None => 1.0,
+    };
+    let named: Vec<Effect> = effects.iter().map(|e| e.effect).collect();
+    let misfit = misfit_of(&fitted_scores, search::cv::NullLoss::for_replicates(settings.replicates), &named);
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
-        None => {
-            let best_key = selection.first_round.iter().map(|b| search::key_gap(b, has_heldout)).min_by(f64::total_cmp);
-            (None, none_confidence(key0, best_key, selection.noise_heldout))
-        }
+        None => (None, selection.none_confidence),
     };
     let mut conditions: Vec<Condition> = data.units.iter().map(|u| u.condition).collect();
     conditions.dedup_by_key(|c| condition_key(*c));
+    let fold_models =
+        selection.baseline_folds.iter().zip(&fitted_folds).map(|(b, f)| (b.model.clone(), f.model.clone())).collect();
     Ok(Diagnosis {
         baseline,
         fitted,
         verdict,
         effects,
         confidence,
-        gap_fit: gaps.0,
-        gap_heldout: gaps.1,
-        gap_after,
+        gap_fit: in_sample.0,
+        gap_after: in_sample.1,
+        cv_gaps,
+        fold_gaps,
         unexplained_share,
         baseline_scores,
         fitted_scores,
         candidates: selection.first_round,
-        noise_threshold: selection.noise_heldout,
-        has_heldout,
-        hold_out: data.hold_out.clone(),
+        noise_threshold: selection.noise,
+        folds: data.folds.clone(),
         misfit,
         conditions,
+        fold_models,
+        notes,
     })
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{Observable, Score, misfit_of, none_confidence};
+    use super::{Effect, Observable, Score, misfit_of};
 
-    /// A fitting score of `observable` with z = `z`.
-    fn fitting_score(observable: Observable, z: f64) -> Score {
-        crate::diagnose::score::test_score(0, observable, z, false)
+    /// A fitting score of `observable` at unit `unit` with z = `z`.
+    fn fitting_score(unit: usize, observable: Observable, z: f64) -> Score {
+        crate::diagnose::score::test_score(unit, observable, z, false)
     }
 
-    /// Seed 21's 18-run `rational` hysteresis set: no candidate's form closed
-    /// enough of the gap, and its two worst observables (the branch
-    /// asymmetry at z ≈ −135, the residual's lag-1 autocorrelation at
-    /// z ≈ +113) had no hint, so the report named only the friction level.
-    /// Every misfit observable now says where to look, worst first.
+    /// A friction memory in a form no candidate has leaves the branch
+    /// asymmetry and the residual's autocorrelation far off: each misfit
+    /// observable says where to look, worst first, and so does the family
+    /// whose signature stands out.
     #[test]
-    fn every_misfit_observable_says_where_to_look() {
+    fn every_misfit_observable_and_family_says_where_to_look() {
         let scores = [
-            fitting_score(Observable::FrictionHysteresis, -135.0),
-            fitting_score(Observable::FrictionResidualAutocorrLag1, 113.0),
-            fitting_score(Observable::PeakMeanM, 0.5),
+            fitting_score(0, Observable::FrictionHysteresis, -135.0),
+            fitting_score(0, Observable::FrictionResidualAutocorrLag1, 113.0),
+            fitting_score(0, Observable::PeakMeanM, 0.5),
         ];
-        let misfit = misfit_of(&scores, 1.0).expect("a misfit beyond the noise");
+        let null = crate::diagnose::search::cv::NullLoss { mean: 0.6, sd: 0.6 };
+        let misfit = misfit_of(&scores, null, &[]).expect("a misfit beyond the noise");
         assert_eq!(misfit.observables.len(), 2, "the peak mean is within the noise");
-        assert_eq!(misfit.hints.len(), 2);
         assert!(misfit.hints[0].contains("friction memory") && misfit.hints[0].contains("measured below simulated"));
         assert!(misfit.hints[1].contains("coloured friction noise"));
-    }
-
-    #[test]
-    fn none_is_sure_only_when_the_baseline_fits() {
-        // At the noise floor, with no candidate near the threshold: sure.
-        assert_eq!(none_confidence(1.5, Some(1.6), 1.1), 0.95);
-        assert_eq!(none_confidence(1.5, None, 1.1), 0.95);
-        // A candidate 1.5 thresholds below the baseline halves it and more.
-        assert!((none_confidence(2.0, Some(2.0 - 1.65), 1.1) - 0.2).abs() < 1e-12);
-        // The baseline 22 thresholds above the floor and no candidate
-        // explaining it (seed 12 set 11: held-out gap 26.45, noise 1.13, the
-        // best candidate 26.61): 0.20, not 0.95.
-        let c = none_confidence(26.45, Some(26.61), 1.13);
-        assert!((c - 0.95 / ((26.45f64 - 1.3) / 1.13).sqrt()).abs() < 1e-12 && (c - 0.20).abs() < 0.01, "{c}");
+        assert!(misfit.hints.iter().any(|h| h.contains("signature of friction_hysteresis")), "{:?}", misfit.hints);
+        // A named family is not pointed at again.
+        let misfit = misfit_of(&scores, null, &[Effect::FrictionHysteresis]).expect("a misfit");
+        assert!(!misfit.hints.iter().any(|h| h.contains("signature of friction_hysteresis")));
     }
 }

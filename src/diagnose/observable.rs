@@ -29,7 +29,7 @@ pub enum Observable {
     FrictionMuMean,
     FrictionResidualStd,
     FrictionResidualSkewness,
-    FrictionResidualExcessKurtosis,
+    FrictionResidualTailWeight,
     FrictionResidualAutocorrLag1,
     FrictionResidualAutocorrLag10,
     FrictionHysteresis,
@@ -111,7 +111,7 @@ impl Observable {
         Observable::FrictionMuMean,
         Observable::FrictionResidualStd,
         Observable::FrictionResidualSkewness,
-        Observable::FrictionResidualExcessKurtosis,
+        Observable::FrictionResidualTailWeight,
         Observable::FrictionResidualAutocorrLag1,
         Observable::FrictionResidualAutocorrLag10,
         Observable::FrictionHysteresis,
@@ -145,7 +145,7 @@ impl Observable {
             Observable::FrictionMuMean => "friction_mu_mean",
             Observable::FrictionResidualStd => "friction_residual_std",
             Observable::FrictionResidualSkewness => "friction_residual_skewness",
-            Observable::FrictionResidualExcessKurtosis => "friction_residual_excess_kurtosis",
+            Observable::FrictionResidualTailWeight => "friction_residual_tail_weight",
             Observable::FrictionResidualAutocorrLag1 => "friction_residual_autocorr_lag1",
             Observable::FrictionResidualAutocorrLag10 => "friction_residual_autocorr_lag10",
             Observable::FrictionHysteresis => "friction_hysteresis",
@@ -212,7 +212,7 @@ impl Observable {
             | Observable::FrictionMuMean
             | Observable::FrictionResidualStd
             | Observable::FrictionResidualSkewness
-            | Observable::FrictionResidualExcessKurtosis
+            | Observable::FrictionResidualTailWeight
             | Observable::FrictionResidualAutocorrLag1
             | Observable::FrictionResidualAutocorrLag10 => MotionPhase::SlipNoise,
         }

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
-use crate::diagnose::{Diagnosis, Unexplained, chart};
+use crate::diagnose::{Diagnosis, FoldGap, Unexplained, chart, sd};
 use crate::error::Result;
 use crate::io::{OutputSet, owned, write_atomically};
 
@@ -18,7 +18,7 @@ use crate::io::{OutputSet, owned, write_atomically};
 pub const REPORT_FORMAT: &str = "stickslip-diagnosis/1";
 
 /// What the gap metric measures, as `report.json` states it.
-pub const GAP_METRIC: &str = "mean over (condition, observable) of the Huber loss of z (z² for |z| <= 3, 6|z| − 9 beyond), z = (measured − simulated)/(simulator's replicate spread); fitting units (held-out units for heldout_*)";
+pub const GAP_METRIC: &str = "mean over (condition, observable) of ln(1 + z²), z = (measured − simulated)/(the spread of their difference under the simulator; after: under the fitted model, the baseline measured in the same spread); about 0.6 for a model that is right; baseline/after over every unit with models fitted to every unit; heldout_* over every unit with each fold predicted by models fitted without it";
 
 /// `report.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -29,31 +29,41 @@ pub struct Report {
     pub gap: GapReport,
     /// Where the calibrated baseline departs from the data (|z| > 3), largest first.
     pub locations: Vec<Location>,
-    /// Every effect tried, best first.
+    /// Every effect tried in the first round, most wins first.
     pub candidates: Vec<CandidateReport>,
     pub models: ModelFiles,
     /// The measurement set diagnosed.
     pub source: String,
     /// Run time of the diagnosis, s.
     pub elapsed_s: f64,
+    /// How the data were read (time frames, observables set aside).
+    #[serde(default)]
+    pub notes: Vec<String>,
 }
+
+/// How the confidence is defined, as `report.json` states it.
+pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) in which this verdict wins: an effect wins a resample when its family closes the largest share of the current model's explainable out-of-sample gap, that share is at least one half, and the gap stands above its noise; `none` wins where no effect does";
 
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct VerdictReport {
     /// The leading effect (the contract's key).
     pub effect: String,
-    /// –, in [0, 1].
+    /// –, in [0, 1] (see `confidence_meaning`).
     pub confidence: f64,
-    /// Every effect named, best first (empty for `none`).
+    /// What the confidence is.
+    #[serde(default)]
+    pub confidence_meaning: String,
+    /// Every effect named, in the order they were added (empty for `none`).
     #[serde(default)]
     pub effects: Vec<VerdictEffect>,
-    /// The share of the baseline's explainable gap (its gap less the noise
-    /// floor of about 1.3) that the named effects leave, –.
+    /// The share of the baseline's explainable out-of-sample gap (its gap
+    /// less the noise floor of about 1.3) that the named effects leave, –.
     #[serde(default)]
     pub unexplained_share: f64,
-    /// Where the calibrated model still misfits beyond noise: which
-    /// observables, and which parameters that points at. `null` when it fits.
+    /// Where the fitted model still misfits beyond noise: which
+    /// observables, what that points at, and every effect family whose
+    /// signature still stands out. `null` when it fits.
     #[serde(default)]
     pub misfit: Option<MisfitReport>,
 }
@@ -66,17 +76,30 @@ pub struct VerdictEffect {
     pub form: String,
     /// –, in [0, 1].
     pub confidence: f64,
-    /// The share of the baseline's explainable gap this effect closed, –.
+    /// The share of what the model before it left of the out-of-sample
+    /// gap (above the noise floor) that this effect closed, each fold
+    /// predicted by models refitted without it, –.
     pub share_of_gap: f64,
-    /// How far the fitted model's simulated response (peaks and phases at
-    /// the fitting units) moves without this effect, as a mean squared move
-    /// in the scores' spreads, –; absent with a single effect. The leading
-    /// effect is the first added unless another one's weight beats it
-    /// beyond noise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub response_weight: Option<f64>,
+    /// What the effect's best form leaves of that gap (1 − share), –: the
+    /// data's effect has a shape no candidate form has exactly.
+    #[serde(default)]
+    pub form_misfit: f64,
+    /// Per fold: the gap at its units without and with the effect.
+    #[serde(default)]
+    pub folds: Vec<FoldReport>,
     /// The fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
+}
+
+/// One fold's gap before and after.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FoldReport {
+    /// What the fold holds out.
+    pub heldout: String,
+    pub before: f64,
+    pub after: f64,
+    /// `(before − after) / before`, –.
+    pub shrink: f64,
 }
 
 /// `verdict.misfit`.
@@ -87,7 +110,7 @@ pub struct MisfitReport {
 }
 
 /// One observable the model misfits: its mean z and mean Huber loss over
-/// the fitting units.
+/// every unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MisfitObservableReport {
     pub observable: Observable,
@@ -95,23 +118,31 @@ pub struct MisfitObservableReport {
     pub mean_loss: f64,
 }
 
-/// `gap`: the gap metric before and after the verdict's effect.
+/// `gap`: the gap metric before and after the verdict's effects.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GapReport {
     pub metric: String,
-    /// The calibrated baseline's gap on the fitting units.
+    /// The calibrated baseline's gap over every unit (fitted to them all).
     pub baseline: f64,
-    /// The fitted model's gap on the fitting units.
+    /// The fitted model's gap over every unit.
     pub after: f64,
     /// `(baseline − after) / baseline`, –.
     pub shrink: f64,
-    /// The same on the held-out units; `null` without them.
+    /// The same out of sample (each fold predicted by the models refitted
+    /// without it); `null` without folds.
     pub heldout_shrink: Option<f64>,
     pub heldout_baseline: Option<f64>,
     pub heldout_after: Option<f64>,
-    /// What the held-out gap had to fall by for an effect to be named.
+    /// `heldout_shrink` fold by fold.
+    #[serde(default)]
+    pub heldout_folds: Vec<FoldReport>,
+    /// The standard deviation of the folds' shrinks, –.
+    #[serde(default)]
+    pub heldout_shrink_sd: Option<f64>,
+    /// The out-of-sample gap's noise threshold: a gap within it of the
+    /// floor (about 1.3) has nothing to explain.
     pub noise_threshold: f64,
-    /// What was held out of every fit.
+    /// How the units were cut into folds.
     #[serde(default)]
     pub heldout_units: String,
 }
@@ -129,20 +160,29 @@ pub struct Location {
     pub score: f64,
 }
 
-/// One candidate effect.
+/// One candidate effect family of the first round.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateReport {
     pub effect: String,
     /// The form that fitted best.
     #[serde(default)]
     pub form: String,
-    /// How far the effect's signature stood above noise, in noise units.
-    #[serde(default)]
-    pub signature_excess: f64,
+    /// The relative fall of the gap over every unit with its best fit, –.
     pub shrink: f64,
+    /// The relative fall of the out-of-sample gap, –.
     pub heldout_shrink: Option<f64>,
+    /// The share of the explainable gap closed in sample and out of sample, –.
+    #[serde(default)]
+    pub share_in_sample: f64,
+    #[serde(default)]
+    pub share_out_of_sample: f64,
+    /// The share of bootstrap resamples it won, –.
+    #[serde(default)]
+    pub wins: f64,
+    /// Whether it was searched in full (else coarsely).
+    #[serde(default)]
+    pub searched_in_full: bool,
     pub gap_fit: f64,
-    pub gap_heldout: f64,
     /// The fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
     /// The five largest |z| the candidate leaves.
@@ -176,13 +216,18 @@ impl From<&Unexplained> for UnexplainedReport {
     }
 }
 
+impl From<&FoldGap> for FoldReport {
+    fn from(f: &FoldGap) -> Self {
+        FoldReport { heldout: f.label.clone(), before: f.before, after: f.after, shrink: f.shrink() }
+    }
+}
+
 impl Diagnosis {
     /// `report.json` as `interfaces.md` describes it (plus extra keys).
     pub fn report(&self, source: &Path, elapsed_s: f64) -> Report {
-        let (after_fit, after_ho) = self.gap_after;
-        let shrink = if self.gap_fit > 0.0 { (self.gap_fit - after_fit) / self.gap_fit } else { 0.0 };
-        let heldout_shrink =
-            (self.has_heldout && self.gap_heldout > 0.0).then(|| (self.gap_heldout - after_ho) / self.gap_heldout);
+        let shrink = if self.gap_fit > 0.0 { (self.gap_fit - self.gap_after) / self.gap_fit } else { 0.0 };
+        let heldout_shrink = self.cv_gaps.map(|(b, a)| if b > 0.0 { (b - a) / b } else { 0.0 });
+        let fold_shrinks: Vec<f64> = self.fold_gaps.iter().map(FoldGap::shrink).collect();
         let mut locations: Vec<&Score> = self.baseline_scores.iter().filter(|s| s.z.abs() > 3.0).collect();
         locations.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
         Report {
@@ -190,6 +235,7 @@ impl Diagnosis {
             verdict: VerdictReport {
                 effect: self.verdict_name().to_string(),
                 confidence: self.confidence,
+                confidence_meaning: CONFIDENCE_MEANING.to_string(),
                 effects: self
                     .effects
                     .iter()
@@ -198,7 +244,8 @@ impl Diagnosis {
                         form: e.form.to_string(),
                         confidence: e.confidence,
                         share_of_gap: e.share,
-                        response_weight: e.response_weight,
+                        form_misfit: e.form_misfit,
+                        folds: e.folds.iter().map(FoldReport::from).collect(),
                         parameters: e.parameters.clone(),
                     })
                     .collect(),
@@ -219,13 +266,15 @@ impl Diagnosis {
             gap: GapReport {
                 metric: GAP_METRIC.to_string(),
                 baseline: self.gap_fit,
-                after: after_fit,
+                after: self.gap_after,
                 shrink,
                 heldout_shrink,
-                heldout_baseline: self.has_heldout.then_some(self.gap_heldout),
-                heldout_after: self.has_heldout.then_some(after_ho),
+                heldout_baseline: self.cv_gaps.map(|g| g.0),
+                heldout_after: self.cv_gaps.map(|g| g.1),
+                heldout_folds: self.fold_gaps.iter().map(FoldReport::from).collect(),
+                heldout_shrink_sd: (fold_shrinks.len() >= 2).then(|| sd(&fold_shrinks)),
                 noise_threshold: self.noise_threshold,
-                heldout_units: self.hold_out.describe(),
+                heldout_units: self.folds.describe(),
             },
             locations: locations
                 .iter()
@@ -234,11 +283,10 @@ impl Diagnosis {
                     normal_force_n: s.normal_force_n,
                     observable: s.observable,
                     detail: format!(
-                        "{}: measured {:.6e}, baseline simulates {:.6e}{}",
+                        "{}: measured {:.6e}, baseline simulates {:.6e}",
                         s.observable.phase().describe(),
                         s.measured,
                         s.simulated,
-                        if s.heldout { " (held-out unit)" } else { "" }
                     ),
                     score: s.z.abs(),
                 })
@@ -249,11 +297,13 @@ impl Diagnosis {
                 .map(|c| CandidateReport {
                     effect: c.effect.name().to_string(),
                     form: c.form.to_string(),
-                    signature_excess: c.signature_excess,
                     shrink: c.shrink,
-                    heldout_shrink: c.heldout_shrink,
+                    heldout_shrink: self.cv_gaps.map(|_| c.heldout_shrink),
+                    share_in_sample: c.in_sample_share,
+                    share_out_of_sample: c.cv_share,
+                    wins: c.wins,
+                    searched_in_full: c.refined,
                     gap_fit: c.gap_fit,
-                    gap_heldout: c.gap_heldout,
                     parameters: c.parameters.clone(),
                     unexplained: c.unexplained.iter().map(UnexplainedReport::from).collect(),
                 })
@@ -261,6 +311,7 @@ impl Diagnosis {
             models: ModelFiles { baseline: "baseline-model.toml".into(), fitted: "fitted-model.toml".into() },
             source: source.display().to_string(),
             elapsed_s,
+            notes: self.notes.clone(),
         }
     }
 }
@@ -430,30 +481,37 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
         d.confidence
     ));
     if d.effects.is_empty() {
-        s.push_str("<p>The calibrated baseline model explains the data: no unmodelled effect lowered the gap on the held-out units by more than noise does.</p>");
+        s.push_str("<p>No unmodelled effect is named: no effect family closed at least half of the calibrated baseline's out-of-sample gap above the noise in most resamples of the conditions (see <i>Candidates</i> below for what each family closed).</p>");
     } else {
-        s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed</th><th>response weight (move without it)</th><th>fitted parameters (unit, meaning)</th></tr>");
+        s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed (out of sample)</th><th>form misfit</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
             s.push_str(&format!(
-                "<tr><td><b>{}</b></td><td style=\"text-align:left\">{}</td><td>{}</td><td>{:.2}</td><td>{:.0}%</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+                "<tr><td><b>{}</b></td><td style=\"text-align:left\">{}</td><td>{}</td><td>{:.2}</td><td>{:.0}%</td><td>{:.0}%</td><td style=\"text-align:left\">{}</td></tr>",
                 escape(e.effect.name()),
                 escape(e.effect.meaning()),
                 escape(e.form),
                 e.confidence,
                 100.0 * e.share,
-                e.response_weight.map_or("–".to_string(), |w| format!("{w:.2}")),
+                100.0 * e.form_misfit,
                 params(&e.parameters)
             ));
         }
-        s.push_str("</table><p class=\"note\">Confidence runs from 0 to 1. The share of the gap closed is the part of the baseline's gap above the noise floor that adding the effect removed. With several effects, the response weight is how far the fitted model's peaks and phases move at the fitted conditions when that effect alone is taken out (mean squared move, in spreads); the effect that moves the response most, beyond noise, leads. <code>fitted-model.toml</code> holds the effect with these values.</p>");
+        s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions in which the effect wins: its family closes the largest share of what the model before it left of the out-of-sample gap, at least half of it, above the noise. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
     }
     s.push_str(&format!(
-        "<p>Left unexplained: {:.0}% of the baseline's gap above the noise floor. Held out of every fit: {}.</p>",
+        "<p>Left unexplained: {:.0}% of the baseline's out-of-sample gap above the noise floor. Folds: {}.</p>",
         100.0 * d.unexplained_share,
-        escape(&d.hold_out.describe())
+        escape(&d.folds.describe())
     ));
+    if !d.notes.is_empty() {
+        s.push_str("<h2>How the data were read</h2><ul>");
+        for n in &d.notes {
+            s.push_str(&format!("<li>{}</li>", escape(n)));
+        }
+        s.push_str("</ul>");
+    }
     if let Some(m) = &d.misfit {
-        s.push_str("<h2>Where the calibrated model still misfits</h2><ul>");
+        s.push_str("<h2>Where the fitted model still misfits</h2><ul>");
         for h in &m.hints {
             s.push_str(&format!("<li>{}</li>", escape(h)));
         }
@@ -465,7 +523,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     }
     s.push_str("<h2>How large the gap is</h2>");
     s.push_str(&format!(
-        "<table><tr><th></th><th>baseline</th><th>after the verdict</th><th>shrink</th></tr><tr><td>fitting units</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>held-out units</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+        "<table><tr><th></th><th>baseline</th><th>after the verdict</th><th>shrink</th></tr><tr><td>every condition, models fitted to them all</td><td>{}</td><td>{}</td><td>{}</td></tr><tr><td>out of sample (each fold predicted by models fitted without it)</td><td>{}</td><td>{}</td><td>{}</td></tr>",
         num(Some(gap.baseline)),
         num(Some(gap.after)),
         num(Some(gap.shrink)),
@@ -473,9 +531,23 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
         num(gap.heldout_after),
         num(gap.heldout_shrink),
     ));
-    s.push_str("<p class=\"note\">The gap is the mean over every scored (condition, observable) of a loss of z, where z is measured − simulated in units of the simulator's own spread: z² up to |z| = 3 and growing linearly beyond, so a model that matches the data to within noise scores about 1. <b>Shrink</b> = (baseline − after) / baseline: 0.4 means the gap fell by 40%. The held-out units were left out of every fit, so their shrink is the honest test. <b>A negative shrink</b> means the model got worse there: the fitted effect matched the fitting units' noise or a feature that does not carry over to the held-out conditions (over-fitting), and such an effect is not named.</p>");
-    if gap.heldout_shrink.is_some_and(|h| h < 0.0) {
-        s.push_str("<p><b>Here the held-out shrink is negative:</b> on the held-out units the fitted model is worse than the calibrated baseline, so whatever it fitted does not generalise; read the verdict with that in mind.</p>");
+    for f in &gap.heldout_folds {
+        s.push_str(&format!(
+            "<tr><td>&nbsp;&nbsp;held out: {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape(&f.heldout),
+            num(Some(f.before)),
+            num(Some(f.after)),
+            num(Some(f.shrink))
+        ));
+    }
+    s.push_str("</table>");
+    s.push_str("<p class=\"note\">The gap is the mean over every scored (condition, observable) of a loss of z, where z is measured − simulated in units of the simulator's own spread: z² up to |z| = 3 and growing linearly beyond, so a model that matches the data to within noise scores about 1.3. <b>Shrink</b> = (baseline − after) / baseline: 0.4 means the gap fell by 40%. <b>A negative shrink</b> means the fitted model predicts that fold worse than the baseline does.</p>");
+    let worse: Vec<&FoldReport> = gap.heldout_folds.iter().filter(|f| f.shrink < 0.0).collect();
+    if !d.effects.is_empty() && !worse.is_empty() {
+        s.push_str(&format!(
+            "<p><b>Predicted worse than by the baseline:</b> {}. Read the fitted model there with care.</p>",
+            escape(&worse.iter().map(|f| f.heldout.as_str()).collect::<Vec<_>>().join("; "))
+        ));
     }
     s.push_str("<h2>Where the baseline departs from the data</h2><img src=\"gap.png\" alt=\"|z| of the worst observables, calibrated baseline and fitted\">");
     s.push_str("<p class=\"note\">Each row is one observable at one condition, its |z| on a log scale under the calibrated baseline (red) and the fitted model (blue). The dashed line is |z| = 3: three spreads, past which a difference is unlikely to be noise; the table lists every such departure. All scores are in <a href=\"scores.csv\">scores.csv</a>.</p>");
@@ -502,22 +574,22 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
             departures.len() - 30
         ));
     }
-    s.push_str("</table><h2>Candidates of the first round (each refitted with the baseline's friction law)</h2><table><tr><th>effect</th><th>form</th><th>gap (fit)</th><th>gap (held-out)</th><th>shrink</th><th>held-out shrink</th><th>parameters</th></tr>");
+    s.push_str("</table><h2>Candidates of the first round</h2><table><tr><th>effect</th><th>form</th><th>share closed in sample</th><th>share closed out of sample</th><th>wins</th><th>searched</th><th>parameters</th></tr>");
     for c in &d.candidates {
         s.push_str(&format!(
-            "<tr><td title=\"{}\">{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            "<tr><td title=\"{}\">{}</td><td>{}</td><td>{:.0}%</td><td>{:.0}%</td><td>{:.2}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
             escape(c.effect.meaning()),
             escape(c.effect.name()),
             escape(c.form),
-            c.gap_fit,
-            c.gap_heldout,
-            c.shrink,
-            c.heldout_shrink.map_or("–".into(), |h| format!("{h:.3}")),
+            100.0 * c.in_sample_share,
+            100.0 * c.cv_share,
+            c.wins,
+            if c.refined { "in full" } else { "coarsely" },
             params(&c.parameters)
         ));
     }
     s.push_str(&format!(
-        "</table><p>A candidate counts only if it lowers the held-out gap by more than {:.3} (noise threshold). Models: <a href=\"baseline-model.toml\">baseline-model.toml</a>, <a href=\"fitted-model.toml\">fitted-model.toml</a>; both run with <code>stickslip sweep --config</code>.</p></body></html>\n",
+        "</table><p class=\"note\">Every family the data have a channel for is fitted at least coarsely (each form at the parameters the data point to); the closest are searched in full. The out-of-sample gap's noise threshold is {:.3}. Models: <a href=\"baseline-model.toml\">baseline-model.toml</a>, <a href=\"fitted-model.toml\">fitted-model.toml</a>; both run with <code>stickslip sweep --config</code>.</p></body></html>\n",
         d.noise_threshold
     ));
     s

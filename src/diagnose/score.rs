@@ -2,13 +2,12 @@
 //! against the simulator's own replicate spread, and the gap metric over
 //! them.
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::diagnose::data::Data;
 use crate::diagnose::features::RunFeatures;
 use crate::diagnose::observable::Observable;
-use crate::diagnose::simulate::{features_of, fitting_records, path_stats_per_condition, replicates};
+use crate::diagnose::simulate::{fitting_records, path_stats_per_condition, record_features};
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
@@ -23,6 +22,14 @@ pub const HUBER_K: f64 = 3.0;
 pub fn huber(z: f64) -> f64 {
     let a = z.abs();
     if a <= HUBER_K { a * a } else { 2.0 * HUBER_K * a - HUBER_K * HUBER_K }
+}
+
+/// The noise a fall of the mean Huber loss over `k` scores must beat:
+/// 3·sqrt(2/k) (three standard deviations of a mean of k values of about
+/// z², each of variance about 2) plus 0.5 for the replicate estimate of each
+/// z's spread.
+pub fn gap_noise(k: usize) -> f64 {
+    3.0 * (2.0 / k.max(1) as f64).sqrt() + 0.5
 }
 
 /// Per (condition, observable): measured value and simulated replicates.
@@ -206,10 +213,7 @@ fn record_scores(
     settings: &DiagnoseSettings,
     run_units: &[usize],
 ) -> Result<Vec<Score>> {
-    let simulated: Vec<Vec<RunFeatures>> = run_units
-        .par_iter()
-        .map(|&u| Ok(features_of(data, u, &replicates(engine, model, data, settings, u, 0..settings.replicates)?)))
-        .collect::<Result<_>>()?;
+    let simulated = record_features(engine, model, data, settings, run_units)?;
     Ok(scores_of_records(data, run_units, &simulated))
 }
 

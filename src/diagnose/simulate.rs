@@ -3,7 +3,7 @@
 //! are the same for every model, so differences between models are not
 //! noise), and per-path peak statistics of small ensembles.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
@@ -89,7 +89,7 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
         return;
     }
     let key = rng::seed_key(seed ^ 0x5E45_0E5E_0000_0000);
-    let draws = data.sensor_draws.get(seed, realisation, samples.len(), |i| {
+    let draws = data.caches.sensor_draws.get(seed, realisation, samples.len(), |i| {
         rng::pair_a(rng::block(key, realisation, rng::STREAM_SENSOR, i as u64))
     });
     for (s, &(gx, gv)) in samples.iter_mut().zip(draws.iter()) {
@@ -105,7 +105,7 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
 /// diagnosis).
 pub(crate) fn features_of(data: &Data<'_>, unit: usize, runs: &[Run]) -> Vec<RunFeatures> {
     let Some(first) = runs.first() else { return Vec::new() };
-    let grid = data.grids.of(unit, first);
+    let grid = data.caches.grids.of(unit, first);
     runs.iter().map(|r| run_features_on(r, &grid)).collect()
 }
 
@@ -152,52 +152,116 @@ pub(crate) struct FittingRecords {
 }
 
 /// How many models' readings a diagnosis keeps.
-const KEPT_MODELS: usize = 64;
+const KEPT_MODELS: usize = 96;
 
-/// The readings of the fitting units' replicate records ([`RecordReading`],
-/// per unit, replicates `0..n` in order) of the last [`KEPT_MODELS`] models,
-/// by (model, noise seed, warm-up). A law step reads the records of the
-/// model it steps from, which were simulated to score that model a moment
-/// before (or the reverse), and a form's best model, searched on half the
-/// replicates, is then calibrated on all of them: every step of a law's
-/// convergence simulated each model twice, and the first half of a search's
-/// best model's replicates were simulated again. A replicate record is
-/// determined by (model, seed, warm-up, unit, replicate number), so each is
-/// simulated once.
+/// The readings of record units' replicate records ([`RecordReading`], per
+/// unit, replicates `0..n` in order) of the last [`KEPT_MODELS`] models, by
+/// (model, noise seed, warm-up). A replicate record is determined by
+/// (model, seed, warm-up, unit, replicate number), so each is simulated
+/// once per diagnosis, whichever view of the data (fold) asks for it: a
+/// law step reads the records of the model it steps from, which were
+/// simulated to score that model a moment before; a form's best model,
+/// searched on half the replicates, is then calibrated on all of them; a
+/// fold's held-out units are another fold's fitting units.
 #[derive(Default)]
 pub(crate) struct RecordCache(Mutex<VecDeque<KeptReadings>>);
 
-/// A model's readings, with the noise seed and warm-up periods they were
-/// simulated with.
-type KeptReadings = (Model, u64, u32, Vec<Vec<RecordReading>>);
+/// A model's readings by unit, with the noise seed and warm-up periods
+/// they were simulated with.
+type KeptReadings = (Model, u64, u32, BTreeMap<usize, Vec<RecordReading>>);
 
 impl RecordCache {
-    /// The readings kept for `model` under `settings` (per fitting unit,
-    /// the replicates simulated so far), if any.
-    fn get(&self, model: &Model, settings: &DiagnoseSettings) -> Option<Vec<Vec<RecordReading>>> {
+    /// The readings kept for `model` under `settings` (by unit, the
+    /// replicates simulated so far), if any.
+    fn get(&self, model: &Model, settings: &DiagnoseSettings) -> BTreeMap<usize, Vec<RecordReading>> {
         let kept = self.0.lock().expect("record cache lock");
         kept.iter()
             .find(|(m, seed, warmup, _)| m == model && *seed == settings.seed && *warmup == settings.warmup_cycles)
             .map(|(_, _, _, readings)| readings.clone())
+            .unwrap_or_default()
     }
 
     /// Keeps `readings` for `model` under `settings` (replacing what was
-    /// kept for it).
-    fn insert(&self, model: &Model, settings: &DiagnoseSettings, readings: Vec<Vec<RecordReading>>) {
+    /// kept for those units of it).
+    fn insert(&self, model: &Model, settings: &DiagnoseSettings, readings: BTreeMap<usize, Vec<RecordReading>>) {
         let mut kept = self.0.lock().expect("record cache lock");
-        kept.retain(|(m, seed, warmup, _)| {
-            !(m == model && *seed == settings.seed && *warmup == settings.warmup_cycles)
-        });
+        let at = kept
+            .iter()
+            .position(|(m, seed, warmup, _)| m == model && *seed == settings.seed && *warmup == settings.warmup_cycles);
+        let mut entry = match at {
+            Some(i) => kept.remove(i).expect("a kept entry"),
+            None => (model.clone(), settings.seed, settings.warmup_cycles, BTreeMap::new()),
+        };
+        entry.3.extend(readings);
         if kept.len() == KEPT_MODELS {
             kept.pop_front();
         }
-        kept.push_back((model.clone(), settings.seed, settings.warmup_cycles, readings));
+        kept.push_back(entry);
     }
 }
 
+/// The readings of `model`'s replicates `0..settings.replicates` of the
+/// record units `units` (simulated in parallel where not kept), in the
+/// order of `units`.
+fn readings_of(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    units: &[usize],
+) -> Result<Vec<Vec<RecordReading>>> {
+    let wanted = settings.replicates as usize;
+    let mut kept = data.caches.records.get(model, settings);
+    let short: Vec<usize> = units.iter().copied().filter(|u| kept.get(u).is_none_or(|r| r.len() < wanted)).collect();
+    if !short.is_empty() {
+        let c = data.law_c;
+        let sensor_v = data.sensor.v_m_per_s;
+        let more: Vec<(usize, Vec<RecordReading>)> = short
+            .par_iter()
+            .map(|&u| {
+                let have = kept.get(&u).map_or(0, Vec::len) as u32;
+                let runs = replicates(engine, model, data, settings, u, have..settings.replicates)?;
+                let features = features_of(data, u, &runs);
+                let readings: Vec<RecordReading> = runs
+                    .iter()
+                    .zip(features)
+                    .map(|(run, features)| RecordReading {
+                        features,
+                        moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
+                    })
+                    .collect();
+                Ok((u, readings))
+            })
+            .collect::<Result<_>>()?;
+        let mut added = BTreeMap::new();
+        for (u, readings) in more {
+            let all = kept.entry(u).or_default();
+            all.extend(readings);
+            added.insert(u, all.clone());
+        }
+        data.caches.records.insert(model, settings, added);
+    }
+    Ok(units.iter().map(|u| kept.get(u).map(|r| r[..wanted.min(r.len())].to_vec()).unwrap_or_default()).collect())
+}
+
+/// The features of `model`'s replicates `0..settings.replicates` of the
+/// record units `units`, in their order ([`RecordCache`]).
+pub(crate) fn record_features(
+    engine: &Engine,
+    model: &Model,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    units: &[usize],
+) -> Result<Vec<Vec<RunFeatures>>> {
+    Ok(readings_of(engine, model, data, settings, units)?
+        .into_iter()
+        .map(|r| r.into_iter().map(|x| x.features).collect())
+        .collect())
+}
+
 /// The [`FittingRecords`] of `model`'s replicates `0..settings.replicates`
-/// of every fitting unit (the units simulated in parallel), each record
-/// simulated once per diagnosis ([`RecordCache`]).
+/// of every fitting record unit of the view `data` (the units simulated in
+/// parallel), each record simulated once per diagnosis ([`RecordCache`]).
 pub(crate) fn fitting_records(
     engine: &Engine,
     model: &Model,
@@ -206,37 +270,11 @@ pub(crate) fn fitting_records(
 ) -> Result<FittingRecords> {
     let units: Vec<usize> =
         (0..data.units.len()).filter(|&i| data.units[i].summary.is_none() && !data.units[i].heldout).collect();
-    let wanted = settings.replicates as usize;
-    let mut readings = data.fitting_records.get(model, settings).unwrap_or_else(|| vec![Vec::new(); units.len()]);
-    if readings.iter().any(|r| r.len() < wanted) {
-        let c = data.measured_law.map(|law| law.c);
-        let sensor_v = data.sensor.v_m_per_s;
-        let more: Vec<Vec<RecordReading>> = units
-            .par_iter()
-            .zip(&readings)
-            .map(|(&u, kept)| {
-                let runs = replicates(engine, model, data, settings, u, kept.len() as u32..settings.replicates)?;
-                let features = features_of(data, u, &runs);
-                Ok(runs
-                    .iter()
-                    .zip(features)
-                    .map(|(run, features)| RecordReading {
-                        features,
-                        moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
-                    })
-                    .collect())
-            })
-            .collect::<Result<_>>()?;
-        for (kept, more) in readings.iter_mut().zip(more) {
-            kept.extend(more);
-        }
-        data.fitting_records.insert(model, settings, readings.clone());
-    }
-    let features = readings.iter().map(|r| r.iter().take(wanted).map(|x| x.features.clone()).collect()).collect();
+    let readings = readings_of(engine, model, data, settings, &units)?;
+    let features = readings.iter().map(|r| r.iter().map(|x| x.features.clone()).collect()).collect();
     let law = data.measured_law.and_then(|measured| {
         let mut moments = LawMoments::default();
-        let kept = readings.iter().flat_map(|r| r.iter().take(wanted));
-        kept.filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
+        readings.iter().flatten().filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
         // As few slipping samples as the measured law is refused for.
         (moments.count() >= MIN_SLIP_SAMPLES).then(|| moments.law(measured.c, [0.0; 10])).flatten()
     });

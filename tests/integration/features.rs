@@ -57,6 +57,7 @@ fn run_tx(t: Vec<f64>, x: Vec<f64>) -> Run {
         v_m_per_s: None,
         normal_force: None,
         friction_force: None,
+        time_origin: Default::default(),
     }
 }
 
@@ -212,8 +213,8 @@ fn friction_residual_shape() {
     let fr = run_features(&friction_run(&gauss)).friction.expect("friction features");
     assert!((fr.mu_mean - 0.4).abs() < 1e-3, "{fr:?}");
     assert!((fr.residual_std / 0.03 - 1.0).abs() < 0.03, "{fr:?}");
-    assert!(fr.residual_skewness.abs() < 0.1, "{fr:?}");
-    assert!(fr.residual_excess_kurtosis.abs() < 0.2, "{fr:?}");
+    assert!(fr.residual_skewness.abs() < 0.03, "{fr:?}");
+    assert!(fr.residual_tail_weight.abs() < 0.05, "{fr:?}");
     assert!(fr.residual_autocorr_lag1.unwrap().abs() < 0.05, "{fr:?}");
     assert!(fr.residual_autocorr_lag10.unwrap().abs() < 0.05, "{fr:?}");
     assert!(fr.hysteresis.unwrap().abs() < 0.003, "{fr:?}");
@@ -221,12 +222,14 @@ fn friction_residual_shape() {
     // Most samples slip (|v| > 5 % of max): all but 2·asin(0.05)/π ≈ 3 %.
     assert!(fr.slip_samples > 29_000 && fr.slip_samples < 29_300, "{fr:?}");
 
-    // Exponential noise (skewness 2, excess kurtosis 6).
+    // Exponential noise: Kelly skewness (ln 10 + ln(10/9) − 2 ln 2) /
+    // (ln 10 − ln(10/9)) = 0.465, tail weight (ln 40 − ln(40/39)) / ln 3 /
+    // 2.906 − 1 = 0.148.
     let mut rng = Rng(17);
     let skewed: Vec<f64> = (0..n).map(|_| 0.03 * (rng.exponential() - 1.0)).collect();
     let fr = run_features(&friction_run(&skewed)).friction.unwrap();
-    assert!(fr.residual_skewness > 1.5, "{fr:?}");
-    assert!(fr.residual_excess_kurtosis > 3.0, "{fr:?}");
+    assert!((fr.residual_skewness - 0.465).abs() < 0.03, "{fr:?}");
+    assert!((fr.residual_tail_weight - 0.148).abs() < 0.04, "{fr:?}");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! spread, shape and memory, the accelerating against decelerating branch,
 //! and breakaway against low-speed friction.
 
-use super::stats::{moments, negligible, shape, solve_normal};
+use super::stats::{moments, negligible, solve_normal};
 use super::{
     BREAKAWAY_SAMPLES, FrictionFeatures, HYSTERESIS_BINS, HYSTERESIS_MIN_PER_SIDE, LOW_SPEED_FRACTION, MIN_PAIRS,
     MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
@@ -103,8 +103,8 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
             .collect(),
         None => (0..m).map(y).collect(),
     };
-    let (r_mean, r2, r3, r4) = moments(&residual);
-    let (residual_skewness, residual_excess_kurtosis) = shape(mu_mean, r2, r3, r4);
+    let (r_mean, r2, _, _) = moments(&residual);
+    let (residual_skewness, residual_tail_weight) = quantile_shape(&residual);
     let residual_std = (r2 * m as f64 / (m - 1) as f64).sqrt();
 
     // Slip phases: runs of consecutive slipping samples moving the same way.
@@ -189,7 +189,7 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
         mu_mean,
         residual_std,
         residual_skewness,
-        residual_excess_kurtosis,
+        residual_tail_weight,
         residual_autocorr_lag1: autocorr(1),
         residual_autocorr_lag10: autocorr(10),
         hysteresis,
@@ -197,4 +197,33 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
         low_speed_mu_mean,
         stiction_excess,
     })
+}
+
+/// The ratio (q97.5 − q2.5) / (q75 − q25) of a Gaussian: 3.919 93 / 1.348 98.
+const GAUSSIAN_TAIL_RATIO: f64 = 2.905_847_5;
+
+/// Kelly's quantile skewness (q90 + q10 − 2 q50) / (q90 − q10), in [−1, 1],
+/// and the excess tail weight (q97.5 − q2.5) / (q75 − q25) / that of a
+/// Gaussian − 1 (0 for a Gaussian, above for heavier tails, below for
+/// lighter ones) of `values` (0, 0 where they do not spread). Quantiles, not
+/// moments: the sampling spread of a third or fourth moment grows with the
+/// sixth or eighth, which heavy-tailed friction noise may not have, so a
+/// model with heavy tails would predict its own moments with a spread so
+/// wide that no record could tell it from a Gaussian one; quantile shapes
+/// have a bounded spread whatever the tails.
+pub(super) fn quantile_shape(values: &[f64]) -> (f64, f64) {
+    if values.len() < 8 {
+        return (0.0, 0.0);
+    }
+    let mut v = values.to_vec();
+    let n = v.len();
+    let mut at = |p: f64| {
+        let k = ((p * (n - 1) as f64).round() as usize).min(n - 1);
+        *v.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let [q025, q10, q25, q50, q75, q90, q975] = [0.025, 0.1, 0.25, 0.5, 0.75, 0.9, 0.975].map(&mut at);
+    let (wide, mid) = (q90 - q10, q75 - q25);
+    let skewness = if wide > 0.0 { (q90 + q10 - 2.0 * q50) / wide } else { 0.0 };
+    let tail = if mid > 0.0 { (q975 - q025) / mid / GAUSSIAN_TAIL_RATIO - 1.0 } else { 0.0 };
+    (skewness, tail)
 }

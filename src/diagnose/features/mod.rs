@@ -9,7 +9,7 @@
 //! | peaks | mean, variance, skewness, count, trend | the paper's Figures 8 and 9 |
 //! | phase | circular mean and variance of each period's fundamental | the response phase (`interfaces.md`) |
 //! | normal force | mean, variance, harmonics 1×–4×, residual variance, drift | `normal_force_harmonics`, `normal_force_drift` |
-//! | friction | mean μ, residual std / skewness / excess kurtosis | `non_gaussian_friction`, `load_dependent_friction` |
+//! | friction | mean μ, residual std / quantile skewness / tail weight | `non_gaussian_friction`, `load_dependent_friction` |
 //! | friction | residual autocorrelation at lags 1 and 10 | `coloured_friction_noise` |
 //! | friction | accelerating − decelerating μ | `friction_hysteresis` |
 //! | friction | breakaway ratio − low-speed μ | `stiction` |
@@ -69,6 +69,12 @@ pub struct RunFeatures {
     /// of successive `x` differences at most that fraction of the largest
     /// difference. `None` with fewer than two samples.
     pub stick_fraction: Option<f64>,
+    /// Whether the record's time is in the frame of the base motion, so
+    /// that its absolute phases (the response's lag behind the base, the
+    /// normal force's harmonics) mean something: false for a record with a
+    /// free time origin, whose phases are then those of its own clock (only
+    /// their spread and their differences are read).
+    pub absolute_phase: bool,
 }
 
 /// Statistics of the largest `x` in each excitation period.
@@ -147,10 +153,13 @@ pub struct FrictionFeatures {
     pub mu_mean: f64,
     /// Standard deviation of the residuals, dimensionless.
     pub residual_std: f64,
-    /// Skewness `m3 / m2^1.5` of the residuals (0 when they do not vary).
+    /// Kelly's quantile skewness of the residuals, (q90 + q10 − 2 q50) /
+    /// (q90 − q10), in [−1, 1] (0 when they do not vary).
     pub residual_skewness: f64,
-    /// Excess kurtosis `m4 / m2² − 3` of the residuals (0 when they do not vary).
-    pub residual_excess_kurtosis: f64,
+    /// The residuals' excess tail weight: (q97.5 − q2.5) / (q75 − q25)
+    /// divided by a Gaussian's 2.906, less 1 (0 for Gaussian residuals, 0
+    /// when they do not vary).
+    pub residual_tail_weight: f64,
     /// Autocorrelation of the residuals between successive samples of the
     /// same slip phase; `None` with fewer than [`MIN_PAIRS`] pairs.
     pub residual_autocorr_lag1: Option<f64>,
@@ -238,6 +247,7 @@ fn features_on_grid(run: &Run, grid: &SampleGrid) -> RunFeatures {
             _ => None,
         },
         stick_fraction: record::stick_fraction(run),
+        absolute_phase: run.time_origin.phase_known(),
     }
 }
 
@@ -254,7 +264,7 @@ impl RunFeatures {
             (Observable::PeakVarM2, p.map(|p| p.var_m2)),
             (Observable::PeakSkewness, p.map(|p| p.skewness)),
             (Observable::PeakTrendPerS, p.and_then(|p| p.trend_per_s)),
-            (Observable::PhaseMeanDeg, p.map(|p| p.phase_mean_deg)),
+            (Observable::PhaseMeanDeg, p.filter(|_| self.absolute_phase).map(|p| p.phase_mean_deg)),
             (Observable::PhaseVarDeg2, p.map(|p| p.phase_var_deg2)),
             (Observable::NormalForceMeanN, n.map(|n| n.mean_n)),
             (Observable::NormalForceVarN2, n.map(|n| n.var_n2)),
@@ -270,7 +280,7 @@ impl RunFeatures {
             (Observable::FrictionMuMean, f.map(|f| f.mu_mean)),
             (Observable::FrictionResidualStd, f.map(|f| f.residual_std)),
             (Observable::FrictionResidualSkewness, f.map(|f| f.residual_skewness)),
-            (Observable::FrictionResidualExcessKurtosis, f.map(|f| f.residual_excess_kurtosis)),
+            (Observable::FrictionResidualTailWeight, f.map(|f| f.residual_tail_weight)),
             (Observable::FrictionResidualAutocorrLag1, f.and_then(|f| f.residual_autocorr_lag1)),
             (Observable::FrictionResidualAutocorrLag10, f.and_then(|f| f.residual_autocorr_lag10)),
             (Observable::FrictionHysteresis, f.and_then(|f| f.hysteresis)),

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::json::{Bound, bad};
-use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow};
+use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow, TimeOrigin};
 use crate::engine::Job;
 use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::error::{Error, Result};
@@ -168,12 +168,13 @@ fn parse_number(file: &Path, line: u64, column: &str, text: &str) -> Result<f64>
     }
 }
 
-const RUN_COLUMNS: [Column; 5] = [
+const RUN_COLUMNS: [Column; 6] = [
     Column::required("t"),
     Column::required("x"),
     Column::optional("v"),
     Column::optional("normal_force"),
     Column::optional("friction_force"),
+    Column::optional("base_x"),
 ];
 
 /// Checks one run file's content (`bytes`, read from `path`).
@@ -183,10 +184,12 @@ pub(super) fn read_run_file(
     frequency_hz: f64,
     amplitude_m: f64,
     force_n: f64,
+    free_origin: bool,
 ) -> Result<Run> {
     let table = Table::open(path, bytes, &RUN_COLUMNS)?;
     let has = |j: usize| table.index[j].is_some();
-    let (has_v, has_n, has_f) = (has(2), has(3), has(4));
+    let (has_v, has_n, has_f, has_base) = (has(2), has(3), has(4), has(5));
+    let mut base = Vec::new();
     let mut t_s = Vec::new();
     let mut x_m = Vec::new();
     let mut v = Vec::new();
@@ -216,6 +219,9 @@ pub(super) fn read_run_file(
         }
         if let Some(value) = values[4] {
             friction.push(value);
+        }
+        if let Some(value) = values[5] {
+            base.push(value);
         }
         Ok(())
     })?;
@@ -285,6 +291,23 @@ pub(super) fn read_run_file(
             ),
         ));
     }
+    let time_origin = if has_base {
+        let (shift_s, amplitude) = base_phase(&t_s, &base, frequency_hz).ok_or_else(|| {
+            bad(
+                path,
+                None,
+                "column `base_x`: the base does not move at the excitation frequency (no phase can be read)",
+            )
+        })?;
+        for t in &mut t_s {
+            *t -= shift_s;
+        }
+        TimeOrigin::BaseChannel { shift_s, amplitude_m: amplitude }
+    } else if free_origin {
+        TimeOrigin::Free
+    } else {
+        TimeOrigin::Model
+    };
     Ok(Run {
         file: path.to_path_buf(),
         excitation_frequency_hz: frequency_hz,
@@ -295,7 +318,36 @@ pub(super) fn read_run_file(
         v_m_per_s: has_v.then_some(v),
         normal_force: has_n.then_some(normal),
         friction_force: has_f.then_some(friction),
+        time_origin,
     })
+}
+
+/// The base's phase in a record's own time: `base_x ≈ c + R cos(Ω (t − s))`
+/// fitted by least squares at the excitation frequency; returns (s, R), s
+/// in seconds within one period (subtracting s from `t` puts the record in
+/// the frame of `u = U0 cos(Ω t)`), R in metres. `None` where the base does
+/// not move at that frequency.
+pub(crate) fn base_phase(t_s: &[f64], base_x_m: &[f64], frequency_hz: f64) -> Option<(f64, f64)> {
+    let omega = std::f64::consts::TAU * frequency_hz;
+    let n = t_s.len().min(base_x_m.len());
+    let (coefficients, _) = crate::diagnose::features::least_squares(
+        n,
+        3,
+        |i, row| {
+            let (s, c) = (omega * t_s[i]).sin_cos();
+            row.copy_from_slice(&[1.0, c, s]);
+        },
+        |i| base_x_m[i],
+    )?;
+    let (a, b) = (coefficients[1], coefficients[2]);
+    let amplitude = a.hypot(b);
+    let scale = base_x_m.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if !(amplitude > 1e-6 * scale.max(1e-12)) {
+        return None;
+    }
+    // a cos Ωt + b sin Ωt = R cos(Ωt − ψ), ψ = atan2(b, a): s = ψ / Ω.
+    let psi = b.atan2(a).rem_euclid(std::f64::consts::TAU);
+    Some((psi / omega, amplitude))
 }
 
 const SUMMARY_COLUMNS: [Column; 9] = [

@@ -122,6 +122,33 @@ pub struct Run {
     pub normal_force: Option<Vec<f64>>,
     /// Friction force on the block, N, if recorded.
     pub friction_force: Option<Vec<f64>>,
+    /// Where the record's time origin lies relative to the base's motion.
+    pub time_origin: TimeOrigin,
+}
+
+/// How a run's time relates to the base motion `u = U0 cos(Ω t)` of the
+/// model, which every absolute phase (the response's lag behind the base,
+/// the normal force's harmonics) is read against.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum TimeOrigin {
+    /// `t` is in the model's frame (the format's default).
+    #[default]
+    Model,
+    /// The record starts at an unknown phase of the base (`"time_origin":
+    /// "free"` on the run or the manifest): no absolute phase is read
+    /// from it.
+    Free,
+    /// The run has a `base_x` column: its `t` was moved into the model's
+    /// frame by the base phase fitted to that column. `shift_s` is what was
+    /// subtracted from `t`, s; `amplitude_m` the fitted base amplitude, m.
+    BaseChannel { shift_s: f64, amplitude_m: f64 },
+}
+
+impl TimeOrigin {
+    /// Whether absolute phases may be read from the run.
+    pub fn phase_known(self) -> bool {
+        self != TimeOrigin::Free
+    }
 }
 
 /// One row of a summary table: statistics of one condition.
@@ -169,6 +196,7 @@ impl Run {
             v_m_per_s: Some(samples.iter().map(|s| s.v_m_per_s).collect()),
             normal_force: Some(samples.iter().map(|s| s.normal_force_n).collect()),
             friction_force: Some(samples.iter().map(|s| s.friction_force_n).collect()),
+            time_origin: TimeOrigin::Model,
         }
     }
 
@@ -284,6 +312,7 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
     if run_values.is_empty() && summary_name.is_none() {
         return Err(bad(&manifest_path, None, "the set has no runs and no summary; it needs at least one of them"));
     }
+    let set_origin = time_origin(top.get("time_origin"), "time_origin", &manifest_path)?;
 
     // Check every manifest entry before touching the files it names.
     let mut entries = Vec::with_capacity(run_values.len());
@@ -305,16 +334,17 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
         let amplitude =
             manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::within(0.0, limits::AMPLITUDE_MAX_M), "m")?;
         let force = manifest.number(obj, &ctx, "normal_force_n", Bound::within(0.0, limits::FORCE_MAX_N), "N")?;
-        entries.push((file, frequency, amplitude, force));
+        let free = time_origin(obj.get("time_origin"), &format!("{ctx}.time_origin"), &manifest_path)?;
+        entries.push((file, frequency, amplitude, force, free || set_origin));
     }
 
     let mut runs = Vec::with_capacity(entries.len());
-    for (i, (file, frequency, amplitude, force)) in entries.into_iter().enumerate() {
+    for (i, (file, frequency, amplitude, force, free)) in entries.into_iter().enumerate() {
         let ctx = format!("runs[{i}]");
         let named_by = format!("manifest.json {ctx}.file");
         let path = dir.join(&file);
         let bytes = read_inside(&root, dir, &file, &manifest_path, &named_by, io::MAX_TABLE_FILE_BYTES, &mut budget)?;
-        runs.push(csv::read_run_file(&path, bytes, frequency, amplitude, force)?);
+        runs.push(csv::read_run_file(&path, bytes, frequency, amplitude, force, free)?);
     }
 
     let (summary, summary_file) = match summary_name {
@@ -335,6 +365,25 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
     };
 
     Ok(MeasurementSet { dir: dir.to_path_buf(), description, rig, runs, summary, summary_file })
+}
+
+/// Whether a manifest's `time_origin` value (at `key`) declares a free time
+/// origin: absent or `null` is the model's frame, `"free"` a free one;
+/// anything else is refused by name.
+fn time_origin(value: Option<&Value>, key: &str, manifest: &Path) -> Result<bool> {
+    match value {
+        None | Some(Value::Null) => Ok(false),
+        Some(Value::String(s)) if s == "free" => Ok(true),
+        Some(other) => Err(bad(
+            manifest,
+            None,
+            format!(
+                "`{key}` is {}; the only value it takes is \"free\" (the record starts at an unknown phase of \
+                 the base); leave it out when `t` is in the frame of u = U0 cos(2π f t), or give a `base_x` column",
+                io::excerpt(&other.to_string(), io::EXCERPT_CHARS)
+            ),
+        )),
+    }
 }
 
 /// Reads the file `name` of the set whose directory is `dir` (canonical:

@@ -1,0 +1,142 @@
+//! The time frame of the records: which runs give absolute phases, and a
+//! check that the ones that claim to really do.
+//!
+//! A response phase (the lag of the response's fundamental behind the base)
+//! and the normal force's harmonic phases are read against the base's
+//! motion `u = U0 cos(Ω t)`. A run fixes that frame with a `base_x` column
+//! (its time is moved into the frame when it is read), or by its `t` being
+//! in the frame (the format's default), or it declares a free time origin
+//! and gives no absolute phase. Records that start at an arbitrary phase of
+//! the base without saying so give phases that disagree with every model by
+//! anything up to 180°, condition by condition at random: scored, they
+//! would swamp every other observable (z-scores in the tens of thousands)
+//! and make a null set look like an effect. [`check_phases`] finds that
+//! pattern and sets such phases aside, saying so in the report.
+
+use crate::diagnose::data::Data;
+use crate::diagnose::measure::TimeOrigin;
+use crate::diagnose::observable::Observable;
+use crate::diagnose::score::Score;
+use crate::engine::reduce::wrap_angle;
+
+/// Notes on the records' time frames for the report: how many runs gave
+/// their phase through `base_x`, how many declared a free origin.
+pub(crate) fn frame_notes(data: &Data<'_>) -> Vec<String> {
+    let runs = &data.set.runs;
+    let mut notes = Vec::new();
+    let free = runs.iter().filter(|r| r.time_origin == TimeOrigin::Free).count();
+    if free > 0 {
+        notes.push(format!(
+            "{free} of {} runs declare a free time origin: their response phase means are not scored (phase spreads and everything else are), and the normal force's harmonics are placed against each record's own response",
+            runs.len()
+        ));
+    }
+    let based: Vec<(f64, f64)> = runs
+        .iter()
+        .filter_map(|r| match r.time_origin {
+            TimeOrigin::BaseChannel { amplitude_m, .. } => Some((amplitude_m, r.excitation_amplitude_m)),
+            _ => None,
+        })
+        .collect();
+    if !based.is_empty() {
+        let off = based.iter().filter(|(fitted, stated)| (fitted / stated - 1.0).abs() > 0.1).count();
+        notes.push(format!(
+            "{} of {} runs give the base's motion in a base_x column: their phases are read against it{}",
+            based.len(),
+            runs.len(),
+            if off > 0 {
+                format!(
+                    " ({off} of them with a base amplitude more than 10% off their stated excitation_amplitude_m; the stated one is simulated)"
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
+    notes
+}
+
+/// Fewest record units whose phases a frame check reads.
+const MIN_UNITS: usize = 4;
+
+/// Whether the phase means of `scores` (measured against simulated, one per
+/// record unit whose runs claim the model's frame) look like records with a
+/// free time origin: their misfits are large (median beyond 30°, median
+/// |z| beyond 10) and spread over the whole circle, as uniform angles are
+/// (Rayleigh's test: the mean resultant length R̄ of n uniform angles
+/// exceeds sqrt(3/n) with probability about e⁻³ = 5%). A model that
+/// misfits the phase misfits it smoothly across conditions, and its misfits
+/// cluster. Returns R̄ and n where the pattern holds.
+pub(crate) fn looks_free(scores: &[Score], claims_frame: impl Fn(usize) -> bool) -> Option<(f64, usize)> {
+    let phases: Vec<&Score> =
+        scores.iter().filter(|s| s.observable == Observable::PhaseMeanDeg && claims_frame(s.unit)).collect();
+    let n = phases.len();
+    if n < MIN_UNITS {
+        return None;
+    }
+    let residuals: Vec<f64> = phases.iter().map(|s| wrap_angle((s.measured - s.simulated).to_radians())).collect();
+    let (c, s) = residuals.iter().fold((0.0, 0.0), |(c, s), r| (c + r.cos(), s + r.sin()));
+    let resultant = (c * c + s * s).sqrt() / n as f64;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let large = median(residuals.iter().map(|r| r.abs().to_degrees()).collect()) > 30.0
+        && median(phases.iter().map(|s| s.z.abs()).collect()) > 10.0;
+    (large && resultant < (3.0 / n as f64).sqrt()).then_some((resultant, n))
+}
+
+/// Where the phase means of the record units that claim the model's frame
+/// look as if their time origin were free ([`looks_free`] on the calibrated
+/// baseline's `scores`), sets them aside: the phase means leave the measured
+/// observables and the records' phases count as relative ones. Returns the
+/// report's note when it did.
+pub(crate) fn check_phases(data: &mut Data<'_>, scores: &[Score]) -> Option<String> {
+    let claims = |u: usize| {
+        let unit = &data.units[u];
+        unit.summary.is_none() && unit.runs.iter().all(|&r| data.set.runs[r].time_origin == TimeOrigin::Model)
+    };
+    let (resultant, n) = looks_free(scores, claims)?;
+    let units: Vec<usize> = (0..data.units.len()).filter(|&u| claims(u)).collect();
+    for &u in &units {
+        data.measured[u].remove(&Observable::PhaseMeanDeg);
+        for f in &mut data.features[u] {
+            f.absolute_phase = false;
+        }
+    }
+    Some(format!(
+        "the response phases of {n} record units disagree with the calibrated baseline by a median of more than 30° and in every direction (mean resultant length {resultant:.2}, below the {:.2} that uniform angles exceed 5% of the time): their time origin looks free, not the frame of u = U0 cos(2π f t) the format assumes without a base_x column. Their phase means are set aside (not scored); declare \"time_origin\": \"free\" or give a base_x column to say so",
+        (3.0 / n as f64).sqrt()
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::score::test_score;
+
+    fn phase(unit: usize, measured: f64, simulated: f64) -> Score {
+        Score { measured, simulated, ..test_score(unit, Observable::PhaseMeanDeg, 200.0, false) }
+    }
+
+    #[test]
+    fn phases_spread_over_the_circle_look_free_and_a_smooth_misfit_does_not() {
+        // Eighteen records started at random phases of the base.
+        let random = [
+            151.0, -97.0, 12.0, -163.0, 78.0, -41.0, 119.0, -130.0, 58.0, 170.0, -12.0, 95.0, -75.0, 33.0, -150.0,
+            140.0, -60.0, 105.0,
+        ];
+        let scores: Vec<Score> = random.iter().enumerate().map(|(u, &m)| phase(u, m, 10.0)).collect();
+        let (r, n) = looks_free(&scores, |_| true).expect("random phases");
+        assert_eq!(n, 18);
+        assert!(r < (3.0f64 / 18.0).sqrt(), "{r}");
+        // A model that lags every condition by 40-60°: large, but clustered.
+        let smooth: Vec<Score> = (0..18).map(|u| phase(u, 10.0 + 40.0 + u as f64, 10.0)).collect();
+        assert_eq!(looks_free(&smooth, |_| true), None);
+        // Small misfits never look free.
+        let small: Vec<Score> = random.iter().enumerate().map(|(u, &m)| phase(u, 10.0 + m / 10.0, 10.0)).collect();
+        assert_eq!(looks_free(&small, |_| true), None);
+        // Too few units to tell.
+        assert_eq!(looks_free(&scores[..3], |_| true), None);
+    }
+}

@@ -1,0 +1,445 @@
+//! Cross-validation over the folds of a set, and the contest that names an
+//! effect.
+//!
+//! Every model is judged by how well it predicts units it was not fitted
+//! to: each fold's units in turn ([`crate::diagnose::data::Folds`]). A
+//! family of an effect (every form the search tried, at every parameter
+//! value it tried: its *pool*) predicts fold k with the member that fits
+//! the other folds best, so a family is compared by what it explains out of
+//! sample, not by how well one shape matches the data: with long records
+//! every shape mismatch is tens of standard errors, and an exact-shape test
+//! refuses every real rig's effect.
+//!
+//! The contest ([`contest`]) resamples the units (a bootstrap: whole
+//! conditions drawn with replacement) and in each resample asks which family
+//! closes the largest share of the current model's explainable
+//! out-of-sample gap; it wins when that share is at least half (the family
+//! explains most of what is left) and the gap stands above its noise. An
+//! effect is named when it wins in more than half of the resamples, and its
+//! confidence is the share of resamples it wins: a probability over the
+//! conditions the data happened to hold.
+
+use std::collections::BTreeMap;
+
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+
+use crate::diagnose::data::{Data, Folds};
+use crate::diagnose::observable::Observable;
+use crate::diagnose::score::Score;
+
+/// A share of the explainable gap a family must close to win a resample:
+/// at least half, i.e. most of it.
+pub(crate) const MOST: f64 = 0.5;
+
+/// Bootstrap resamples of the contest.
+pub(crate) const RESAMPLES: usize = 2000;
+
+/// The loss of one z-score: ln(1 + (z/3)²), twice the negative
+/// log-density (up to a constant) of a Cauchy model discrepancy of scale
+/// three standard errors. Every model of a real rig misses some observables
+/// by tens or thousands of standard errors (long records make every shape
+/// mismatch that large), and under a heavy-tailed discrepancy a miss beyond
+/// three standard errors counts by its order of magnitude: a z of 8 000
+/// counts about three times a z of 30, not 270 times, so an observable that
+/// no candidate form can reach does not hide what another effect explains.
+/// Within three standard errors it is about z²/9, as a Gaussian's.
+pub(crate) fn loss(z: f64) -> f64 {
+    (z * z / (DISCREPANCY_SCALE * DISCREPANCY_SCALE)).ln_1p()
+}
+
+/// The scale of the model discrepancy in [`loss`], in standard errors: the
+/// three beyond which a difference is unlikely to be noise.
+pub(crate) const DISCREPANCY_SCALE: f64 = 3.0;
+
+/// The loss a unit's observable counts when a model gives it no value (its
+/// simulated records never show it, e.g. friction features of a block that
+/// never slips): that of a z of 10.
+fn missing_loss() -> f64 {
+    loss(10.0)
+}
+
+/// The mean and standard deviation of [`loss`] for a model that is right:
+/// z is then Student's t with R − 1 degrees of freedom for R simulated
+/// replicates (the spread is estimated from them), –.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct NullLoss {
+    pub(crate) mean: f64,
+    pub(crate) sd: f64,
+}
+
+impl NullLoss {
+    /// For z-scores from `replicates` simulated replicates, by quadrature of
+    /// [`loss`] against Student's t density with `replicates − 1` degrees of
+    /// freedom (x = tan θ over (−π/2, π/2)).
+    pub(crate) fn for_replicates(replicates: u32) -> NullLoss {
+        use statrs::distribution::{Continuous, StudentsT};
+        let nu = f64::from(replicates.max(2) - 1);
+        let t = StudentsT::new(0.0, 1.0, nu).expect("a valid Student's t");
+        let n = 4000;
+        let (mut m1, mut m2) = (0.0, 0.0);
+        let h = std::f64::consts::PI / n as f64;
+        for i in 0..n {
+            let theta = -std::f64::consts::FRAC_PI_2 + (i as f64 + 0.5) * h;
+            let x = theta.tan();
+            let w = t.pdf(x) * (1.0 + x * x) * h;
+            let l = loss(x);
+            m1 += w * l;
+            m2 += w * l * l;
+        }
+        NullLoss { mean: m1, sd: (m2 - m1 * m1).max(0.0).sqrt() }
+    }
+
+    /// The noise a mean of `k` losses must rise above (or fall by) to be
+    /// more than noise: three standard deviations of that mean, counted as
+    /// if only half of the scores were independent (a unit's observables
+    /// move together), –.
+    pub(crate) fn noise(&self, k: usize) -> f64 {
+        3.0 * self.sd * (2.0 / k.max(1) as f64).sqrt()
+    }
+}
+
+/// A model's loss at each unit: the sum of its scores' losses over the
+/// unit's measured observables ([`score_loss`]), and how many there are.
+pub(crate) type UnitLosses = BTreeMap<usize, (f64, usize)>;
+
+/// The losses at every unit of `data` of a model before a change
+/// (`before`) and after it (`after`), measured in one yardstick: each
+/// (unit, observable) in the spread of measured − simulated under the model
+/// after the change (at least a tenth of the spread before it, so that a
+/// model whose own spread is degenerate cannot make every departure
+/// infinitely large). In a shared yardstick a model cannot close the gap by
+/// widening its own simulated spread (a strongly coloured noise widens
+/// every simulated distribution and would look closer to the data
+/// everywhere by its own z): both models are measured in its wider units,
+/// so it must move what it predicts towards the data. And a model whose
+/// prediction of an observable is rightly uncertain (the kurtosis of a
+/// heavy-tailed friction noise varies a lot from record to record) is
+/// asked whether the data are closer to what it predicts than to what the
+/// model before it predicts, in its own units, not in the narrow units of
+/// a model that cannot produce that value at all. A measured observable
+/// without a score counts [`missing_loss`].
+pub(crate) fn pair_losses(before: &[Score], after: &[Score], data: &Data<'_>) -> (UnitLosses, UnitLosses) {
+    let key = |s: &Score| (s.unit, s.observable);
+    let scale_before: BTreeMap<(usize, Observable), f64> = before.iter().map(|s| (key(s), s.scale)).collect();
+    let scale_after: BTreeMap<(usize, Observable), f64> = after.iter().map(|s| (key(s), s.scale)).collect();
+    let ruler = |k: &(usize, Observable)| {
+        let before = scale_before.get(k).copied().unwrap_or(0.0);
+        scale_after.get(k).copied().unwrap_or(before).max(0.1 * before)
+    };
+    let losses = |scores: &[Score]| -> BTreeMap<(usize, Observable), f64> {
+        scores
+            .iter()
+            .map(|s| {
+                let r = ruler(&key(s));
+                let z = if r > 0.0 && s.scale > 0.0 { s.z * s.scale / r } else { s.z };
+                (key(s), loss(z))
+            })
+            .collect()
+    };
+    (per_unit(&losses(before), data), per_unit(&losses(after), data))
+}
+
+/// The losses of a model's `scores` in its own scales (its z-scores).
+pub(crate) fn own_losses(scores: &[Score], data: &Data<'_>) -> UnitLosses {
+    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), loss(s.z))).collect(), data)
+}
+
+/// Per-score losses summed by unit over the unit's measured observables.
+fn per_unit(by: &BTreeMap<(usize, Observable), f64>, data: &Data<'_>) -> UnitLosses {
+    (0..data.units.len())
+        .map(|u| {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for &o in data.measured[u].keys() {
+                sum += by.get(&(u, o)).copied().unwrap_or_else(missing_loss);
+                n += 1;
+            }
+            (u, (sum, n))
+        })
+        .filter(|(_, (_, n))| *n > 0)
+        .collect()
+}
+
+/// The mean loss over `units` of `losses` (0 for none).
+pub(crate) fn mean_loss(losses: &UnitLosses, units: impl Iterator<Item = usize>) -> f64 {
+    let (sum, n) = units.filter_map(|u| losses.get(&u)).fold((0.0, 0usize), |(s, n), (l, k)| (s + l, n + k));
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}
+
+/// Every unit some fold holds out.
+pub(crate) fn held_units(folds: &Folds) -> Vec<usize> {
+    let mut units: Vec<usize> = folds.folds.iter().flat_map(|f| f.units.iter().copied()).collect();
+    units.sort_unstable();
+    units
+}
+
+/// Out of sample, a family predicts each fold's units with the member of
+/// its `pool` that closes the largest share of the current model's gap at
+/// the units the fold does not hold out (each member's losses, and the
+/// current model's in the same yardstick, at every unit; see
+/// [`pair_losses`]): the held-out units' losses so predicted, the current
+/// model's there in the same yardsticks, and the member chosen for each fold
+/// (its index in the pool). Empty without members.
+pub(crate) fn pool_predictions(
+    pool: &[(UnitLosses, UnitLosses)],
+    folds: &Folds,
+) -> (UnitLosses, UnitLosses, Vec<usize>) {
+    let (mut out, mut reference) = (UnitLosses::new(), UnitLosses::new());
+    let mut picks = Vec::new();
+    if pool.is_empty() {
+        return (out, reference, picks);
+    }
+    for fold in &folds.folds {
+        let training = |(member, current): &(UnitLosses, UnitLosses)| {
+            let units = || member.keys().copied().filter(|u| !fold.units.contains(u));
+            mean_loss(member, units()) / mean_loss(current, units()).max(1e-12)
+        };
+        let best = (0..pool.len()).min_by(|&a, &b| training(&pool[a]).total_cmp(&training(&pool[b]))).unwrap_or(0);
+        picks.push(best);
+        for &u in &fold.units {
+            if let (Some(&l), Some(&c)) = (pool[best].0.get(&u), pool[best].1.get(&u)) {
+                out.insert(u, l);
+                reference.insert(u, c);
+            }
+        }
+    }
+    (out, reference, picks)
+}
+
+/// The losses at the held-out units of fold models: `per_fold[k]` is the
+/// model fitted without fold k, whose losses at that fold's units are kept.
+pub(crate) fn fold_predictions(per_fold: &[UnitLosses], folds: &Folds) -> UnitLosses {
+    let mut out = UnitLosses::new();
+    for (fold, losses) in folds.folds.iter().zip(per_fold) {
+        for &u in &fold.units {
+            if let Some(&l) = losses.get(&u) {
+                out.insert(u, l);
+            }
+        }
+    }
+    out
+}
+
+/// Gaps out of sample with the units weighted by `w` (a resample's counts).
+fn weighted_gap(losses: &UnitLosses, units: &[usize], w: &[f64]) -> (f64, f64) {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for (&u, &wu) in units.iter().zip(w) {
+        if let Some(&(l, k)) = losses.get(&u) {
+            sum += wu * l;
+            n += wu * k as f64;
+        }
+    }
+    (if n > 0.0 { sum / n } else { 0.0 }, n)
+}
+
+/// One family in a [`contest`]: its out-of-sample losses, and (for the
+/// family whose models were also refitted fold by fold) those of the
+/// refitted models, which it must explain most of the gap with as well.
+pub(crate) struct Entrant<'a> {
+    pub(crate) losses: &'a UnitLosses,
+    /// The current model's losses in the same yardsticks.
+    pub(crate) reference: &'a UnitLosses,
+    /// The honest refits' losses and the current model's refits' losses.
+    pub(crate) refitted: Option<(&'a UnitLosses, &'a UnitLosses)>,
+}
+
+/// What a contest found.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Contest {
+    /// The share of resamples each entrant won, in entrant order.
+    pub(crate) wins: Vec<f64>,
+    /// The share of resamples nobody won.
+    pub(crate) none: f64,
+    /// The share of resamples in which the current model's gap stood within
+    /// its noise of the floor (nothing to explain): how sure "the current
+    /// model explains the data" is.
+    pub(crate) fits: f64,
+    /// Without resampling: each entrant's share of the current model's
+    /// explainable gap (its out-of-sample gap less the null loss, in the
+    /// entrant's yardstick).
+    pub(crate) shares: Vec<f64>,
+    /// Without resampling: the current model's gap out of sample and its
+    /// noise threshold.
+    pub(crate) gap: f64,
+    pub(crate) noise: f64,
+}
+
+impl Contest {
+    /// The entrant that won most often, if it won more than half of the
+    /// resamples.
+    pub(crate) fn winner(&self) -> Option<usize> {
+        let best = (0..self.wins.len()).max_by(|&a, &b| self.wins[a].total_cmp(&self.wins[b]))?;
+        (self.wins[best] > 0.5).then_some(best)
+    }
+}
+
+/// Which entrant wins one weighting of the units: the one that closes the
+/// largest share of the current model's explainable gap, if that share is
+/// at least [`MOST`] and the gap stands above its noise; an entrant with
+/// refits must close [`MOST`] with them too.
+fn winner_of(
+    current: &UnitLosses,
+    entrants: &[Entrant<'_>],
+    units: &[usize],
+    w: &[f64],
+    null: NullLoss,
+) -> (Option<usize>, Vec<f64>, f64, f64) {
+    let (gap, n) = weighted_gap(current, units, w);
+    let noise = null.noise(n.round().max(1.0) as usize);
+    let floor = null.mean;
+    let share = |l: &UnitLosses, reference: &UnitLosses| {
+        let r = weighted_gap(reference, units, w).0;
+        (r - weighted_gap(l, units, w).0) / (r - floor).max(1e-12)
+    };
+    let shares: Vec<f64> = entrants.iter().map(|e| share(e.losses, e.reference)).collect();
+    let best = (0..entrants.len()).max_by(|&a, &b| shares[a].total_cmp(&shares[b]));
+    let wins = best.filter(|&b| {
+        let refit_ok = entrants[b].refitted.is_none_or(|(fitted, base)| share(fitted, base) >= MOST);
+        // The gap stands above its noise in the current model's own scales
+        // and in the yardstick the entrant is measured in.
+        let above = gap - floor > noise && weighted_gap(entrants[b].reference, units, w).0 - floor > noise;
+        above && shares[b] >= MOST && refit_ok
+    });
+    (wins, shares, gap, noise)
+}
+
+/// The contest of `entrants` against the `current` model's out-of-sample
+/// losses, over the held-out `units`, with [`RESAMPLES`] bootstrap
+/// resamples of the units drawn from `seed`; `null` is the loss of a model
+/// that is right.
+pub(crate) fn contest(
+    current: &UnitLosses,
+    entrants: &[Entrant<'_>],
+    units: &[usize],
+    null: NullLoss,
+    seed: u64,
+) -> Contest {
+    let ones = vec![1.0; units.len()];
+    let (_, shares, gap, noise) = winner_of(current, entrants, units, &ones, null);
+    let mut wins = vec![0usize; entrants.len()];
+    let (mut none, mut fits) = (0usize, 0usize);
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut w = vec![0.0; units.len()];
+    for _ in 0..RESAMPLES {
+        w.iter_mut().for_each(|x| *x = 0.0);
+        for _ in 0..units.len() {
+            w[rng.random_range(0..units.len())] += 1.0;
+        }
+        let (winner, _, gap, noise) = winner_of(current, entrants, units, &w, null);
+        match winner {
+            Some(i) => wins[i] += 1,
+            None => none += 1,
+        }
+        if gap - null.mean <= noise {
+            fits += 1;
+        }
+    }
+    let share = |k: usize| k as f64 / RESAMPLES as f64;
+    Contest { wins: wins.into_iter().map(share).collect(), none: share(none), fits: share(fits), shares, gap, noise }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Losses of `k` scores per unit at z-score `z` for units 0..n.
+    fn at(z: &[f64]) -> UnitLosses {
+        z.iter().enumerate().map(|(u, &z)| (u, (10.0 * loss(z), 10))).collect()
+    }
+
+    const NULL: NullLoss = NullLoss { mean: 0.18, sd: 0.32 };
+    /// (mean, sd) of ln(1 + (z/3)²) by Monte Carlo (two million draws).
+    const GAUSS: (f64, f64) = (0.0969, 0.1228);
+    const T3: (f64, f64) = (0.1797, 0.3198);
+    const T7: (f64, f64) = (0.1241, 0.1815);
+
+    #[test]
+    fn the_null_loss_is_that_of_students_t() {
+        // Monte Carlo values of ln(1 + (z/3)²) (two million draws): for a
+        // Gaussian z, for t with 3 degrees of freedom, and with 7.
+        let close = |n: NullLoss, m: f64, s: f64| (n.mean - m).abs() < 0.003 && (n.sd - s).abs() < 0.006;
+        assert!(close(NullLoss::for_replicates(100_000), GAUSS.0, GAUSS.1), "{:?}", NullLoss::for_replicates(100_000));
+        assert!(close(NullLoss::for_replicates(4), T3.0, T3.1), "{:?}", NullLoss::for_replicates(4));
+        assert!(close(NullLoss::for_replicates(8), T7.0, T7.1), "{:?}", NullLoss::for_replicates(8));
+    }
+
+    #[test]
+    fn a_family_that_explains_most_of_the_gap_everywhere_wins_with_confidence() {
+        let units: Vec<usize> = (0..12).collect();
+        let current = at(&[8.0; 12]);
+        // Leaves z = 2 everywhere: from a loss of 39 to 4, 93% of what is
+        // explainable; its rival closes a third.
+        let good = at(&[2.0; 12]);
+        let weak = at(&[6.5; 12]);
+        let c = contest(
+            &current,
+            &[
+                Entrant { losses: &weak, reference: &current, refitted: None },
+                Entrant { losses: &good, reference: &current, refitted: None },
+            ],
+            &units,
+            NULL,
+            1,
+        );
+        assert_eq!(c.winner(), Some(1));
+        assert!(c.wins[1] > 0.99, "{c:?}");
+        assert!(c.shares[1] > 0.9 && c.shares[0] < 0.5);
+    }
+
+    #[test]
+    fn nothing_wins_where_the_current_model_fits_within_noise() {
+        let units: Vec<usize> = (0..12).collect();
+        let current = at(&[1.0; 12]);
+        let better = at(&[0.5; 12]);
+        let c = contest(&current, &[Entrant { losses: &better, reference: &current, refitted: None }], &units, NULL, 1);
+        assert_eq!(c.winner(), None);
+        assert!(c.none > 0.99, "{c:?}");
+    }
+
+    #[test]
+    fn a_family_that_helps_only_some_conditions_is_not_sure() {
+        // Closes the whole gap at half the units and none of it at the
+        // others: half of the explainable gap, so about half the resamples.
+        let units: Vec<usize> = (0..12).collect();
+        let current = at(&[6.0; 12]);
+        let half: Vec<f64> = (0..12).map(|u| if u % 2 == 0 { 1.1 } else { 6.0 }).collect();
+        let half = at(&half);
+        let c = contest(&current, &[Entrant { losses: &half, reference: &current, refitted: None }], &units, NULL, 3);
+        assert!(c.wins[0] > 0.2 && c.wins[0] < 0.8, "{c:?}");
+    }
+
+    #[test]
+    fn refits_that_do_not_hold_refuse_the_family() {
+        let units: Vec<usize> = (0..12).collect();
+        let current = at(&[8.0; 12]);
+        let good = at(&[2.0; 12]);
+        let refit_base = at(&[8.0; 12]);
+        let refit_poor = at(&[7.0; 12]);
+        let e = [Entrant { losses: &good, reference: &current, refitted: Some((&refit_poor, &refit_base)) }];
+        assert_eq!(contest(&current, &e, &units, NULL, 1).winner(), None);
+        let refit_good = at(&[2.5; 12]);
+        let e = [Entrant { losses: &good, reference: &current, refitted: Some((&refit_good, &refit_base)) }];
+        assert_eq!(contest(&current, &e, &units, NULL, 1).winner(), Some(0));
+    }
+
+    #[test]
+    fn each_fold_is_predicted_by_the_member_that_fits_the_other_folds() {
+        use crate::diagnose::data::{Fold, FoldKind};
+        let folds = Folds {
+            kind: FoldKind::LoadLevels,
+            folds: vec![
+                Fold { label: "a".into(), units: vec![0], conditions: Vec::new() },
+                Fold { label: "b".into(), units: vec![1], conditions: Vec::new() },
+            ],
+        };
+        // Member 0 fits unit 0 and misses unit 1; member 1 the reverse.
+        let current = at(&[5.0, 5.0]);
+        let pool = vec![(at(&[0.0, 5.0]), current.clone()), (at(&[5.0, 0.0]), current.clone())];
+        let (predicted, reference, picks) = pool_predictions(&pool, &folds);
+        // Fold a (unit 0 held out) trains on unit 1: member 1, which misses unit 0.
+        assert_eq!(picks, vec![1, 0]);
+        assert_eq!(predicted[&0].0, pool[1].0[&0].0);
+        assert_eq!(predicted[&1].0, pool[0].0[&1].0);
+        assert_eq!(reference[&0].0, current[&0].0);
+    }
+}

@@ -1,0 +1,585 @@
+//! Attribution: which effects the data need beyond the calibrated
+//! baseline, named by cross-validated share of the gap explained.
+//!
+//! Round by round (at most [`MAX_EFFECTS`] effects), on top of the model
+//! named so far:
+//!
+//! 1. **Every family is fitted** ([`round`]): each form of every effect the
+//!    data have a channel for is tried at the parameters the data's
+//!    signature implies (a coarse fit, the friction law recalibrated), and
+//!    the families that fit best are then searched in full
+//!    ([`fit::coordinate_search`]). Screening orders the search; it never
+//!    drops a family unfitted.
+//! 2. **Cross-validated**: each fold of the set ([`crate::diagnose::data::Folds`]:
+//!    every load level in turn, the outer ones included) is predicted by the
+//!    family member (form and parameters) that fits the other folds best
+//!    ([`cv::pool_predictions`]).
+//! 3. **The contest** ([`cv::contest`]) names the family that closes the
+//!    largest share of the current model's out-of-sample gap, when that
+//!    share is at least half and the gap stands above its noise, in more
+//!    than half of the bootstrap resamples of the conditions. The leading
+//!    contender is then refitted fold by fold from scratch on each fold's
+//!    own units, friction law included ([`refit_folds`]), and must explain
+//!    most of the gap that way too. Its confidence is the share of
+//!    resamples it wins.
+//! 4. The named family's best fit on the full data is polished on every
+//!    replicate ([`fit::polish`]) and becomes the model the next round
+//!    builds on; its fold refits become the next round's fold models.
+//!
+//! What a named form still leaves of the gap it was asked to explain is
+//! reported as its form misfit: real rigs never match a candidate's shape
+//! exactly, and an effect is named for the family, not the shape.
+
+pub(crate) mod cv;
+pub(crate) mod fit;
+
+use std::collections::BTreeMap;
+
+use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
+use crate::diagnose::candidates::{Context, Variant, bent, variants};
+use crate::diagnose::data::Data;
+use crate::diagnose::score::{Scope, Score, score};
+use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
+use crate::engine::{Effect, Engine, Model};
+use crate::error::{Error, Result};
+use cv::{
+    Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses, pair_losses,
+    pool_predictions,
+};
+use fit::{Trial, coordinate_search, evaluate, polish, search_settings, tracing};
+
+/// At most this many effects are named.
+pub(crate) const MAX_EFFECTS: usize = 3;
+
+/// Families searched in full in a round, after every family's coarse fit:
+/// those whose coarse fit came closest to the data.
+const REFINED_FAMILIES: usize = 2;
+
+/// A model with its scores.
+#[derive(Clone, Debug)]
+pub(crate) struct Fitted {
+    pub(crate) model: Model,
+    pub(crate) scores: Vec<Score>,
+}
+
+impl From<Trial> for Fitted {
+    fn from(t: Trial) -> Fitted {
+        Fitted { model: t.model, scores: t.scores }
+    }
+}
+
+/// One member of a family's pool: a form at some parameter values, its
+/// losses at every unit and the current model's in the same yardstick
+/// ([`pair_losses`]).
+#[derive(Clone, Debug)]
+struct Member {
+    form: &'static str,
+    values: Vec<f64>,
+    losses: UnitLosses,
+    reference: UnitLosses,
+}
+
+impl Member {
+    /// A member made of a trial of `form` on top of `current`.
+    fn of(form: &'static str, trial: &Trial, current: &Fitted, data: &Data<'_>) -> Member {
+        let (reference, losses) = pair_losses(&current.scores, &trial.scores, data);
+        Member { form, values: trial.values.clone(), losses, reference }
+    }
+}
+
+/// What one effect's fits gave in a round.
+struct Family {
+    effect: Effect,
+    /// The best full-data trial and its form.
+    best: Trial,
+    form: &'static str,
+    parameters: BTreeMap<String, f64>,
+    /// Every trial, any form.
+    pool: Vec<Member>,
+    /// Whether it was searched in full (else only its coarse fit).
+    refined: bool,
+}
+
+/// One step of the selection: a named effect.
+#[derive(Clone, Debug)]
+pub(crate) struct Step {
+    /// Its full-data fit, polished on every replicate.
+    pub(crate) candidate: Candidate,
+    /// The share of resamples it won, –.
+    pub(crate) confidence: f64,
+    /// The share of what the model before it left of the out-of-sample gap
+    /// that it closed, from its fold refits, –.
+    pub(crate) share: f64,
+    /// Per fold: the model before it and with it, refitted without the
+    /// fold, and their gaps at the fold's units.
+    pub(crate) folds: Vec<FoldResult>,
+}
+
+/// A model and the one before it, both fitted without a fold, at that fold.
+#[derive(Clone, Debug)]
+pub(crate) struct FoldResult {
+    /// The model with the effect (fitted without the fold).
+    pub(crate) after: Fitted,
+    /// Their mean Huber loss at the fold's units.
+    pub(crate) gap_before: f64,
+    pub(crate) gap_after: f64,
+}
+
+/// What the selection found.
+pub(crate) struct Selection {
+    pub(crate) steps: Vec<Step>,
+    /// Every family of the first round, best (most wins) first.
+    pub(crate) first_round: Vec<Candidate>,
+    /// How sure "the baseline explains the data" is where nothing was
+    /// named: the share of resamples in which its out-of-sample gap stood
+    /// within its noise of the floor, –. (Where it misfits and no family
+    /// explains most of the misfit the verdict is still `none`, but not a
+    /// confident one.)
+    pub(crate) none_confidence: f64,
+    /// The baseline refitted without each fold.
+    pub(crate) baseline_folds: Vec<Fitted>,
+    /// The out-of-sample noise threshold of the gap, –.
+    pub(crate) noise: f64,
+    /// The loss of a model that is right, on the replicates models are
+    /// compared on.
+    pub(crate) null: NullLoss,
+}
+
+impl Selection {
+    /// The fold models of the last named effect (the baseline's where none).
+    pub(crate) fn fitted_folds(&self) -> Vec<Fitted> {
+        match self.steps.last() {
+            Some(s) => s.folds.iter().map(|f| f.after.clone()).collect(),
+            None => self.baseline_folds.clone(),
+        }
+    }
+}
+
+/// The baseline refitted without each fold: its law carried to each fold's
+/// measured law from the full-data baseline's, on search replicates,
+/// scored on every unit.
+fn baseline_folds(
+    baseline: &Model,
+    slope: f64,
+    views: &[Data<'_>],
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Vec<Fitted>> {
+    views
+        .iter()
+        .map(|view| {
+            let (m, s, _) = calibrate_and_score(baseline, view, search, engine, Some(slope), 2, Scope::Fitting)?;
+            let (model, scores) = converge_law(m, s, view, search, engine)?;
+            Ok(Fitted { model, scores })
+        })
+        .collect()
+}
+
+/// Forward selection from the calibrated baseline (see the module).
+pub(crate) fn select(
+    baseline: &Model,
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Selection> {
+    let search = search_settings(settings);
+    let views = data.fold_views();
+    let units = held_units(&data.folds);
+    progress(&format!("refitting the baseline without each fold ({} folds)", views.len()));
+    let baseline_folds = baseline_folds(baseline, slope, &views, &search, engine)?;
+    let mut current = Fitted { model: baseline.clone(), scores: score(engine, baseline, data, &search, Scope::All)? };
+    let mut current_folds = baseline_folds.clone();
+    let mut steps: Vec<Step> = Vec::new();
+    let mut first_round = Vec::new();
+    let mut none_confidence = 1.0;
+    let mut noise: f64 = 0.0;
+    let seed = settings.seed ^ 0xC0_47E5;
+    let null = NullLoss::for_replicates(search.replicates);
+    while steps.len() < MAX_EFFECTS && !units.is_empty() {
+        let current_losses = own_losses(&current.scores, data);
+        // Nothing above the noise to explain: no family can win.
+        let idle = contest(&current_losses, &[], &units, null, seed);
+        noise = noise.max(idle.noise);
+        if idle.gap - null.mean <= idle.noise {
+            if tracing() {
+                eprintln!("round {}: gap {:.2} within its noise {:.2} of the floor", steps.len(), idle.gap, idle.noise);
+            }
+            none_confidence = idle.fits;
+            break;
+        }
+        let named: Vec<Effect> = steps.iter().map(|s| s.candidate.effect).collect();
+        let families = round(&current, &named, slope, data, &search, engine, progress)?;
+        let predictions: Vec<(UnitLosses, UnitLosses, Vec<usize>)> = families
+            .iter()
+            .map(|f| {
+                let pool: Vec<(UnitLosses, UnitLosses)> =
+                    f.pool.iter().map(|m| (m.losses.clone(), m.reference.clone())).collect();
+                pool_predictions(&pool, &data.folds)
+            })
+            .collect();
+        let entrants: Vec<Entrant<'_>> =
+            predictions.iter().map(|(losses, reference, _)| Entrant { losses, reference, refitted: None }).collect();
+        let pooled = contest(&current_losses, &entrants, &units, null, seed);
+        if tracing() {
+            for (f, (losses, reference, picks)) in families.iter().zip(&predictions) {
+                let per_unit: Vec<String> = units
+                    .iter()
+                    .map(|u| {
+                        let l = losses.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
+                        let r = reference.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
+                        format!("{u}: {r:.1}->{l:.1}")
+                    })
+                    .collect();
+                let picked: Vec<String> =
+                    picks.iter().map(|&p| format!("{} {:?}", f.pool[p].form, f.pool[p].values)).collect();
+                eprintln!("round {}: {} picks {picked:?}; by unit {}", steps.len(), f.effect, per_unit.join(", "));
+            }
+            for (f, (w, s)) in families.iter().zip(pooled.wins.iter().zip(&pooled.shares)) {
+                eprintln!(
+                    "round {}: {} [{}] fit {:.2} out-of-sample share {s:.3} wins {w:.3}",
+                    steps.len(),
+                    f.effect,
+                    f.form,
+                    f.best.gap_fit
+                );
+            }
+            eprintln!("round {}: gap {:.2} noise {:.2} none {:.3}", steps.len(), pooled.gap, pooled.noise, pooled.none);
+        }
+        if steps.is_empty() {
+            first_round = candidates_of(&families, &pooled, &current, data, null);
+        }
+        none_confidence = pooled.fits;
+        let Some(top) = pooled.winner() else { break };
+        let family = &families[top];
+        progress(&format!("refitting {} without each fold", family.effect));
+        let refits = refit_folds(family, &predictions[top].2, &current_folds, slope, &views, &search, engine)?;
+        let Some(refits) = refits else { break };
+        let (base_losses, refit_losses) = fold_pair_losses(&current_folds, &refits, data);
+        let entrants: Vec<Entrant<'_>> = predictions
+            .iter()
+            .enumerate()
+            .map(|(i, (losses, reference, _))| Entrant {
+                losses,
+                reference,
+                refitted: (i == top).then_some((&refit_losses, &base_losses)),
+            })
+            .collect();
+        let judged = contest(&current_losses, &entrants, &units, null, seed);
+        if tracing() {
+            eprintln!(
+                "round {}: {} refitted: wins {:.3} (pooled {:.3}); refits' gap {:.2} against {:.2}",
+                steps.len(),
+                family.effect,
+                judged.wins[top],
+                pooled.wins[top],
+                mean_loss(&refit_losses, units.iter().copied()),
+                mean_loss(&base_losses, units.iter().copied())
+            );
+        }
+        if judged.winner() != Some(top) {
+            break;
+        }
+        if steps.is_empty() {
+            first_round = candidates_of(&families, &judged, &current, data, null);
+        }
+        progress(&format!("{} named; polishing its model on every replicate", family.effect));
+        let polished = match polish(&family.best, slope, data, settings, engine)? {
+            Some(t) => t,
+            None => family.best.clone(),
+        };
+        let folds: Vec<FoldResult> = (0..views.len())
+            .map(|k| {
+                let held = data.folds.folds[k].units.iter().copied();
+                let (before, after) = pair_gaps(&current_folds[k].scores, &refits[k].scores, data, held);
+                FoldResult { gap_before: before, gap_after: after, after: refits[k].clone() }
+            })
+            .collect();
+        let before = mean_loss(&base_losses, units.iter().copied());
+        let after = mean_loss(&refit_losses, units.iter().copied());
+        let share = ((before - after) / (before - null.mean).max(1e-12)).clamp(-1.0, 1.0);
+        let candidate = candidate_of(
+            family,
+            Fitted::from(polished.clone()),
+            (judged.gap, judged.shares[top]),
+            judged.wins[top],
+            &current,
+            data,
+            null,
+        );
+        steps.push(Step { candidate, confidence: judged.wins[top], share, folds });
+        current = Fitted {
+            model: polished.model.clone(),
+            scores: score(engine, &polished.model, data, &search, Scope::All)?,
+        };
+        current_folds = refits;
+    }
+    Ok(Selection { steps, first_round, none_confidence, baseline_folds, noise, null })
+}
+
+/// The report's candidate for a family: its best full-data fit, what it
+/// closes of the current model's gap in sample and out of sample, and how
+/// often it won.
+fn candidate_of(
+    family: &Family,
+    fitted: Fitted,
+    cv: (f64, f64),
+    wins: f64,
+    current: &Fitted,
+    data: &Data<'_>,
+    null: NullLoss,
+) -> Candidate {
+    let (before, after) = pair_losses(&current.scores, &fitted.scores, data);
+    let (g0, g) = (mean_loss(&before, before.keys().copied()), mean_loss(&after, after.keys().copied()));
+    let (cv_gap, cv_share) = cv;
+    let mut worst: Vec<&Score> = fitted.scores.iter().collect();
+    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    Candidate {
+        effect: family.effect,
+        form: family.form,
+        gap_fit: g,
+        shrink: if g0 > 0.0 { (g0 - g) / g0 } else { 0.0 },
+        in_sample_share: (g0 - g) / (g0 - null.mean).max(1e-12),
+        cv_share,
+        heldout_shrink: if cv_gap > 0.0 { cv_share * (cv_gap - null.mean).max(0.0) / cv_gap } else { 0.0 },
+        wins,
+        refined: family.refined,
+        parameters: family.parameters.clone(),
+        unexplained: worst
+            .iter()
+            .take(5)
+            .map(|s| Unexplained {
+                observable: s.observable,
+                excitation_frequency_hz: s.excitation_frequency_hz,
+                normal_force_n: s.normal_force_n,
+                z: s.z,
+            })
+            .collect(),
+        model: fitted.model,
+        scores: fitted.scores,
+    }
+}
+
+/// Every family of a round as the report lists it, most wins first (then
+/// the largest out-of-sample share).
+fn candidates_of(
+    families: &[Family],
+    contest: &Contest,
+    current: &Fitted,
+    data: &Data<'_>,
+    null: NullLoss,
+) -> Vec<Candidate> {
+    let mut out: Vec<Candidate> = families
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let fitted = Fitted { model: f.best.model.clone(), scores: f.best.scores.clone() };
+            candidate_of(f, fitted, (contest.gap, contest.shares[i]), contest.wins[i], current, data, null)
+        })
+        .collect();
+    out.sort_by(|a, b| b.wins.total_cmp(&a.wins).then(b.cv_share.total_cmp(&a.cv_share)));
+    out
+}
+
+/// The form `form` of `effect` as the context `ctx` builds it (the bent
+/// load dependence from the linear one at `values`), if there is one.
+fn variant_named(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
+    variants(effect, ctx)
+        .into_iter()
+        .find(|v| v.form == form)
+        .or_else(|| bent(effect, "linear", values, ctx).filter(|v| v.form == form))
+}
+
+/// Every family's coarse fit on the full data (each form at the start the
+/// data point to), then a full search of every form of the
+/// [`REFINED_FAMILIES`] whose coarse fits came closest; every trial joins
+/// its family's pool.
+#[allow(clippy::too_many_arguments)]
+fn round(
+    current: &Fitted,
+    named: &[Effect],
+    slope: f64,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Family>> {
+    let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles);
+    let mut families: Vec<(Family, Vec<Option<Trial>>)> = Vec::new();
+    for effect in Effect::ALL.into_iter().filter(|e| !named.contains(e)) {
+        let forms = variants(effect, &ctx);
+        if forms.is_empty() {
+            continue;
+        }
+        progress(&format!("trying {effect} (a coarse fit of each of its {} forms)", forms.len()));
+        let mut starts: Vec<Option<Trial>> = Vec::new();
+        for v in &forms {
+            starts.push(evaluate(v, &v.start(), &current.model, &current.scores, 1, slope, data, search, engine)?);
+        }
+        let objective = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
+        let best = (0..forms.len()).min_by(|&a, &b| objective(a).total_cmp(&objective(b)));
+        let Some((best, Some(trial))) = best.map(|i| (i, starts[i].clone())) else { continue };
+        let pool = forms
+            .iter()
+            .zip(&starts)
+            .filter_map(|(v, t)| t.as_ref().map(|t| Member::of(v.form, t, current, data)))
+            .collect();
+        let (form, parameters) = (forms[best].form, forms[best].describe(&trial.values));
+        families.push((Family { effect, best: trial, form, parameters, pool, refined: false }, starts));
+    }
+    families.sort_by(|a, b| a.0.best.objective.total_cmp(&b.0.best.objective));
+    for (family, starts) in families.iter_mut().take(REFINED_FAMILIES) {
+        // A family whose best coarse fit is no closer than the current
+        // model has nothing to refine from.
+        if family.best.objective >= 1.0 {
+            continue;
+        }
+        progress(&format!("searching {} in full", family.effect));
+        refine(family, std::mem::take(starts), current, slope, &ctx, data, search, engine)?;
+    }
+    Ok(families.into_iter().map(|(f, _)| f).collect())
+}
+
+/// The full search of every form of a family from its coarse fit
+/// (`starts`, one trial per form in the order of its variants; a linear
+/// load dependence that fitted is then bent), every trial joining the pool.
+#[allow(clippy::too_many_arguments)]
+fn refine(
+    family: &mut Family,
+    starts: Vec<Option<Trial>>,
+    current: &Fitted,
+    slope: f64,
+    ctx: &Context<'_>,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<()> {
+    let forms = variants(family.effect, ctx);
+    let mut queue: Vec<(Variant, Option<Trial>)> = forms.into_iter().zip(starts).collect();
+    let mut i = 0;
+    while i < queue.len() {
+        let start = queue[i].1.take();
+        let variant = &queue[i].0;
+        let start = match start {
+            Some(t) => t,
+            None => match evaluate(
+                variant,
+                &variant.start(),
+                &current.model,
+                &current.scores,
+                1,
+                slope,
+                data,
+                search,
+                engine,
+            )? {
+                Some(t) => t,
+                None => {
+                    i += 1;
+                    continue;
+                }
+            },
+        };
+        let mut seen: Vec<Member> = Vec::new();
+        let mut record = |t: &Trial| seen.push(Member::of(variant.form, t, current, data));
+        let best = coordinate_search(
+            &variant.params,
+            start,
+            |b: &Trial, v: &[f64]| evaluate(variant, v, &b.model, &current.scores, 1, slope, data, search, engine),
+            &mut record,
+        )?;
+        family.pool.extend(seen);
+        let bend = (best.objective < 1.0).then(|| bent(family.effect, variant.form, &best.values, ctx)).flatten();
+        if best.objective < family.best.objective {
+            family.parameters = variant.describe(&best.values);
+            family.form = variant.form;
+            family.best = best;
+        }
+        if let Some(b) = bend {
+            queue.push((b, None));
+        }
+        i += 1;
+    }
+    family.refined = true;
+    Ok(())
+}
+
+/// The family refitted without each fold: its form at the parameters its
+/// pool chose for that fold (`picks[k]`, chosen on the fold's other units
+/// alone), put on the current model's fold refit (`current_folds[k]`), with
+/// the friction law recalibrated to that fold's own measured law and
+/// carried until it stops lowering the fold's fitting gap, scored on every
+/// unit. `None` where a fold's model cannot be built or run.
+#[allow(clippy::too_many_arguments)]
+fn refit_folds(
+    family: &Family,
+    picks: &[usize],
+    current_folds: &[Fitted],
+    slope: f64,
+    views: &[Data<'_>],
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<Vec<Fitted>>> {
+    let mut out = Vec::new();
+    for (k, view) in views.iter().enumerate() {
+        let member = &family.pool[picks[k]];
+        let base = &current_folds[k];
+        let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
+        let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else { return Ok(None) };
+        let Some(mut start) =
+            evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
+        else {
+            return Ok(None);
+        };
+        // Where the pool's parameters with the fold's own law fit the
+        // fold's units no better than the model before the effect, they
+        // are searched again there.
+        if start.objective >= 1.0 {
+            start = coordinate_search(
+                &variant.params,
+                start,
+                |b: &Trial, v: &[f64]| evaluate(&variant, v, &b.model, &base.scores, 1, slope, view, search, engine),
+                &mut |_| {},
+            )?;
+        }
+        let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
+            Err(Error::Diverged { .. }) => return Ok(None),
+            other => other?,
+        };
+        if tracing() {
+            eprintln!(
+                "fold {k} ({}): {} [{}] {:?}: fit {:.2} held out {:.2}",
+                view.folds.folds[k].label,
+                family.effect,
+                variant.form,
+                member.values,
+                crate::diagnose::score::gap_of(&scores, false),
+                crate::diagnose::score::gap_of(&scores, true)
+            );
+        }
+        out.push(Fitted { model, scores });
+    }
+    Ok(Some(out))
+}
+
+/// Out of sample, the models before an effect and with it, both refitted
+/// without each fold (`before[k]`, `after[k]`): the losses at each fold's
+/// units, both in one yardstick ([`pair_losses`]).
+fn fold_pair_losses(before: &[Fitted], after: &[Fitted], data: &Data<'_>) -> (UnitLosses, UnitLosses) {
+    let (b, a): (Vec<UnitLosses>, Vec<UnitLosses>) =
+        before.iter().zip(after).map(|(x, y)| pair_losses(&x.scores, &y.scores, data)).unzip();
+    (fold_predictions(&b, &data.folds), fold_predictions(&a, &data.folds))
+}
+
+/// The mean losses at `units` of a model before an effect and with it
+/// (their scores), in one yardstick ([`pair_losses`]).
+pub(crate) fn pair_gaps(
+    before: &[Score],
+    after: &[Score],
+    data: &Data<'_>,
+    units: impl Iterator<Item = usize> + Clone,
+) -> (f64, f64) {
+    let (b, a) = pair_losses(before, after, data);
+    (mean_loss(&b, units.clone()), mean_loss(&a, units))
+}
