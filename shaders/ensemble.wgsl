@@ -15,7 +15,6 @@ struct Params {
     friction_d_s2_per_m2: f32,
     friction_sigma: f32,
     normal_force_sigma_n: f32,
-    steps_per_period: u32,
     warmup_cycles: u32,
     seed_lo: u32,
     seed_hi: u32,
@@ -92,6 +91,8 @@ struct GridPoint {
     harmonic_amplitude_2_n: f32,
     harmonic_amplitude_3_n: f32,
     harmonic_amplitude_4_n: f32,
+    // Steps per period at this point (raised by a friction memory, by frequency).
+    steps_per_period: u32,
 }
 
 struct PathState {

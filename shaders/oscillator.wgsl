@@ -473,7 +473,7 @@ fn span_steps(span: f32, max_step: f32) -> u32 {
 // Noise boundaries and the period's end are step boundaries: each span
 // between them is divided into equal steps no longer than T / S.
 fn run_period(measuring: bool) {
-    let steps_per_period = params.steps_per_period;
+    let steps_per_period = point.steps_per_period;
     let max_step = point.period_s / f32(steps_per_period);
     let w = point.omega_rad_per_s;
     path.period_max_x_m = path.x_m;

@@ -35,7 +35,6 @@ pub struct Params {
     pub friction_sigma: f32,
     /// N
     pub normal_force_sigma_n: f32,
-    pub steps_per_period: u32,
     pub warmup_cycles: u32,
     pub seed_lo: u32,
     pub seed_hi: u32,
@@ -195,6 +194,9 @@ pub struct GridPoint {
     pub harmonic_amplitude_2_n: f32,
     pub harmonic_amplitude_3_n: f32,
     pub harmonic_amplitude_4_n: f32,
+    /// Integration steps per period at this point (the model's, raised by
+    /// frequency where a friction memory needs it: `Oscillator`).
+    pub steps_per_period: u32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -257,7 +259,6 @@ impl Params {
             friction_d_s2_per_m2: osc.friction_d_s2_per_m2 as f32,
             friction_sigma: osc.friction_sigma as f32,
             normal_force_sigma_n: osc.normal_force_sigma_n as f32,
-            steps_per_period: osc.steps_per_period,
             warmup_cycles: plan.warmup_cycles,
             seed_lo,
             seed_hi,
@@ -296,6 +297,7 @@ impl GridPoint {
             harmonic_amplitude_2_n: o.effects.harmonic_amplitudes_n[1] as f32,
             harmonic_amplitude_3_n: o.effects.harmonic_amplitudes_n[2] as f32,
             harmonic_amplitude_4_n: o.effects.harmonic_amplitudes_n[3] as f32,
+            steps_per_period: o.steps_per_period,
         }
     }
 }
