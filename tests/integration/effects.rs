@@ -10,7 +10,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 32] = [
+const ZERO: [&[&str]; 37] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -29,6 +29,11 @@ const ZERO: [&[&str]; 32] = [
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"rational\""],
     &["friction_hysteresis.time_constant_s=0.0", "friction_hysteresis.form=\"lag\""],
+    &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"slip\""],
+    // Ageing is off at B = 0 whatever its slip distance, and at L = 0
+    // whatever its B (no state, no raised steps).
+    &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.0", "friction_hysteresis.form=\"ageing\""],
+    &["friction_hysteresis.length_m=0.0", "friction_hysteresis.strength=0.05", "friction_hysteresis.form=\"ageing\""],
     &["coloured_friction_noise.correlation_time_s=0.0"],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.0", "coloured_friction_noise.form=\"hold\""],
@@ -49,6 +54,8 @@ const ZERO: [&[&str]; 32] = [
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"saturating\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"exponential\""],
     &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"quadratic\""],
+    &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"adhesion\""],
+    &["load_dependent_friction.strength=0.0", "load_dependent_friction.form=\"scaled\""],
     &["normal_force_drift.rate_per_s=0.0"],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"wander\""],
@@ -58,7 +65,7 @@ const ZERO: [&[&str]; 32] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 33] = [
+const ON: [&[&str]; 38] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -85,6 +92,8 @@ const ON: [&[&str]; 33] = [
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"rational\""],
     &["friction_hysteresis.time_constant_s=0.01", "friction_hysteresis.form=\"lag\""],
+    &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"slip\""],
+    &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.05", "friction_hysteresis.form=\"ageing\""],
     &["coloured_friction_noise.correlation_time_s=0.05"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"hold\""],
@@ -117,6 +126,9 @@ const ON: [&[&str]; 33] = [
         "load_dependent_friction.curvature_per_n2=0.002",
         "load_dependent_friction.form=\"quadratic\"",
     ],
+    &["load_dependent_friction.strength=1.0", "load_dependent_friction.form=\"adhesion\""],
+    &["load_dependent_friction.strength=-1.0", "load_dependent_friction.form=\"adhesion\""],
+    &["load_dependent_friction.strength=0.3", "load_dependent_friction.form=\"scaled\""],
     &["normal_force_drift.rate_per_s=0.01"],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.01", "normal_force_drift.form=\"wander\""],

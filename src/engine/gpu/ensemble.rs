@@ -51,6 +51,7 @@ fn validate(job: &Job<'_>, plan: RunPlan, oscillators: &[Oscillator]) -> Result<
         effects.non_gaussian_strength = 0.0;
         // Per point on the GPU too (`GridPoint`): they scale with N0.
         effects.harmonic_amplitudes_n = [0.0; 4];
+        effects.friction_scale = 1.0;
         Oscillator {
             omega_rad_per_s: 0.0,
             period_s: 0.0,
@@ -172,7 +173,7 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
     let rpp = u64::from(job.realisations);
     let total_invocations = job.points.len() as u64 * rpp;
     let total_cycles = plan.warmup_cycles + plan.measured_cycles;
-    // The most steps of any point (hysteresis `lag` raises them where its
+    // The most steps of any point (a friction memory raises them where its
     // memory time is shorter than a step, by frequency; each point takes
     // its own, `GridPoint::steps_per_period`).
     let steps = oscillators.iter().map(|o| u64::from(o.steps_per_period)).max().unwrap_or(1);

@@ -74,7 +74,7 @@ pub struct EffectParams {
     pub harmonic_phase_3_rad: f32,
     pub harmonic_phase_4_rad: f32,
     pub hysteresis_form: u32,
-    /// m
+    /// Build-up length, or the slip distance of `slip` and `ageing`, m.
     pub hysteresis_length_m: f32,
     /// s
     pub hysteresis_lag_s: f32,
@@ -98,8 +98,10 @@ pub struct EffectParams {
     pub noise_interval_s: f32,
     /// 1/s²
     pub drift_curvature_per_s2: f32,
-    pub _pad2: u32,
-    pub _pad3: u32,
+    /// B of hysteresis `ageing`, –.
+    pub hysteresis_strength: f32,
+    /// Adhesion force A of load dependence `adhesion`, N.
+    pub adhesion_force_n: f32,
 }
 
 impl EffectParams {
@@ -138,8 +140,8 @@ impl EffectParams {
             drift_rate_per_s: e.drift_rate_per_s as f32,
             noise_interval_s: noise_interval_s as f32,
             drift_curvature_per_s2: e.drift_curvature_per_s2 as f32,
-            _pad2: 0,
-            _pad3: 0,
+            hysteresis_strength: e.hysteresis_strength as f32,
+            adhesion_force_n: e.adhesion_force_n as f32,
         }
     }
 
@@ -194,6 +196,9 @@ pub struct GridPoint {
     pub harmonic_amplitude_2_n: f32,
     pub harmonic_amplitude_3_n: f32,
     pub harmonic_amplitude_4_n: f32,
+    /// Factor (N0/Nref)^k of the law's a, b and d at this point (load
+    /// dependence `scaled`; exactly 1 otherwise), –.
+    pub friction_scale: f32,
     /// Integration steps per period at this point (the model's, raised by
     /// frequency where a friction memory needs it: `Oscillator`).
     pub steps_per_period: u32,
@@ -220,10 +225,13 @@ pub struct PathState {
     pub stiction_excess: f32,
     pub colour_state_1: f32,
     pub colour_state_2: f32,
-    /// The lagged friction coefficient of hysteresis `lag`, –.
-    pub lagged_mu: f32,
+    /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
+    /// contact age θ of `ageing` (s).
+    pub memory: f32,
     /// When the current stick began, s from the run's start.
     pub stick_since_s: f32,
+    /// The static coefficient's contact-age term of hysteresis `ageing`, –.
+    pub ageing_excess: f32,
 }
 
 /// Uniform of `check.wgsl` (struct `CheckParams`).
@@ -297,6 +305,7 @@ impl GridPoint {
             harmonic_amplitude_2_n: o.effects.harmonic_amplitudes_n[1] as f32,
             harmonic_amplitude_3_n: o.effects.harmonic_amplitudes_n[2] as f32,
             harmonic_amplitude_4_n: o.effects.harmonic_amplitudes_n[3] as f32,
+            friction_scale: o.effects.friction_scale as f32,
             steps_per_period: o.steps_per_period,
         }
     }

@@ -15,8 +15,8 @@ use std::fmt::Write;
 
 use crate::engine::cpu::effects::{MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE};
 use crate::engine::effects::{
-    ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm, HysteresisForm, LoadForm,
-    NonGaussianForm, STICTION_DECAY_M, StictionForm,
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm,
+    HysteresisForm, LoadForm, NonGaussianForm, STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::gpu::ensemble::{
     ACCUMULATOR_WORDS, ILLINOIS_ITERATIONS, ILLINOIS_TOLERANCE, MAX_EVENTS_PER_SEGMENT, PROBE_HALVINGS,
@@ -131,6 +131,7 @@ fn constants() -> String {
         ("DRIFT_SATURATION_S", DRIFT_SATURATION_S),
         ("DRIFT_WANDER_S", DRIFT_WANDER_S),
         ("STICTION_DECAY_M", STICTION_DECAY_M),
+        ("AGEING_CUTOFF_SPEED_M_PER_S", AGEING_CUTOFF_SPEED_M_PER_S),
         ("MIXTURE_OUTLIER_SHARE", MIXTURE_OUTLIER_SHARE),
         ("MIXTURE_OUTLIER_QUANTILE", MIXTURE_OUTLIER_QUANTILE),
     ] {
@@ -169,6 +170,10 @@ mod tests {
         let c = constants();
         assert!(c.contains("const NON_GAUSSIAN_FORM_TUKEY_H: u32 = 2u;"), "{c}");
         assert!(c.contains("const COLOUR_FORM_TWO_SCALE: u32 = 2u;"), "{c}");
+        assert!(c.contains("const HYSTERESIS_FORM_SLIP: u32 = 4u;"), "{c}");
+        assert!(c.contains("const HYSTERESIS_FORM_AGEING: u32 = 5u;"), "{c}");
+        assert!(c.contains("const LOAD_FORM_ADHESION: u32 = 5u;"), "{c}");
+        assert!(c.contains("const LOAD_FORM_SCALED: u32 = 6u;"), "{c}");
         assert!(c.contains("const HISTOGRAM_BINS: u32 = 2048u;"), "{c}");
         let literal = f32_literal(STICTION_DECAY_M);
         let parsed: f32 = literal.trim_end_matches('f').parse().unwrap();
