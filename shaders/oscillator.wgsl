@@ -9,11 +9,6 @@
 // in periods. The deliberate f32/f64 differences are tabled in that file's docs.
 
 const MODE_STICK: i32 = 0;
-// The friction memory the slip ODE carries (memory_form; the CPU's `Memory`).
-const MEMORY_NONE: i32 = 0;
-const MEMORY_LAG: i32 = 1;
-const MEMORY_SLIP: i32 = 2;
-const MEMORY_AGEING: i32 = 3;
 const TAU: f32 = 6.283185307179586;
 const FIXED_ONE_INV: f32 = 2.3283064365386963e-10; // 2^-32
 
@@ -198,7 +193,10 @@ fn steady_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
         + path.friction_noise;
 }
 
-// Which friction memory is on (the CPU's Memory::of).
+// Which friction memory the slip ODE carries (the CPU's Memory::of; the
+// MEMORY_* codes are generated). The host runs a copy of this kernel in
+// which this function returns its memory as a constant
+// (source::ensemble_wgsl_with_memory), so the others' branches fold away.
 fn memory_form() -> i32 {
     if (effects.hysteresis_form == HYSTERESIS_FORM_LAG && effects.hysteresis_lag_s > 0.0) {
         return MEMORY_LAG;

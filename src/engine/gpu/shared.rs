@@ -6,7 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::RunPlan;
-use crate::engine::effects::{self, Effects, Form};
+use crate::engine::cpu::oscillator::Memory;
+use crate::engine::effects::{self, Effects, Form, HysteresisForm};
 use crate::engine::oscillator::{Oscillator, Point};
 use crate::engine::rng;
 
@@ -150,6 +151,22 @@ impl EffectParams {
     /// (`source::ensemble_wgsl_without_effects`).
     pub fn without_effects() -> EffectParams {
         Self::from_effects(&effects::EffectParams::new(&Effects::default(), 0.0, 0.0, 0.0), 0.0)
+    }
+
+    /// The friction memory the kernel's `memory_form()` decides from this
+    /// uniform (its f32 values, so that the two agree): the one
+    /// `source::ensemble_wgsl_with_memory` fixes.
+    pub(crate) fn memory(&self) -> Memory {
+        let form = |f: HysteresisForm| self.hysteresis_form == f.code();
+        if form(HysteresisForm::Lag) && self.hysteresis_lag_s > 0.0 {
+            Memory::Lag
+        } else if form(HysteresisForm::Slip) && self.hysteresis_length_m > 0.0 {
+            Memory::Slip
+        } else if form(HysteresisForm::Ageing) && self.hysteresis_length_m > 0.0 && self.hysteresis_strength != 0.0 {
+            Memory::Ageing
+        } else {
+            Memory::None
+        }
     }
 
     /// Whether this uniform is [`EffectParams::without_effects`] but for
