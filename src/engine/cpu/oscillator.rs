@@ -209,7 +209,9 @@ pub(crate) struct Path<'a> {
     /// `dwell`, hysteresis `ageing`).
     stick_since_s: f64,
     /// Whether sliding friction depends on more than the current velocity
-    /// and interval (hysteresis, or a stiction excess carried into the slip).
+    /// and interval (hysteresis, or a stiction excess carried into the
+    /// slip), or has an adhesion force: whether it takes more than the
+    /// baseline's arithmetic.
     history: bool,
     /// Which friction memory is on ([`Memory::of`] the effects).
     memory_form: Memory,
@@ -238,6 +240,7 @@ impl<'a> Path<'a> {
             matches!(e.hysteresis_form, HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational);
         let history = memory_form != Memory::None
             || (e.hysteresis_length_m != 0.0 && build_up)
+            || e.adhesion_force_n != 0.0
             || e.stiction_form == StictionForm::Decaying
             || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
         let mut path = Path {
@@ -424,13 +427,7 @@ impl<'a> Path<'a> {
         let slipped_m = (x_m - self.slip_start_x_m).abs();
         let mut mu = match self.memory_form {
             Memory::Lag | Memory::Slip => memory,
-            Memory::Ageing => {
-                let length_m = e.hysteresis_length_m;
-                let steady_age_s = length_m / (v_m_per_s.abs() + AGEING_CUTOFF_SPEED_M_PER_S);
-                let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
-                self.steady_law(speed_m_per_s, v_m_per_s)
-                    + effects::contact_age_term(e.hysteresis_strength, memory, steady_age_s, cutoff_age_s)
-            }
+            Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
             Memory::None => {
                 self.steady_law(speed_m_per_s, v_m_per_s)
                     * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
@@ -442,6 +439,33 @@ impl<'a> Path<'a> {
             mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
         }
         mu.max(0.0)
+    }
+
+    /// The magnitude of the friction force while slipping, the arguments
+    /// those of [`Path::friction_coefficient`]: μN, plus the adhesion force
+    /// under load dependence `adhesion` (the sum clipped at 0), N. The
+    /// adhesion is added on the history path only ([`Path::history`] is set
+    /// with it), so the baseline's stages test nothing more.
+    #[inline(always)]
+    fn friction_force_n(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
+        let friction_n = self.friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * self.normal_force_n;
+        if !self.history {
+            return friction_n;
+        }
+        friction_n + effects::adhesion(friction_n, self.osc.effects.adhesion_force_n)
+    }
+
+    /// The sliding coefficient of hysteresis `ageing` with contact age
+    /// `age_s` (s), before stiction: `μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c))`,
+    /// θ_ss(v) = L/(|v| + v_c), –. Not inlined: it calls `ln` anyway.
+    #[inline(never)]
+    fn ageing_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, age_s: f64) -> f64 {
+        let e = &self.osc.effects;
+        let length_m = e.hysteresis_length_m;
+        let steady_age_s = length_m / (v_m_per_s.abs() + AGEING_CUTOFF_SPEED_M_PER_S);
+        let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        self.steady_law(speed_m_per_s, v_m_per_s)
+            + effects::contact_age_term(e.hysteresis_strength, age_s, steady_age_s, cutoff_age_s)
     }
 
     /// The static coefficient `μ(0) + stiction excess + contact-age term`,
@@ -516,13 +540,9 @@ impl<'a> Path<'a> {
         sign: f64,
     ) -> (f64, f64) {
         let o = self.osc;
-        let mu = self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, memory);
+        let friction_n = self.friction_force_n(sign * v_m_per_s, v_m_per_s, x_m, memory);
         let spring = self.spring_force(cos_omega_t, x_m);
-        let mut force = spring - o.damping_n_s_per_m * v_m_per_s - sign * mu * self.normal_force_n;
-        if o.effects.adhesion_force_n != 0.0 {
-            force -= sign * effects::adhesion(mu * self.normal_force_n, o.effects.adhesion_force_n);
-        }
-        let acceleration = force * self.inv_mass;
+        let acceleration = (spring - o.damping_n_s_per_m * v_m_per_s - sign * friction_n) * self.inv_mass;
         let memory_rate = if MEMORY { self.memory_rate(sign * v_m_per_s, v_m_per_s, memory) } else { 0.0 };
         (acceleration, memory_rate)
     }
@@ -869,11 +889,7 @@ impl<'a> Path<'a> {
             Mode::Stick => -self.spring_force(trig.cos, self.x_m),
             Mode::Slip(s) => {
                 let sign = f64::from(s);
-                let mu = self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.memory);
-                let adhesion_n = self.osc.effects.adhesion_force_n;
-                let adhesion_n =
-                    if adhesion_n != 0.0 { effects::adhesion(mu * self.normal_force_n, adhesion_n) } else { 0.0 };
-                -sign * mu * self.normal_force_n - sign * adhesion_n
+                -sign * self.friction_force_n(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.memory)
             }
         }
     }
