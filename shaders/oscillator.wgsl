@@ -216,10 +216,7 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f3
     let form = memory_form();
     var mu = memory;
     if (form == MEMORY_AGEING) {
-        let length_m = effects.hysteresis_length_m;
-        let steady_age_s = length_m / (abs(v_m_per_s) + AGEING_CUTOFF_SPEED_M_PER_S);
-        let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
-        mu = steady_law(speed_m_per_s, v_m_per_s) + contact_age_term(memory, steady_age_s, cutoff_age_s);
+        mu = ageing_coefficient(speed_m_per_s, v_m_per_s, memory);
     } else if (form == MEMORY_NONE) {
         mu = steady_law(speed_m_per_s, v_m_per_s) * hysteresis_factor(slipped_m);
     }
@@ -229,6 +226,27 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f3
         mu += path.stiction_excess * max(1.0 - slipped_m / effects.stiction_release_m, 0.0);
     }
     return max(mu, 0.0);
+}
+
+// μN plus the adhesion force (the sum clipped at 0), N: the CPU's
+// Path::friction_force_n. slip_rates forms the same force inline, as
+// −sign·μ·N − sign·(adhesion), so that the baseline's expression keeps its
+// shape where a driver fuses multiplies into adds.
+fn friction_force_n(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f32) -> f32 {
+    let friction_n = friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * path.normal_force_n;
+    if (effects.adhesion_force_n != 0.0) {
+        return friction_n + adhesion(friction_n);
+    }
+    return friction_n;
+}
+
+// μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c)), θ_ss(v) = L/(|v| + v_c): the
+// sliding coefficient of hysteresis `ageing` before stiction.
+fn ageing_coefficient(speed_m_per_s: f32, v_m_per_s: f32, age_s: f32) -> f32 {
+    let length_m = effects.hysteresis_length_m;
+    let steady_age_s = length_m / (abs(v_m_per_s) + AGEING_CUTOFF_SPEED_M_PER_S);
+    let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+    return steady_law(speed_m_per_s, v_m_per_s) + contact_age_term(age_s, steady_age_s, cutoff_age_s);
 }
 
 fn static_coefficient() -> f32 {
@@ -537,12 +555,7 @@ fn friction_force(trig: vec2<f32>) -> f32 {
         return -spring_force(trig.x, path.x_m);
     }
     let sign = f32(path.mode);
-    let mu = friction_coefficient(sign * path.v_m_per_s, path.v_m_per_s, path.x_m, path.memory);
-    var adhesion_n = 0.0;
-    if (effects.adhesion_force_n != 0.0) {
-        adhesion_n = adhesion(mu * path.normal_force_n);
-    }
-    return -sign * mu * path.normal_force_n - sign * adhesion_n;
+    return -sign * friction_force_n(sign * path.v_m_per_s, path.v_m_per_s, path.x_m, path.memory);
 }
 
 // The fewest equal steps no longer than max_step that cover span (the CPU's
