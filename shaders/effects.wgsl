@@ -64,10 +64,26 @@ fn hysteresis_factor(slipped_m: f32) -> f32 {
     if (effects.hysteresis_form == HYSTERESIS_FORM_RATIONAL) {
         return r / (r + 1.0);
     }
-    if (effects.hysteresis_form == HYSTERESIS_FORM_LAG) {
+    if (effects.hysteresis_form == HYSTERESIS_FORM_LAG || effects.hysteresis_form == HYSTERESIS_FORM_SLIP
+        || effects.hysteresis_form == HYSTERESIS_FORM_AGEING) {
         return 1.0;
     }
     return 1.0 - exp(-r);
+}
+
+// (|v|/L)(μ_ss − μ_f): the slip law's rate of the friction memory, 1/s.
+fn slip_law_rate(steady_mu: f32, memory_mu: f32, speed: f32) -> f32 {
+    return speed / effects.hysteresis_length_m * (steady_mu - memory_mu);
+}
+
+// 1 − |v| θ / L: the ageing law's rate of the contact age θ (s), –.
+fn ageing_rate(age_s: f32, speed: f32) -> f32 {
+    return 1.0 - speed * age_s / effects.hysteresis_length_m;
+}
+
+// B ln((θ + θ_c)/(θ_ref + θ_c)), θ read as 0 below 0, –.
+fn contact_age_term(age_s: f32, reference_age_s: f32, cutoff_age_s: f32) -> f32 {
+    return effects.hysteresis_strength * log((max(age_s, 0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s));
 }
 
 fn drift_factor(t_s: f32) -> f32 {
@@ -82,4 +98,10 @@ fn drift_factor(t_s: f32) -> f32 {
         return max(0.0, 1.0 + (rate + effects.drift_curvature_per_s2 * t_s) * t_s);
     }
     return 1.0 + rate * t_s;
+}
+
+// The adhesion force A, no less than −μN (the friction force's magnitude
+// μN + A is clipped at 0), N.
+fn adhesion(friction_n: f32) -> f32 {
+    return max(effects.adhesion_force_n, -friction_n);
 }

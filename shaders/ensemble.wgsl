@@ -15,7 +15,6 @@ struct Params {
     friction_d_s2_per_m2: f32,
     friction_sigma: f32,
     normal_force_sigma_n: f32,
-    steps_per_period: u32,
     warmup_cycles: u32,
     seed_lo: u32,
     seed_hi: u32,
@@ -63,8 +62,10 @@ struct EffectParams {
     drift_rate_per_s: f32,
     noise_interval_s: f32,
     drift_curvature_per_s2: f32,
-    _pad2: u32,
-    _pad3: u32,
+    // B of hysteresis `ageing`, –.
+    hysteresis_strength: f32,
+    // Adhesion force A of load dependence `adhesion`, N.
+    adhesion_force_n: f32,
 }
 
 struct GridPoint {
@@ -92,6 +93,10 @@ struct GridPoint {
     harmonic_amplitude_2_n: f32,
     harmonic_amplitude_3_n: f32,
     harmonic_amplitude_4_n: f32,
+    // Factor (N0/Nref)^k of the law's a, b, d (load dependence `scaled`; else 1), –.
+    friction_scale: f32,
+    // Steps per period at this point (raised by a friction memory, by frequency).
+    steps_per_period: u32,
 }
 
 struct PathState {
@@ -111,8 +116,10 @@ struct PathState {
     stiction_excess: f32,
     colour_state_1: f32,
     colour_state_2: f32,
-    lagged_mu: f32,
+    // μ_f of hysteresis `lag` and `slip` (–), θ of `ageing` (s).
+    memory: f32,
     stick_since_s: f32,
+    ageing_excess: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -155,6 +162,9 @@ fn load_invocation(n: u32) {
     point = points[params.point_offset + point_index];
     realisation = params.realisation_offset + n % params.realisations_per_point;
     key = vec2<u32>(params.seed_lo, params.seed_hi);
+    law_a = params.friction_a * point.friction_scale;
+    law_b = params.friction_b * point.friction_scale;
+    law_d = params.friction_d_s2_per_m2 * point.friction_scale;
 }
 
 fn store_path(n: u32) {
@@ -162,7 +172,7 @@ fn store_path(n: u32) {
         path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
         path.normal_force_n, path.stick_time_s, path.slip_start_x_m, path.colour_state,
         path.interval_phase, path.stiction_excess, path.colour_state_1, path.colour_state_2,
-        path.lagged_mu, path.stick_since_s);
+        path.memory, path.stick_since_s, path.ageing_excess);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -186,7 +196,8 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     path.interval_phase = 0.0;
     path.mode = MODE_STICK;
     path.stick_since_s = 0.0;
-    path.lagged_mu = 0.0;
+    path.memory = 0.0;
+    path.ageing_excess = 0.0;
     draw_noise();
     if (path.v_m_per_s > 0.0) {
         path.mode = 1;
@@ -197,8 +208,9 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if (path.mode == MODE_STICK) {
         start_stick(0.0);
-    } else {
-        path.lagged_mu = lag_start_coefficient();
+    } else if (memory_form() != MEMORY_AGEING) {
+        // The contact age starts at 0 whether the block sticks or slips.
+        path.memory = lag_start_coefficient();
     }
     store_path(n);
 }
@@ -214,7 +226,7 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
         s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, s.colour_state_1,
-        s.colour_state_2, s.lagged_mu, s.stick_since_s, 0.0, 0.0, 0.0, 0.0);
+        s.colour_state_2, s.memory, s.stick_since_s, s.ageing_excess, 0.0, 0.0, 0.0, 0.0);
     sample_row = n * params.sample_slots;
     interval_at_dispatch = s.interval;
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u));

@@ -30,8 +30,12 @@ struct Path {
     stiction_excess: f32,
     colour_state_1: f32,
     colour_state_2: f32,
-    lagged_mu: f32,
+    // μ_f of hysteresis `lag` and `slip` (–), the contact age θ of `ageing`
+    // (s; while stuck, θ when the stick began).
+    memory: f32,
     stick_since_s: f32,
+    // The static coefficient's contact-age term of `ageing`, –.
+    ageing_excess: f32,
     period_max_x_m: f32,
     period_stick_s: f32,
     // ∫ x cos(Ωt) dt and ∫ x sin(Ωt) dt over the period so far (phase_of).
@@ -45,7 +49,7 @@ struct Path {
 struct SlipStep {
     x_m: f32,
     v_m_per_s: f32,
-    lagged_mu: f32,
+    memory: f32,
     x2_m: f32,
     x3_m: f32,
     x4_m: f32,
@@ -58,6 +62,11 @@ var<private> path: Path;
 var<private> point: GridPoint;
 var<private> realisation: u32;
 var<private> key: vec2<u32>;
+// The law's a, b, d at this point's load (load dependence `scaled`), set
+// with the point.
+var<private> law_a: f32;
+var<private> law_b: f32;
+var<private> law_d: f32;
 
 // (cos, sin) of a phase, and a rotation of one by another.
 fn trig_at(theta: f32) -> vec2<f32> {
@@ -138,6 +147,21 @@ fn draw_noise() {
             path.stiction_excess = dwell_excess(effects.stiction_excess, t_s - path.stick_since_s, effects.stiction_dwell_s);
         }
     }
+    if (memory_form() == MEMORY_AGEING && path.mode == MODE_STICK) {
+        path.ageing_excess = contact_age_excess(contact_age_at(t_s));
+    }
+}
+
+// The contact age θ (s) while stuck, held over the interval starting at
+// interval_start_s: θ at the stick's start plus the time stuck up to then.
+fn contact_age_at(interval_start_s: f32) -> f32 {
+    return path.memory + max(interval_start_s - path.stick_since_s, 0.0);
+}
+
+// B ln((θ + θ_c)/(2 θ_c)): the static coefficient's contact-age term.
+fn contact_age_excess(age_s: f32) -> f32 {
+    let cutoff_age_s = effects.hysteresis_length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+    return contact_age_term(age_s, cutoff_age_s, cutoff_age_s);
 }
 
 // A stick starts at t_s (from the run's start): dwell stiction ages anew.
@@ -163,20 +187,37 @@ fn stribeck_factor(c_s_per_m: f32, speed_m_per_s: f32) -> f32 {
 }
 
 fn steady_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
-    return params.friction_a + point.friction_offset
-        + params.friction_b * stribeck_factor(params.friction_c_s_per_m, speed_m_per_s)
-        + params.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
+    return law_a + point.friction_offset
+        + law_b * stribeck_factor(params.friction_c_s_per_m, speed_m_per_s)
+        + law_d * v_m_per_s * v_m_per_s
         + path.friction_noise;
 }
 
-fn lag_on() -> bool {
-    return effects.hysteresis_form == HYSTERESIS_FORM_LAG && effects.hysteresis_lag_s > 0.0;
+// Which friction memory the slip ODE carries (the CPU's Memory::of; the
+// MEMORY_* codes are generated). The host runs a copy of this kernel in
+// which this function returns its memory as a constant
+// (source::ensemble_wgsl_with_memory), so the others' branches fold away.
+fn memory_form() -> i32 {
+    if (effects.hysteresis_form == HYSTERESIS_FORM_LAG && effects.hysteresis_lag_s > 0.0) {
+        return MEMORY_LAG;
+    }
+    if (effects.hysteresis_form == HYSTERESIS_FORM_SLIP && effects.hysteresis_length_m > 0.0) {
+        return MEMORY_SLIP;
+    }
+    if (effects.hysteresis_form == HYSTERESIS_FORM_AGEING && effects.hysteresis_length_m > 0.0
+        && effects.hysteresis_strength != 0.0) {
+        return MEMORY_AGEING;
+    }
+    return MEMORY_NONE;
 }
 
-fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, lagged_mu: f32) -> f32 {
+fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f32) -> f32 {
     let slipped_m = abs(x_m - path.slip_start_x_m);
-    var mu = lagged_mu;
-    if (!lag_on()) {
+    let form = memory_form();
+    var mu = memory;
+    if (form == MEMORY_AGEING) {
+        mu = ageing_coefficient(speed_m_per_s, v_m_per_s, memory);
+    } else if (form == MEMORY_NONE) {
         mu = steady_law(speed_m_per_s, v_m_per_s) * hysteresis_factor(slipped_m);
     }
     if (effects.stiction_form == STICTION_FORM_DECAYING) {
@@ -187,11 +228,33 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, lagged_mu:
     return max(mu, 0.0);
 }
 
-fn static_coefficient() -> f32 {
-    return max(params.friction_a + point.friction_offset + params.friction_b + path.friction_noise + path.stiction_excess, 0.0);
+// μN plus the adhesion force (the sum clipped at 0), N: the CPU's
+// Path::friction_force_n. slip_rates forms the same force inline, as
+// −sign·μ·N − sign·(adhesion), so that the baseline's expression keeps its
+// shape where a driver fuses multiplies into adds.
+fn friction_force_n(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f32) -> f32 {
+    let friction_n = friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * path.normal_force_n;
+    if (effects.adhesion_force_n != 0.0) {
+        return friction_n + adhesion(friction_n);
+    }
+    return friction_n;
 }
 
-// Where the lagged coefficient starts at a breakaway: the static one less
+// μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c)), θ_ss(v) = L/(|v| + v_c): the
+// sliding coefficient of hysteresis `ageing` before stiction.
+fn ageing_coefficient(speed_m_per_s: f32, v_m_per_s: f32, age_s: f32) -> f32 {
+    let length_m = effects.hysteresis_length_m;
+    let steady_age_s = length_m / (abs(v_m_per_s) + AGEING_CUTOFF_SPEED_M_PER_S);
+    let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+    return steady_law(speed_m_per_s, v_m_per_s) + contact_age_term(age_s, steady_age_s, cutoff_age_s);
+}
+
+fn static_coefficient() -> f32 {
+    return max(law_a + point.friction_offset + law_b + path.friction_noise + path.stiction_excess
+        + path.ageing_excess, 0.0);
+}
+
+// Where the friction memory of `lag` and `slip` starts at a breakaway: the static one less
 // the stiction excess friction_coefficient adds while it is released
 // (src/engine/cpu/oscillator.rs: Path::lag_start_coefficient).
 fn lag_start_coefficient() -> f32 {
@@ -204,28 +267,49 @@ fn lag_start_coefficient() -> f32 {
     return static_coefficient() - excess;
 }
 
+// μ_s N, plus the adhesion force (the sum clipped at 0).
 fn breakaway_force() -> f32 {
-    return static_coefficient() * path.normal_force_n;
+    let friction_n = static_coefficient() * path.normal_force_n;
+    if (effects.adhesion_force_n != 0.0) {
+        return friction_n + adhesion(friction_n);
+    }
+    return friction_n;
 }
 
-// (acceleration, rate of the lagged friction coefficient).
-fn slip_rates(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, lagged_mu: f32, sign: f32) -> vec2<f32> {
-    let mu = friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
+// Rate of the friction memory: lag (μ_ss − μ_f)/τ_m, slip (|v|/L)(μ_ss − μ_f),
+// ageing 1 − |v| θ/L.
+fn memory_rate(speed_m_per_s: f32, v_m_per_s: f32, memory: f32) -> f32 {
+    let form = memory_form();
+    if (form == MEMORY_LAG) {
+        return (steady_law(speed_m_per_s, v_m_per_s) - memory) / effects.hysteresis_lag_s;
+    }
+    if (form == MEMORY_SLIP) {
+        return slip_law_rate(steady_law(speed_m_per_s, v_m_per_s), memory, abs(v_m_per_s));
+    }
+    if (form == MEMORY_AGEING) {
+        return ageing_rate(memory, abs(v_m_per_s));
+    }
+    return 0.0;
+}
+
+// (acceleration, rate of the friction memory).
+fn slip_rates(cos_omega_t: f32, x_m: f32, v_m_per_s: f32, memory: f32, sign: f32) -> vec2<f32> {
+    let mu = friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, memory);
+    var force = spring_force(cos_omega_t, x_m) - params.damping_n_s_per_m * v_m_per_s
+        - sign * mu * path.normal_force_n;
+    if (effects.adhesion_force_n != 0.0) {
+        force -= sign * adhesion(mu * path.normal_force_n);
+    }
     // Times 1/m like the CPU reference: the reciprocal depends on the
     // uniform only, so no stage waits on a division by the mass.
-    let acceleration = (spring_force(cos_omega_t, x_m) - params.damping_n_s_per_m * v_m_per_s
-        - sign * mu * path.normal_force_n) * (1.0 / params.mass_kg);
-    var lag_rate = 0.0;
-    if (lag_on()) {
-        lag_rate = (steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / effects.hysteresis_lag_s;
-    }
-    return vec2<f32>(acceleration, lag_rate);
+    let acceleration = force * (1.0 / params.mass_kg);
+    return vec2<f32>(acceleration, memory_rate(sign * v_m_per_s, v_m_per_s, memory));
 }
 
 fn rk4_slip(start: vec2<f32>, x_m: f32, v_m_per_s: f32, h_s: f32, half_turn: vec2<f32>, sign: f32) -> SlipStep {
     let mid = rotated(start, half_turn);
     let end = rotated(mid, half_turn);
-    let m0 = path.lagged_mu;
+    let m0 = path.memory;
     let hh = 0.5 * h_s;
     let k1x = v_m_per_s;
     let k1 = slip_rates(start.x, x_m, v_m_per_s, m0, sign);
@@ -401,7 +485,12 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             path.mode = i32(until.y);
             path.slip_start_x_m = path.x_m;
             if (path.mode != MODE_STICK) {
-                path.lagged_mu = lag_start_coefficient();
+                if (memory_form() == MEMORY_AGEING) {
+                    // The slip starts from the contact age the breakaway was judged by.
+                    path.memory = contact_age_at(f32(path.interval) * effects.noise_interval_s);
+                } else {
+                    path.memory = lag_start_coefficient();
+                }
             }
             t_a = t_end;
             start = end;
@@ -421,7 +510,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                 }
                 path.x_m = step.x_m;
                 path.v_m_per_s = step.v_m_per_s;
-                path.lagged_mu = step.lagged_mu;
+                path.memory = step.memory;
                 path.period_max_x_m = max(path.period_max_x_m, step.x_m);
                 return step.trig2;
             }
@@ -432,11 +521,15 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             }
             path.x_m = to_zero.x_m;
             path.v_m_per_s = 0.0;
-            path.lagged_mu = to_zero.lagged_mu;
+            path.memory = to_zero.memory;
             path.period_max_x_m = max(path.period_max_x_m, to_zero.x_m);
             t_a = t_a + h_zero;
             start = trig_at(w * t_a);
             whole = false;
+            if (memory_form() == MEMORY_AGEING) {
+                // At rest the static coefficient reads the contact age the slip reached.
+                path.ageing_excess = contact_age_excess(path.memory);
+            }
             if (events < MAX_EVENTS_PER_SEGMENT) {
                 path.mode = stick_or_slip(start);
             } else {
@@ -444,8 +537,10 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             }
             if (path.mode == MODE_STICK) {
                 start_stick(period_start_s + t_a);
-            } else {
-                path.lagged_mu = lag_start_coefficient();
+            } else if (memory_form() != MEMORY_AGEING) {
+                // A slip from rest is a breakaway: μ_f starts at the static
+                // coefficient; the contact age goes on from where the slip left it.
+                path.memory = lag_start_coefficient();
             }
             path.slip_start_x_m = path.x_m;
             events += 1u;
@@ -460,8 +555,7 @@ fn friction_force(trig: vec2<f32>) -> f32 {
         return -spring_force(trig.x, path.x_m);
     }
     let sign = f32(path.mode);
-    let mu = friction_coefficient(sign * path.v_m_per_s, path.v_m_per_s, path.x_m, path.lagged_mu);
-    return -sign * mu * path.normal_force_n;
+    return -sign * friction_force_n(sign * path.v_m_per_s, path.v_m_per_s, path.x_m, path.memory);
 }
 
 // The fewest equal steps no longer than max_step that cover span (the CPU's
@@ -473,7 +567,7 @@ fn span_steps(span: f32, max_step: f32) -> u32 {
 // Noise boundaries and the period's end are step boundaries: each span
 // between them is divided into equal steps no longer than T / S.
 fn run_period(measuring: bool) {
-    let steps_per_period = params.steps_per_period;
+    let steps_per_period = point.steps_per_period;
     let max_step = point.period_s / f32(steps_per_period);
     let w = point.omega_rad_per_s;
     path.period_max_x_m = path.x_m;

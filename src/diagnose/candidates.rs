@@ -588,6 +588,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                         form: HysteresisForm::Exponential,
                         length_m: p[0],
                         time_constant_s: 0.0,
+                        strength: 0.0,
                     });
                     m
                 }),
@@ -603,8 +604,12 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 params: vec![Param::log("time_constant_s", 6.0e-3_f64.max(interval), 2.5, interval, 0.2)],
                 apply: Box::new(|m, p| {
                     let mut m = m.clone();
-                    m.effects.friction_hysteresis =
-                        Some(FrictionHysteresis { form: HysteresisForm::Lag, length_m: 0.0, time_constant_s: p[0] });
+                    m.effects.friction_hysteresis = Some(FrictionHysteresis {
+                        form: HysteresisForm::Lag,
+                        length_m: 0.0,
+                        time_constant_s: p[0],
+                        strength: 0.0,
+                    });
                     m
                 }),
             };

@@ -142,6 +142,7 @@ pub fn random_truth(
                     form: if first { HysteresisForm::Tanh } else { HysteresisForm::Rational },
                     length_m: pick(1e-4, 3e-4),
                     time_constant_s: 0.0,
+                    strength: 0.0,
                 });
             }
             Effect::ColouredFrictionNoise => {

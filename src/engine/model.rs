@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::effects::{Effect, Effects};
+use crate::engine::effects::{Effect, Effects, LoadForm};
 use crate::error::{Error, Result};
 
 /// The physically sensible ranges that every parameter and grid coordinate
@@ -440,6 +440,7 @@ impl Model {
         }
         if let Some(h) = &e.friction_hysteresis {
             bound("friction_hysteresis.length_m", h.length_m, LENGTH_MAX_M, "m")?;
+            bound("friction_hysteresis.strength", h.strength, FRICTION_COEFFICIENT_MAX, "")?;
         }
         if let Some(c) = &e.coloured_friction_noise {
             bound("coloured_friction_noise.correlation_time_s", c.correlation_time_s, TIME_MAX_S, "s")?;
@@ -449,7 +450,11 @@ impl Model {
             bound("stiction.release_length_m", s.release_length_m, LENGTH_MAX_M, "m")?;
         }
         if let Some(l) = &e.load_dependent_friction {
-            bound("load_dependent_friction.strength", l.strength, RATE_MAX, "")?;
+            match l.form {
+                // The adhesion force A, N.
+                LoadForm::Adhesion => bound("load_dependent_friction.strength", l.strength, FORCE_MAX_N, "N")?,
+                _ => bound("load_dependent_friction.strength", l.strength, RATE_MAX, "")?,
+            }
             bound("load_dependent_friction.curvature_per_n2", l.curvature_per_n2, RATE_MAX, "1/N²")?;
             bound("load_dependent_friction.reference_force_n", l.reference_force_n, FORCE_MAX_N, "N")?;
         }

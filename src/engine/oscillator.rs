@@ -179,33 +179,75 @@ impl Oscillator {
         })
     }
 
-    /// The model's steps per period, raised where hysteresis `lag` is on so
-    /// that no step is longer than its memory time τ_m: classical RK4 on
+    /// The model's steps per period, raised where a friction memory is on
+    /// so that no step is longer than its memory time: classical RK4 on
     /// `dμ_f/dt = (μ − μ_f)/τ_m` is unstable for steps beyond 2.8 τ_m (the
     /// lagged coefficient then grew without bound, 15 and more, instead of
     /// following the law) and inaccurate well before; at one step per τ_m it
-    /// follows the exact decay within 2% per step. Unchanged for every
-    /// other model and for memory times longer than a step. A memory time
-    /// that would need more than [`Solver::MAX_STEPS_PER_PERIOD`] steps is
-    /// refused, by name.
+    /// follows the exact decay within 2% per step.
+    ///
+    /// - hysteresis `lag`: τ_m is its memory time.
+    /// - hysteresis `slip` and `ageing`: their states relax over the slip
+    ///   distance L, with rate |v|/L (`dμ_f/dt = (|v|/L)(μ_ss − μ_f)`,
+    ///   `dθ/dt = 1 − |v| θ/L`), so the memory time L/|v| shortens with
+    ///   speed. It is taken at the speed scale max(Ω, ω0) X, X the
+    ///   frictionless steady amplitude at this frequency
+    ///   ([`Model::linear_amplitude_m`]): friction only takes energy out, so
+    ///   the motion stays within about X, and a slip from a stick, driven by
+    ///   the springs, is at most as fast as a swing at the natural frequency
+    ///   ω0 (on the paper rig at 5–15 Hz and 4–16 N: slips up to 1.7 Ω X =
+    ///   0.83 ω0 X at 5 Hz, where they start from sticks, and within 1.06 Ω X
+    ///   elsewhere; RK4 stays stable up to 2.8 times the scale). That is
+    ///   2π X max(f, f0) / (f L) steps per period: about 440 at 7 Hz with
+    ///   L = 0.1 mm, 14 500 next to resonance (10 Hz, X = 0.23 m), ten times
+    ///   more for each tenfold shorter L.
+    ///
+    /// Unchanged for every other model and where the memory time is longer
+    /// than a step. A memory that would need more than
+    /// [`Solver::MAX_STEPS_PER_PERIOD`] steps is refused, by name.
     fn steps_resolving(model: &Model, condition: Condition) -> Result<u32> {
         let steps = model.solver.steps_per_period;
-        let Some(h) = model.effects.friction_hysteresis.as_ref().filter(|h| h.form == HysteresisForm::Lag) else {
+        let Some(h) = model.effects.friction_hysteresis.as_ref() else {
             return Ok(steps);
         };
-        if h.time_constant_s <= 0.0 {
-            return Ok(steps);
-        }
         let period_s = 1.0 / condition.excitation_frequency_hz;
-        let needed = (period_s / h.time_constant_s).ceil();
-        if needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
+        let fastest_hz = condition.excitation_frequency_hz.max(model.rig.natural_frequency_hz);
+        let speed_scale =
+            std::f64::consts::TAU * fastest_hz * model.linear_amplitude_m(condition.excitation_frequency_hz);
+        let (memory_s, key, value, what) = match h.form {
+            HysteresisForm::Lag if h.time_constant_s > 0.0 => (
+                h.time_constant_s,
+                "friction_hysteresis.time_constant_s",
+                h.time_constant_s,
+                format!("a memory time of {:e} s", h.time_constant_s),
+            ),
+            HysteresisForm::Slip | HysteresisForm::Ageing
+                if h.length_m > 0.0 && (h.form == HysteresisForm::Slip || h.strength != 0.0) =>
+            {
+                let memory_s = h.length_m / speed_scale;
+                (
+                    memory_s,
+                    "friction_hysteresis.length_m",
+                    h.length_m,
+                    format!(
+                        "a slip distance of {:e} m at the speed scale {speed_scale:e} m/s (the faster of the \
+                         excitation's and the natural angular frequency times the frictionless steady amplitude) \
+                         is a memory time of {memory_s:e} s, which",
+                        h.length_m
+                    ),
+                )
+            }
+            _ => return Ok(steps),
+        };
+        let needed = (period_s / memory_s).ceil();
+        // NaN too (no finite speed scale): refused.
+        if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
             return Err(Error::InvalidParameter {
-                key: "friction_hysteresis.time_constant_s".into(),
-                value: h.time_constant_s.to_string(),
+                key: key.into(),
+                value: value.to_string(),
                 message: format!(
-                    "a memory time of {:e} s needs {needed:e} steps per period at {} Hz to be integrated \
-                     stably; at most {} are allowed",
-                    h.time_constant_s,
+                    "{what} needs {needed:e} steps per period at {} Hz to be integrated stably; at most {} are \
+                     allowed",
                     condition.excitation_frequency_hz,
                     Solver::MAX_STEPS_PER_PERIOD
                 ),

@@ -61,7 +61,8 @@ pub fn dwell_excess(excess: f64, dwell_s: f64, ageing_s: f64) -> f64 {
 
 /// Build-up of sliding friction with displacement `d` (m) since slip start,
 /// over the characteristic displacement `length` (m); 1 when `length` is 0
-/// and for the `lag` form (which acts through its own state).
+/// and for the `lag`, `slip` and `ageing` forms (which act through the
+/// friction memory state).
 pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
     if length == 0.0 {
         return 1.0;
@@ -71,8 +72,32 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
         HysteresisForm::Tanh => r.tanh(),
         HysteresisForm::Rational => r / (r + 1.0),
         HysteresisForm::Exponential => 1.0 - (-r).exp(),
-        HysteresisForm::Lag => 1.0,
+        HysteresisForm::Lag | HysteresisForm::Slip | HysteresisForm::Ageing => 1.0,
     }
+}
+
+/// Rate of the friction memory μ_f under hysteresis `slip` (the slip law),
+/// 1/s: it relaxes to the steady law's `steady_mu` (–) over the slip
+/// distance `length` (m, > 0) at speed `speed` (m/s, ≥ 0),
+/// `(|v|/L)(μ_ss − μ_f)`.
+pub fn slip_law_rate(steady_mu: f64, memory_mu: f64, speed: f64, length: f64) -> f64 {
+    speed / length * (steady_mu - memory_mu)
+}
+
+/// Rate of the contact age θ (`age_s`, s) under hysteresis `ageing` (the
+/// ageing law) at speed `speed` (m/s, ≥ 0) with slip distance `length` (m,
+/// > 0): `1 − |v| θ / L`, –.
+pub fn ageing_rate(age_s: f64, speed: f64, length: f64) -> f64 {
+    1.0 - speed * age_s / length
+}
+
+/// The contact-age term of hysteresis `ageing`, –:
+/// `B ln((θ + θ_c)/(θ_ref + θ_c))` with `strength` B (–), the contact age
+/// θ = `age_s` (s; read as 0 where an RK4 stage overshoots below it),
+/// `reference_age_s` θ_ref (s: the steady age L/(|v| + v_c) while sliding,
+/// θ_c at rest) and the cut-off age θ_c = L/v_c (`cutoff_age_s`, s).
+pub fn contact_age_term(strength: f64, age_s: f64, reference_age_s: f64, cutoff_age_s: f64) -> f64 {
+    strength * ((age_s.max(0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s)).ln()
 }
 
 /// Drift factor of N0 at time `t` (s) from the run's start, initial
@@ -85,4 +110,12 @@ pub fn drift_factor(form: DriftForm, rate: f64, curvature: f64, t: f64) -> f64 {
         DriftForm::Wander => 1.0 + rate * DRIFT_WANDER_S * (t / DRIFT_WANDER_S).sin(),
         DriftForm::Linear => 1.0 + rate * t,
     }
+}
+
+/// The adhesion force of load dependence `adhesion` as it adds to a
+/// friction force of magnitude `friction_n` (μN, N): the force `adhesion_n`
+/// (A, N), but no less than −μN, so that the sum μN + A, the friction force's
+/// magnitude, is clipped at 0.
+pub fn adhesion(friction_n: f64, adhesion_n: f64) -> f64 {
+    adhesion_n.max(-friction_n)
 }

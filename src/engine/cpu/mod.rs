@@ -339,11 +339,11 @@ mod tests {
     /// condition that slips throughout and one that sticks much of each
     /// period (so lanes part at events), without effects, with effects held
     /// per interval (harmonics, coloured noise) and with a friction history
-    /// (hysteresis by slip length, and by a time lag: the lagged coefficient
-    /// is one more state of the step).
+    /// (hysteresis by slip length, and by a friction memory, one more state
+    /// of the step: a time lag, the slip law, the ageing law with adhesion).
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
-        let cases: [&[&str]; 4] = [
+        let cases: [&[&str]; 6] = [
             &[],
             &[
                 "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
@@ -351,6 +351,14 @@ mod tests {
             ],
             &["friction_hysteresis.length_m=2e-4"],
             &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
+            &["friction_hysteresis.form=\"slip\"", "friction_hysteresis.length_m=2e-4"],
+            &[
+                "friction_hysteresis.form=\"ageing\"",
+                "friction_hysteresis.length_m=2e-4",
+                "friction_hysteresis.strength=0.05",
+                "load_dependent_friction.form=\"adhesion\"",
+                "load_dependent_friction.strength=0.5",
+            ],
         ];
         for (overrides, lanes) in cases.into_iter().flat_map(|c| LANE_WIDTHS.map(|w| (c, w))) {
             let realisations: Vec<u32> = (3..3 + lanes as u32).collect();

@@ -34,7 +34,9 @@
 //! kernel writes those itself.
 
 use crate::engine::cpu::effects;
-use crate::engine::effects::{ColourForm, EffectParams, HysteresisForm, STICTION_DECAY_M, StictionForm};
+use crate::engine::effects::{
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HysteresisForm, STICTION_DECAY_M, StictionForm,
+};
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
 
@@ -44,6 +46,37 @@ pub enum Mode {
     Stick,
     /// Slipping with velocity sign +1 or −1.
     Slip(i8),
+}
+
+/// The friction memory the slip ODE carries as its third state (hysteresis
+/// `lag`, `slip` or `ageing` switched on), or none. The kernel sees the
+/// codes as the generated `MEMORY_*` constants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Memory {
+    None = 0,
+    /// μ_f lags the steady law in time (memory time τ_m).
+    Lag = 1,
+    /// μ_f relaxes to the steady law over a slip distance L (the slip law).
+    Slip = 2,
+    /// The contact age θ of the ageing law.
+    Ageing = 3,
+}
+
+impl Memory {
+    /// Every memory, in code order, with its name in the kernel's constants.
+    pub(crate) const ALL: [(Memory, &'static str); 4] =
+        [(Memory::None, "NONE"), (Memory::Lag, "LAG"), (Memory::Slip, "SLIP"), (Memory::Ageing, "AGEING")];
+
+    /// The memory of flattened effects: on where its form's strength is not
+    /// zero (`lag`: τ_m > 0; `slip`: L > 0; `ageing`: L > 0 and B ≠ 0).
+    pub(crate) fn of(e: &EffectParams) -> Memory {
+        match e.hysteresis_form {
+            HysteresisForm::Lag if e.hysteresis_lag_s > 0.0 => Memory::Lag,
+            HysteresisForm::Slip if e.hysteresis_length_m > 0.0 => Memory::Slip,
+            HysteresisForm::Ageing if e.hysteresis_length_m > 0.0 && e.hysteresis_strength != 0.0 => Memory::Ageing,
+            _ => Memory::None,
+        }
+    }
 }
 
 /// Halvings of a step probing for motion after a start from rest: 2⁻⁶⁰ of
@@ -122,8 +155,8 @@ fn harmonics_n(e: &EffectParams, interval_phase: f64) -> f64 {
 struct SlipStep {
     x_m: f64,
     v_m_per_s: f64,
-    /// The lagged friction coefficient at the end (hysteresis `lag`), –.
-    lagged_mu: f64,
+    /// The friction memory at the end (μ_f, –, or θ, s; see [`Memory`]).
+    memory: f64,
     stage_x_m: [f64; 4],
     trig: [Trig; 3],
 }
@@ -165,15 +198,28 @@ pub(crate) struct Path<'a> {
     interval_phase: f64,
     /// Static-friction excess in the current interval, –.
     stiction_excess: f64,
-    /// The lagged friction coefficient μ_f of hysteresis `lag`, –.
-    lagged_mu: f64,
-    /// When the current stick began, s from the run's start (stiction `dwell`).
+    /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
+    /// contact age θ of `ageing` (s; while stuck, θ when the stick began).
+    memory: f64,
+    /// The static coefficient's contact-age term B ln((θ + θ_c)/(2 θ_c)) of
+    /// hysteresis `ageing`, with θ at the current interval's start while
+    /// stuck (or at the stick's start), and at the last velocity zero, –.
+    ageing_excess: f64,
+    /// When the current stick began, s from the run's start (stiction
+    /// `dwell`, hysteresis `ageing`).
     stick_since_s: f64,
     /// Whether sliding friction depends on more than the current velocity
-    /// and interval (hysteresis, or a stiction excess carried into the slip).
+    /// and interval (hysteresis, or a stiction excess carried into the
+    /// slip), or has an adhesion force: whether it takes more than the
+    /// baseline's arithmetic.
     history: bool,
-    /// Whether hysteresis `lag` is on (its memory time is not zero).
-    lag: bool,
+    /// Which friction memory is on ([`Memory::of`] the effects).
+    memory_form: Memory,
+    /// The law's a, b (–) and d (s²/m²) at this point's load: times
+    /// (N0/Nref)^k under load dependence `scaled`, themselves otherwise.
+    law_a: f64,
+    law_b: f64,
+    law_d: f64,
     /// 1 / m, 1/kg.
     inv_mass: f64,
     /// Largest x so far in the current period, m.
@@ -189,9 +235,12 @@ pub(crate) struct Path<'a> {
 impl<'a> Path<'a> {
     pub(crate) fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
         let e = &osc.effects;
-        let lag = e.hysteresis_form == HysteresisForm::Lag && e.hysteresis_lag_s > 0.0;
-        let history = lag
-            || (e.hysteresis_length_m != 0.0 && e.hysteresis_form != HysteresisForm::Lag)
+        let memory_form = Memory::of(e);
+        let build_up =
+            matches!(e.hysteresis_form, HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational);
+        let history = memory_form != Memory::None
+            || (e.hysteresis_length_m != 0.0 && build_up)
+            || e.adhesion_force_n != 0.0
             || e.stiction_form == StictionForm::Decaying
             || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
         let mut path = Path {
@@ -210,10 +259,14 @@ impl<'a> Path<'a> {
             colour_state: [0.0; 3],
             interval_phase: 0.0,
             stiction_excess: 0.0,
-            lagged_mu: 0.0,
+            memory: 0.0,
+            ageing_excess: 0.0,
             stick_since_s: 0.0,
             history,
-            lag,
+            memory_form,
+            law_a: osc.friction_a * e.friction_scale,
+            law_b: osc.friction_b * e.friction_scale,
+            law_d: osc.friction_d_s2_per_m2 * e.friction_scale,
             inv_mass: 1.0 / osc.mass_kg,
             period_max_x_m: initial.x_m,
             period_stick_s: 0.0,
@@ -230,8 +283,9 @@ impl<'a> Path<'a> {
         };
         if path.mode == Mode::Stick {
             path.start_stick(0.0);
-        } else {
-            path.lagged_mu = path.lag_start_coefficient();
+        } else if path.memory_form != Memory::Ageing {
+            // The contact age starts at 0 whether the block sticks or slips.
+            path.memory = path.lag_start_coefficient();
         }
         path
     }
@@ -307,6 +361,25 @@ impl<'a> Path<'a> {
             StictionForm::Dwell => 0.0,
             _ => e.stiction_excess,
         };
+        if self.memory_form == Memory::Ageing && self.mode == Mode::Stick {
+            self.ageing_excess = self.contact_age_excess(self.contact_age_at(t_s));
+        }
+    }
+
+    /// The contact age θ (s) of hysteresis `ageing` while stuck, held over
+    /// the noise interval that starts at `interval_start_s` (s from the
+    /// run's start): θ at the stick's start plus the time stuck up to the
+    /// interval's start (none in the interval the stick began).
+    fn contact_age_at(&self, interval_start_s: f64) -> f64 {
+        self.memory + (interval_start_s - self.stick_since_s).max(0.0)
+    }
+
+    /// The static coefficient's contact-age term at age `age_s` (s):
+    /// `B ln((θ + θ_c)/(2 θ_c))`, the sliding friction's term at v = 0, –.
+    fn contact_age_excess(&self, age_s: f64) -> f64 {
+        let e = &self.osc.effects;
+        let cutoff_age_s = e.hysteresis_length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        effects::contact_age_term(e.hysteresis_strength, age_s, cutoff_age_s, cutoff_age_s)
     }
 
     /// Marks the start of a stick at `t_s` (from the run's start): the
@@ -328,33 +401,37 @@ impl<'a> Path<'a> {
     }
 
     /// The steady friction law while slipping with speed `speed` (m/s) at
-    /// velocity `v` (m/s), before effects of history: `a + Δa + b S(c, s)
-    /// + d v² + σ ξ` with `S` = [`stribeck_factor`], –.
+    /// velocity `v` (m/s), before effects of history:
+    /// `a + Δa + b S(c, s) + d v² + σ ξ` with `S` = [`stribeck_factor`]
+    /// (a, b and d at this point's load), –.
     #[inline(always)]
     fn steady_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
         let o = self.osc;
-        o.friction_a
+        self.law_a
             + o.effects.friction_offset
-            + o.friction_b * stribeck_factor(o.friction_c_s_per_m, speed_m_per_s)
-            + o.friction_d_s2_per_m2 * v_m_per_s * v_m_per_s
+            + self.law_b * stribeck_factor(o.friction_c_s_per_m, speed_m_per_s)
+            + self.law_d * v_m_per_s * v_m_per_s
             + self.friction_noise
     }
 
     /// Friction coefficient while slipping with speed `speed` (m/s) at
-    /// displacement `x_m`, with the lagged coefficient `lagged_mu` (used by
-    /// hysteresis `lag` only), clipped at 0.
+    /// displacement `x_m`, with the friction memory `memory` (μ_f of
+    /// hysteresis `lag` and `slip`, θ of `ageing`; unused otherwise),
+    /// clipped at 0.
     #[inline(always)]
-    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, lagged_mu: f64) -> f64 {
+    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
         if !self.history {
             return self.steady_law(speed_m_per_s, v_m_per_s).max(0.0);
         }
         let e = &self.osc.effects;
         let slipped_m = (x_m - self.slip_start_x_m).abs();
-        let mut mu = if self.lag {
-            lagged_mu
-        } else {
-            self.steady_law(speed_m_per_s, v_m_per_s)
-                * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
+        let mut mu = match self.memory_form {
+            Memory::Lag | Memory::Slip => memory,
+            Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
+            Memory::None => {
+                self.steady_law(speed_m_per_s, v_m_per_s)
+                    * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
+            }
         };
         if e.stiction_form == StictionForm::Decaying {
             mu += self.stiction_excess * (-slipped_m / STICTION_DECAY_M).exp();
@@ -364,14 +441,48 @@ impl<'a> Path<'a> {
         mu.max(0.0)
     }
 
-    /// The static coefficient `μ(0) + stiction excess`, clipped at 0, –.
-    fn static_coefficient(&self) -> f64 {
-        let o = self.osc;
-        (o.friction_a + o.effects.friction_offset + o.friction_b + self.friction_noise + self.stiction_excess).max(0.0)
+    /// The magnitude of the friction force while slipping, the arguments
+    /// those of [`Path::friction_coefficient`]: μN, plus the adhesion force
+    /// under load dependence `adhesion` (the sum clipped at 0), N. The
+    /// adhesion is added on the history path only ([`Path::history`] is set
+    /// with it), so the baseline's stages test nothing more.
+    #[inline(always)]
+    fn friction_force_n(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
+        let friction_n = self.friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * self.normal_force_n;
+        if !self.history {
+            return friction_n;
+        }
+        friction_n + effects::adhesion(friction_n, self.osc.effects.adhesion_force_n)
     }
 
-    /// Where hysteresis `lag`'s lagged coefficient starts when the block
-    /// breaks away: the static coefficient the breakaway was judged by, less
+    /// The sliding coefficient of hysteresis `ageing` with contact age
+    /// `age_s` (s), before stiction: `μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c))`,
+    /// θ_ss(v) = L/(|v| + v_c), –. Not inlined: it calls `ln` anyway.
+    #[inline(never)]
+    fn ageing_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, age_s: f64) -> f64 {
+        let e = &self.osc.effects;
+        let length_m = e.hysteresis_length_m;
+        let steady_age_s = length_m / (v_m_per_s.abs() + AGEING_CUTOFF_SPEED_M_PER_S);
+        let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        self.steady_law(speed_m_per_s, v_m_per_s)
+            + effects::contact_age_term(e.hysteresis_strength, age_s, steady_age_s, cutoff_age_s)
+    }
+
+    /// The static coefficient `μ(0) + stiction excess + contact-age term`,
+    /// clipped at 0, –.
+    fn static_coefficient(&self) -> f64 {
+        let o = self.osc;
+        (self.law_a
+            + o.effects.friction_offset
+            + self.law_b
+            + self.friction_noise
+            + self.stiction_excess
+            + self.ageing_excess)
+            .max(0.0)
+    }
+
+    /// Where the friction memory μ_f of hysteresis `lag` and `slip` starts
+    /// when the block breaks away: the static coefficient the breakaway was judged by, less
     /// the stiction excess that [`Path::friction_coefficient`] adds on top
     /// while it is released (`decaying`, or `constant` with a release
     /// length), so that sliding starts at exactly the static coefficient.
@@ -386,54 +497,75 @@ impl<'a> Path<'a> {
         self.static_coefficient() - if released { self.stiction_excess } else { 0.0 }
     }
 
-    /// Breakaway force `μ_s N`, N.
+    /// Breakaway force `μ_s N` (plus the adhesion force under load
+    /// dependence `adhesion`, the sum clipped at 0), N.
     fn breakaway_force(&self) -> f64 {
-        self.static_coefficient() * self.normal_force_n
+        let friction_n = self.static_coefficient() * self.normal_force_n;
+        let adhesion_n = self.osc.effects.adhesion_force_n;
+        if adhesion_n != 0.0 { friction_n + effects::adhesion(friction_n, adhesion_n) } else { friction_n }
+    }
+
+    /// Rate of the friction memory while slipping at velocity `v` (m/s)
+    /// with speed `speed` (m/s, the slip direction's): `lag`
+    /// (μ_ss − μ_f)/τ_m and `slip` (|v|/L)(μ_ss − μ_f), 1/s; `ageing`
+    /// 1 − |v| θ/L, –.
+    #[inline(always)]
+    fn memory_rate(&self, speed_m_per_s: f64, v_m_per_s: f64, memory: f64) -> f64 {
+        let e = &self.osc.effects;
+        match self.memory_form {
+            Memory::Lag => (self.steady_law(speed_m_per_s, v_m_per_s) - memory) / e.hysteresis_lag_s,
+            Memory::Slip => effects::slip_law_rate(
+                self.steady_law(speed_m_per_s, v_m_per_s),
+                memory,
+                v_m_per_s.abs(),
+                e.hysteresis_length_m,
+            ),
+            Memory::Ageing => effects::ageing_rate(memory, v_m_per_s.abs(), e.hysteresis_length_m),
+            Memory::None => 0.0,
+        }
     }
 
     /// Acceleration (m/s²) while slipping in direction `sign`, with the base
-    /// at `cos_omega_t` of its amplitude, and the rate of the lagged friction
-    /// coefficient (1/s; 0 unless hysteresis `lag` is on: `LAG` is
-    /// [`Path::lag`], a constant so that without it no stage computes it).
+    /// at `cos_omega_t` of its amplitude, and the rate of the friction
+    /// memory ([`Path::memory_rate`]; 0 unless a memory is on: `MEMORY` is
+    /// whether [`Path::memory_form`] is one, a constant so that without it
+    /// no stage computes it).
     #[inline(always)]
-    fn slip_rates<const LAG: bool>(
+    fn slip_rates<const MEMORY: bool>(
         &self,
         cos_omega_t: f64,
         x_m: f64,
         v_m_per_s: f64,
-        lagged_mu: f64,
+        memory: f64,
         sign: f64,
     ) -> (f64, f64) {
         let o = self.osc;
-        let mu = self.friction_coefficient(sign * v_m_per_s, v_m_per_s, x_m, lagged_mu);
+        let friction_n = self.friction_force_n(sign * v_m_per_s, v_m_per_s, x_m, memory);
         let spring = self.spring_force(cos_omega_t, x_m);
-        let acceleration = (spring - o.damping_n_s_per_m * v_m_per_s - sign * mu * self.normal_force_n) * self.inv_mass;
-        let lag_rate = if LAG {
-            (self.steady_law(sign * v_m_per_s, v_m_per_s) - lagged_mu) / o.effects.hysteresis_lag_s
-        } else {
-            0.0
-        };
-        (acceleration, lag_rate)
+        let acceleration = (spring - o.damping_n_s_per_m * v_m_per_s - sign * friction_n) * self.inv_mass;
+        let memory_rate = if MEMORY { self.memory_rate(sign * v_m_per_s, v_m_per_s, memory) } else { 0.0 };
+        (acceleration, memory_rate)
     }
 
     /// One classical RK4 step of the slip ODE from `t` (where the base's trig
     /// is `start`) over `h` seconds; `half` rotates by `Ωh/2`.
     #[inline]
     fn rk4_slip(&self, start: Trig, x_m: f64, v_m_per_s: f64, h_s: f64, half: Trig, sign: f64) -> SlipStep {
-        // Compiled twice, with and without the lagged coefficient's state:
+        // Compiled twice, with and without the friction memory's state:
         // the same arithmetic (its rate is exactly 0 without it), but the
-        // step most runs take has no division by the lag time in its
-        // dependency chain (the compiler evaluated it and threw it away).
-        if self.lag {
+        // step most runs take has no memory rate in its dependency chain
+        // (the compiler evaluated it and threw it away).
+        if self.memory_form != Memory::None {
             self.rk4_slip_with::<true>(start, x_m, v_m_per_s, h_s, half, sign)
         } else {
             self.rk4_slip_with::<false>(start, x_m, v_m_per_s, h_s, half, sign)
         }
     }
 
-    /// [`Path::rk4_slip`] with `LAG` = [`Path::lag`].
+    /// [`Path::rk4_slip`] with `MEMORY` = whether [`Path::memory_form`] is
+    /// a memory.
     #[inline(always)]
-    fn rk4_slip_with<const LAG: bool>(
+    fn rk4_slip_with<const MEMORY: bool>(
         &self,
         start: Trig,
         x_m: f64,
@@ -444,23 +576,23 @@ impl<'a> Path<'a> {
     ) -> SlipStep {
         let mid = start.rotated(half);
         let end = mid.rotated(half);
-        let m0 = self.lagged_mu;
+        let m0 = self.memory;
         let hh = 0.5 * h_s;
         let k1x = v_m_per_s;
-        let (k1v, k1m) = self.slip_rates::<LAG>(start.cos, x_m, v_m_per_s, m0, sign);
+        let (k1v, k1m) = self.slip_rates::<MEMORY>(start.cos, x_m, v_m_per_s, m0, sign);
         let k2x = v_m_per_s + hh * k1v;
         let x2 = x_m + hh * k1x;
-        let (k2v, k2m) = self.slip_rates::<LAG>(mid.cos, x2, k2x, m0 + hh * k1m, sign);
+        let (k2v, k2m) = self.slip_rates::<MEMORY>(mid.cos, x2, k2x, m0 + hh * k1m, sign);
         let k3x = v_m_per_s + hh * k2v;
         let x3 = x_m + hh * k2x;
-        let (k3v, k3m) = self.slip_rates::<LAG>(mid.cos, x3, k3x, m0 + hh * k2m, sign);
+        let (k3v, k3m) = self.slip_rates::<MEMORY>(mid.cos, x3, k3x, m0 + hh * k2m, sign);
         let k4x = v_m_per_s + h_s * k3v;
         let x4 = x_m + h_s * k3x;
-        let (k4v, k4m) = self.slip_rates::<LAG>(end.cos, x4, k4x, m0 + h_s * k3m, sign);
+        let (k4v, k4m) = self.slip_rates::<MEMORY>(end.cos, x4, k4x, m0 + h_s * k3m, sign);
         SlipStep {
             x_m: x_m + h_s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
             v_m_per_s: v_m_per_s + h_s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
-            lagged_mu: m0 + h_s / 6.0 * (k1m + 2.0 * k2m + 2.0 * k3m + k4m),
+            memory: m0 + h_s / 6.0 * (k1m + 2.0 * k2m + 2.0 * k3m + k4m),
             stage_x_m: [x_m, x2, x3, x4],
             trig: [start, mid, end],
         }
@@ -546,7 +678,7 @@ impl<'a> Path<'a> {
             // The first guess: the first root of the quadratic through
             // g(0), its slope there and g(h), O(h³) from the zero where
             // the chord's is O(h²).
-            let b = sign * self.slip_rates::<false>(start.cos, self.x_m, self.v_m_per_s, self.lagged_mu, sign).0;
+            let b = sign * self.slip_rates::<false>(start.cos, self.x_m, self.v_m_per_s, self.memory, sign).0;
             let c = (g_hi - g_lo - b * h_s) / (h_s * h_s);
             let disc = b * b - 4.0 * c * g_lo;
             if disc >= 0.0 {
@@ -563,7 +695,7 @@ impl<'a> Path<'a> {
             let at_x = step_to(x);
             let g_x = g(&at_x);
             let end = at_x.trig[2];
-            let slope = sign * self.slip_rates::<false>(end.cos, at_x.x_m, at_x.v_m_per_s, at_x.lagged_mu, sign).0;
+            let slope = sign * self.slip_rates::<false>(end.cos, at_x.x_m, at_x.v_m_per_s, at_x.memory, sign).0;
             let newton = x - g_x / slope;
             if g_x > 0.0 {
                 lo = x;
@@ -590,7 +722,7 @@ impl<'a> Path<'a> {
     /// the same probe as halving one by one from `h/2` (about two steps
     /// instead of ten on the benchmark's 18-run set).
     fn first_probe_guess(&self, start: Trig, h_s: f64, g_full: f64, sign: f64) -> i32 {
-        let a = sign * self.slip_rates::<false>(start.cos, self.x_m, self.v_m_per_s, self.lagged_mu, sign).0;
+        let a = sign * self.slip_rates::<false>(start.cos, self.x_m, self.v_m_per_s, self.memory, sign).0;
         let b = (a * h_s - g_full) / (h_s * h_s);
         let k = (h_s * b / a).log2().ceil();
         if a > 0.0 && b > 0.0 && k.is_finite() { (k as i32).clamp(1, MAX_PROBE_HALVINGS) } else { 1 }
@@ -691,7 +823,13 @@ impl<'a> Path<'a> {
                     self.mode = next;
                     self.slip_start_x_m = self.x_m;
                     if next != Mode::Stick {
-                        self.lagged_mu = self.lag_start_coefficient();
+                        self.memory = if self.memory_form == Memory::Ageing {
+                            // The slip starts from the contact age the
+                            // breakaway was judged by.
+                            self.contact_age_at(self.interval as f64 * self.osc.noise_interval_s)
+                        } else {
+                            self.lag_start_coefficient()
+                        };
                     }
                     (t_a, start, whole) = (t_end, end, None);
                     events += 1;
@@ -713,21 +851,28 @@ impl<'a> Path<'a> {
                     }
                     self.x_m = to_zero.x_m;
                     self.v_m_per_s = 0.0;
-                    self.lagged_mu = to_zero.lagged_mu;
+                    self.memory = to_zero.memory;
                     self.period_max_x_m = self.period_max_x_m.max(to_zero.x_m);
                     t_a += h_zero;
                     start = Trig::at(w * t_a);
                     whole = None;
+                    if self.memory_form == Memory::Ageing {
+                        // At rest the static coefficient reads the contact
+                        // age the slip reached.
+                        self.ageing_excess = self.contact_age_excess(self.memory);
+                    }
                     self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(start) } else { Mode::Stick };
                     if self.mode == Mode::Stick {
                         self.start_stick(period_start_s + t_a);
-                    } else {
+                    } else if self.memory_form != Memory::Ageing {
                         // A slip from rest is a breakaway like one from a
                         // stick: the lagged coefficient starts at the static
                         // one the breakaway was judged by (carried over, it
                         // held a block the test let go, which then could
                         // not move and re-slipped up to the event limit).
-                        self.lagged_mu = self.lag_start_coefficient();
+                        // The contact age goes on from where the slip left
+                        // it, which the static coefficient just read.
+                        self.memory = self.lag_start_coefficient();
                     }
                     self.slip_start_x_m = self.x_m;
                     events += 1;
@@ -744,8 +889,7 @@ impl<'a> Path<'a> {
             Mode::Stick => -self.spring_force(trig.cos, self.x_m),
             Mode::Slip(s) => {
                 let sign = f64::from(s);
-                let mu = self.friction_coefficient(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.lagged_mu);
-                -sign * mu * self.normal_force_n
+                -sign * self.friction_force_n(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.memory)
             }
         }
     }
@@ -760,7 +904,7 @@ impl<'a> Path<'a> {
         }
         self.x_m = step.x_m;
         self.v_m_per_s = step.v_m_per_s;
-        self.lagged_mu = step.lagged_mu;
+        self.memory = step.memory;
         self.period_max_x_m = self.period_max_x_m.max(step.x_m);
         step.trig[2]
     }
@@ -792,11 +936,11 @@ pub(crate) const LANE_WIDTHS: [usize; 2] = [LANES, HALF_LANES];
 /// one repeats that same step first), so the answers are those of one path
 /// at a time, bit for bit.
 fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
-    let lag = lanes[0].lag;
+    let memory = lanes[0].memory_form != Memory::None;
     match lanes.len() {
-        LANES if lag => slip_lanes::<LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
+        LANES if memory => slip_lanes::<LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
         LANES => slip_lanes::<LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
-        HALF_LANES if lag => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
+        HALF_LANES if memory => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
         HALF_LANES => slip_lanes::<HALF_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
         _ => {
             for (path, trig) in lanes.iter_mut().zip(trigs.iter_mut()) {
@@ -806,12 +950,12 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
     }
 }
 
-/// [`advance_lanes`] for `N` lanes, `LAG` = [`Path::lag`] (the same for
-/// all: it is the oscillator's). A stuck lane takes no slip step (at 12 Hz
+/// [`advance_lanes`] for `N` lanes, `MEMORY` = whether a friction memory is
+/// on (the same for all: it is the oscillator's). A stuck lane takes no slip step (at 12 Hz
 /// and 16.39 N, where the block sticks much of each period, that was a
 /// tenth of the time).
 #[inline(always)]
-fn slip_lanes<const N: usize, const LAG: bool>(
+fn slip_lanes<const N: usize, const MEMORY: bool>(
     lanes: &mut [Path<'_>],
     trigs: &mut [Trig],
     t_a: f64,
@@ -828,7 +972,7 @@ fn slip_lanes<const N: usize, const LAG: bool>(
     });
     let steps: [Option<SlipStep>; N] = std::array::from_fn(|l| {
         let p = &lanes[l];
-        (signs[l] != 0.0).then(|| p.rk4_slip_with::<LAG>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))
+        (signs[l] != 0.0).then(|| p.rk4_slip_with::<MEMORY>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))
     });
     for l in 0..N {
         trigs[l] = match &steps[l] {
@@ -1056,11 +1200,11 @@ mod tests {
         // The spring at t = 0 (base at its amplitude) pushes with 0.15 N.
         path.x_m = osc.base_amplitude_m - 0.15 * n / osc.stiffness_n_per_m;
         path.slip_start_x_m = path.x_m;
-        path.lagged_mu = 0.3;
+        path.memory = 0.3;
         assert_eq!(path.mode, Mode::Slip(1));
         path.advance_segment(0.0, 1e-3, Trig { cos: 1.0, sin: 0.0 }, None, false);
         assert_eq!(path.mode, Mode::Slip(1), "held at rest: v = {}", path.v_m_per_s);
-        assert!(path.v_m_per_s > 0.0 && path.lagged_mu < 0.3, "v = {}, μ_f = {}", path.v_m_per_s, path.lagged_mu);
+        assert!(path.v_m_per_s > 0.0 && path.memory < 0.3, "v = {}, μ_f = {}", path.v_m_per_s, path.memory);
     }
 
     /// Under hysteresis `lag` with a stiction released over a slip length,
@@ -1083,6 +1227,41 @@ mod tests {
         assert_eq!(path.mode, Mode::Slip(1), "stuck: v = {}", path.v_m_per_s);
         assert!(path.v_m_per_s > 0.0 && path.x_m > x0, "v = {}, moved {} m", path.v_m_per_s, path.x_m - x0);
         assert!((path.lag_start_coefficient() + 0.2 - mu_s).abs() < 1e-12);
+    }
+
+    /// Under hysteresis `ageing` a breakaway is judged by the static
+    /// coefficient with the contact age held at the interval's start, and
+    /// the slip starts from that same age, so sliding friction at v = 0
+    /// starts at exactly that static coefficient (no stop and re-slip at
+    /// once). The age held is the stick's start plus the time stuck up to
+    /// the interval's start, and the term is B ln((θ + θ_c)/(2 θ_c)).
+    #[test]
+    fn an_ageing_slip_starts_at_the_static_coefficient() {
+        let model = crate::engine::Model::paper_rig(&[
+            "friction.sigma=0".into(),
+            "normal_force.sigma=0".into(),
+            "friction_hysteresis.form=\"ageing\"".into(),
+            "friction_hysteresis.length_m=1e-5".into(),
+            "friction_hysteresis.strength=0.03".into(),
+        ])
+        .unwrap();
+        let condition = crate::engine::Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+        let osc = Oscillator::new(&model, condition).unwrap();
+        let mut path = Path::new(&osc, 1, 0, InitialState { x_m: 0.0, v_m_per_s: 0.0 });
+        assert_eq!(path.memory_form, Memory::Ageing);
+        // Stuck since 0.1 s with an age of 2 ms then; interval 100 starts later.
+        path.mode = Mode::Stick;
+        (path.memory, path.stick_since_s, path.interval) = (2e-3, 0.1, 100);
+        path.draw_noise();
+        let t_s = 100.0 * osc.noise_interval_s;
+        let age_s = path.contact_age_at(t_s);
+        let cutoff_age_s = 1e-5 / AGEING_CUTOFF_SPEED_M_PER_S;
+        assert!((age_s - (2e-3 + t_s - 0.1)).abs() < 1e-15, "{age_s}");
+        let expected = 0.03 * ((age_s + cutoff_age_s) / (2.0 * cutoff_age_s)).ln();
+        assert!((path.ageing_excess - expected).abs() < 1e-15, "{} vs {expected}", path.ageing_excess);
+        assert!((path.static_coefficient() - (0.527 + expected)).abs() < 1e-12);
+        let sliding = path.friction_coefficient(0.0, 0.0, path.x_m, age_s);
+        assert!((sliding - path.static_coefficient()).abs() < 1e-15, "{sliding} vs {}", path.static_coefficient());
     }
 
     /// The friction noise's standardised values g over `n` intervals with

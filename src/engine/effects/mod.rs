@@ -10,15 +10,30 @@
 //!   uneven wear 2×, bumps higher);
 //! - non-Gaussian friction noise: the paper's Figure 6 (skew growing with load);
 //! - hysteresis: frictional memory (Hess & Soom 1990), Dahl's pre-sliding
-//!   build-up of friction over a characteristic displacement after reversal;
+//!   build-up of friction over a characteristic displacement after reversal,
+//!   and the two rate-and-state evolution laws: the slip law (Ruina 1983:
+//!   friction relaxes to the steady law over a slip distance L, `slip`) and
+//!   the ageing law (Dieterich 1979, Ruina 1983: a contact age θ that grows
+//!   while stuck and raises the static and early sliding friction by
+//!   B ln θ, `ageing`);
 //! - coloured friction noise: correlated asperity contact (Ornstein–Uhlenbeck);
 //! - stiction: static friction above kinetic at breakaway (Rabinowicz; LuGre);
-//! - load-dependent friction: μ changing with contact pressure;
+//! - load-dependent friction: μ changing with contact pressure, either by an
+//!   offset of `a` (several shapes), by a factor (N0/Nref)^k on the whole
+//!   law (`scaled`), or as the two-term law F = μN + A with an adhesion
+//!   force A (Derjaguin 1934; Bowden & Tabor, `adhesion`);
 //! - normal-force drift: wear and heating during a run (paper §2.2.1).
 //!
 //! Everything time-varying is evaluated once per noise interval (at the
 //! interval's start) and held, like the noise itself: results do not depend
 //! on the step size, and breakaway from stick stays a closed-form event.
+//! The friction memory of hysteresis `lag`, `slip` and `ageing` is one more
+//! state of the slip ODE (μ_f, –, for `lag` and `slip`; the contact age θ,
+//! s, for `ageing`), integrated by the same RK4 step as x and v; while stuck
+//! θ ages with time and is read at each interval's start.
+//!
+//! Units: lengths in m, times in s, forces in N, coefficients and exponents
+//! dimensionless (–), as each table's field names say.
 
 mod params;
 mod tables;
@@ -137,6 +152,13 @@ pub const DRIFT_SATURATION_S: f64 = 20.0;
 pub const DRIFT_WANDER_S: f64 = 15.0;
 /// Displacement over which `decaying` stiction fades, m.
 pub const STICTION_DECAY_M: f64 = 1e-4;
+/// Cut-off speed v_c of hysteresis `ageing`, m/s: the steady contact age is
+/// L/(|v| + v_c), and θ_c = L/v_c keeps the logarithm finite at rest and for
+/// fresh contacts (θ = 0). 1 mm/s: well below the paper rig's sliding
+/// speeds (cm/s to m/s), so in steady sliding (θ = L/|v|) the state term
+/// B ln(1 + 1/(u (u + 2))), u = |v|/v_c, is about 0.1% of B at 3 cm/s and
+/// less above.
+pub const AGEING_CUTOFF_SPEED_M_PER_S: f64 = 1e-3;
 
 /// All effects of a model; `None` is off.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -243,6 +265,12 @@ impl Effects {
                 h.time_constant_s >= 0.0,
                 "must be >= 0 s",
             )?;
+            check(
+                "friction_hysteresis.strength",
+                h.strength,
+                true,
+                "must be a finite number (B of the ageing form, –)",
+            )?;
         }
         if let Some(c) = &self.coloured_friction_noise {
             check(
@@ -264,7 +292,12 @@ impl Effects {
             check("stiction.dwell_time_s", s.dwell_time_s, s.dwell_time_s >= 0.0, "must be >= 0 s")?;
         }
         if let Some(l) = &self.load_dependent_friction {
-            check("load_dependent_friction.strength", l.strength, true, "must be finite")?;
+            let what = match l.form {
+                LoadForm::Adhesion => "must be a finite force (the adhesion force A of the adhesion form, N)",
+                LoadForm::Scaled | LoadForm::Power => "must be a finite exponent",
+                _ => "must be finite",
+            };
+            check("load_dependent_friction.strength", l.strength, true, what)?;
             check("load_dependent_friction.curvature_per_n2", l.curvature_per_n2, true, "must be finite")?;
             check(
                 "load_dependent_friction.reference_force_n",

@@ -4,7 +4,8 @@ use super::{ColourForm, DriftForm, Effects, HarmonicForm, HysteresisForm, LoadFo
 
 /// Effect parameters for one grid point, flattened for the integrators.
 /// An absent effect has its first (candidate) form at zero strength: the
-/// baseline.
+/// baseline. That is [`EffectParams::new`] of no effects, not `default()`
+/// (whose shares, hold interval and law factor are 0).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EffectParams {
     pub harmonic_form: HarmonicForm,
@@ -22,10 +23,12 @@ pub struct EffectParams {
     /// Strength at this point's N0 (load scaling applied), –.
     pub non_gaussian_strength: f64,
     pub hysteresis_form: HysteresisForm,
-    /// m
+    /// Build-up length δ, or the slip distance L of `slip` and `ageing`, m.
     pub hysteresis_length_m: f64,
     /// Memory time of the `lag` form, s.
     pub hysteresis_lag_s: f64,
+    /// B of the `ageing` form, –.
+    pub hysteresis_strength: f64,
     pub colour_form: ColourForm,
     /// AR(1) coefficient per interval, –.
     pub colour_rho: f64,
@@ -44,6 +47,12 @@ pub struct EffectParams {
     pub stiction_dwell_s: f64,
     /// Δa at this point's N0, –.
     pub friction_offset: f64,
+    /// Factor (N0/Nref)^k of the law's a, b and d at this point's N0
+    /// (load dependence `scaled`; exactly 1 otherwise), –.
+    pub friction_scale: f64,
+    /// Adhesion force A added to the friction force's magnitude (load
+    /// dependence `adhesion`; 0 otherwise), N.
+    pub adhesion_force_n: f64,
     pub drift_form: DriftForm,
     /// 1/s
     pub drift_rate_per_s: f64,
@@ -62,8 +71,13 @@ impl EffectParams {
     /// friction law's level at rest `mu_at_rest` (a + b, –) and noise hold
     /// interval `interval_s` (s).
     pub fn new(effects: &Effects, n0: f64, mu_at_rest: f64, interval_s: f64) -> EffectParams {
-        let mut p =
-            EffectParams { harmonic_shape: 2.0, colour_hold_intervals: 1, colour_share: 1.0, ..Default::default() };
+        let mut p = EffectParams {
+            harmonic_shape: 2.0,
+            colour_hold_intervals: 1,
+            colour_share: 1.0,
+            friction_scale: 1.0,
+            ..Default::default()
+        };
         if let Some(h) = &effects.normal_force_harmonics {
             p.harmonic_form = h.form;
             p.harmonic_amplitudes_n = std::array::from_fn(|k| h.amplitudes_n[k] + h.amplitudes_per_n0[k] * n0);
@@ -88,6 +102,7 @@ impl EffectParams {
             p.hysteresis_form = h.form;
             p.hysteresis_length_m = h.length_m;
             p.hysteresis_lag_s = h.time_constant_s;
+            p.hysteresis_strength = h.strength;
         }
         if let Some(c) = &effects.coloured_friction_noise {
             p.colour_form = c.form;
@@ -114,7 +129,15 @@ impl EffectParams {
                 LoadForm::Power => mu_at_rest.max(0.0) * ((n0.max(1e-9) / r).powf(l.strength) - 1.0),
                 LoadForm::Saturating => l.strength * r * (1.0 - (-(n0 - r) / r).exp()),
                 LoadForm::Exponential => l.strength * r * (((n0 - r) / r).exp() - 1.0),
+                LoadForm::Adhesion | LoadForm::Scaled => 0.0,
             };
+            if l.form == LoadForm::Adhesion {
+                p.adhesion_force_n = l.strength;
+            }
+            // Only where k is not 0, so that k = 0 multiplies by exactly 1.
+            if l.form == LoadForm::Scaled && l.strength != 0.0 {
+                p.friction_scale = (n0.max(1e-9) / r).powf(l.strength);
+            }
         }
         if let Some(d) = &effects.normal_force_drift {
             p.drift_form = d.form;

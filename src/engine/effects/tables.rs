@@ -87,24 +87,64 @@ impl Form for NonGaussianForm {
 
 /// Friction that depends on the motion's history, so accelerating and
 /// decelerating branches differ: after each slip start the sliding friction
-/// builds up over a displacement (Dahl-like pre-sliding), or it lags behind
-/// the steady law in time (Hess & Soom's frictional memory).
+/// builds up over a displacement (Dahl-like pre-sliding), lags behind the
+/// steady law in time (Hess & Soom's frictional memory), relaxes to it over a
+/// slip distance (rate-and-state slip law), or carries a contact age that
+/// heals while stuck (rate-and-state ageing law).
+///
+/// In every form μ_ss(v) is the steady law the baseline uses, with its
+/// noise and any load offset: `a + Δa + b S(c, |v|) + d v² + σ_μ ξ_μ`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionHysteresis {
     /// Build-up φ(d) of the sliding friction with displacement d since slip
     /// start: `exponential` 1 − e^(−d/δ); `tanh` tanh(d/δ); `rational`
-    /// d/(d+δ). `lag`: the friction coefficient μ_f follows the steady law
-    /// μ(v) with a first-order lag, dμ_f/dt = (μ(v) − μ_f)/τ_m, starting at
-    /// the static coefficient at each breakaway.
+    /// d/(d+δ) (δ = `length_m`).
+    ///
+    /// `lag`: the friction coefficient μ_f follows the steady law μ_ss(v)
+    /// with a first-order lag in time, dμ_f/dt = (μ_ss(v) − μ_f)/τ_m
+    /// (τ_m = `time_constant_s`), starting at the static coefficient at each
+    /// breakaway (Hess & Soom 1990). Off (the baseline) when τ_m = 0.
+    ///
+    /// `slip`: the rate-and-state *slip law* in friction form (Ruina 1983,
+    /// linearised about steady sliding): μ_f relaxes to μ_ss(v) over a slip
+    /// distance L = `length_m`, dμ_f/dt = (|v|/L)(μ_ss(v) − μ_f), starting at
+    /// the static coefficient at each breakaway: `lag` with the memory time
+    /// L/|v|, so the relaxation is the same per metre slid at every speed.
+    /// Off (the baseline) when L = 0.
+    ///
+    /// `ageing`: the Dieterich–Ruina *ageing law* (Dieterich 1979, Ruina
+    /// 1983) with a contact age θ (s): dθ/dt = 1 − |v| θ / L, so θ grows at
+    /// rate 1 while stuck (contact healing) and tends to L/|v| in steady
+    /// sliding (L = `length_m`). Sliding friction is
+    /// μ = μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c)) with θ_ss(v) = L/(|v| + v_c),
+    /// θ_c = L/v_c, v_c = [`AGEING_CUTOFF_SPEED_M_PER_S`] (1 mm/s: the cut-off
+    /// keeps the logarithm finite at rest and at θ = 0) and B = `strength`.
+    /// The static coefficient adds the same term at v = 0:
+    /// μ_s = μ(0) + B ln((θ + θ_c)/(2 θ_c)), with θ evaluated at the start of
+    /// each noise interval while stuck (held over the interval, so breakaway
+    /// stays closed-form) and at the start of each stick. θ is not reset at a
+    /// breakaway: the slip starts from the θ the static coefficient was judged
+    /// by (so friction starts from that static coefficient; the healing of
+    /// under one noise interval before the breakaway is not counted) and
+    /// evolves continuously after. θ starts at 0 at the run's start. Off (the
+    /// baseline) when B = 0 or L = 0.
+    ///
+    /// [`AGEING_CUTOFF_SPEED_M_PER_S`]: super::AGEING_CUTOFF_SPEED_M_PER_S
     #[serde(default)]
     pub form: HysteresisForm,
-    /// Characteristic displacement δ of the build-up forms, m.
+    /// Characteristic displacement δ of the build-up forms, or the slip
+    /// distance L of `slip` and `ageing`, m (≥ 0).
     #[serde(default)]
     pub length_m: f64,
-    /// Memory time τ_m of the `lag` form, s.
+    /// Memory time τ_m of the `lag` form, s (≥ 0).
     #[serde(default)]
     pub time_constant_s: f64,
+    /// B of the `ageing` form, – (finite; the rise of the static coefficient
+    /// per e-fold of contact age beside θ_c; 0: the baseline). Unused by the
+    /// other forms.
+    #[serde(default)]
+    pub strength: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -115,11 +155,19 @@ pub enum HysteresisForm {
     Tanh = 1,
     Rational = 2,
     Lag = 3,
+    Slip = 4,
+    Ageing = 5,
 }
 
 impl Form for HysteresisForm {
-    const ALL: &'static [Self] =
-        &[HysteresisForm::Exponential, HysteresisForm::Tanh, HysteresisForm::Rational, HysteresisForm::Lag];
+    const ALL: &'static [Self] = &[
+        HysteresisForm::Exponential,
+        HysteresisForm::Tanh,
+        HysteresisForm::Rational,
+        HysteresisForm::Lag,
+        HysteresisForm::Slip,
+        HysteresisForm::Ageing,
+    ];
 
     fn code(self) -> u32 {
         self as u32
@@ -212,7 +260,7 @@ impl Form for StictionForm {
     }
 }
 
-/// The mean friction coefficient changes with the normal-force level N0.
+/// The friction changes with the normal-force level N0.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LoadDependentFriction {
@@ -222,9 +270,24 @@ pub struct LoadDependentFriction {
     /// μ₀ = a + b the law's level at rest (so it scales with the friction
     /// however a and b share it); `saturating` k Nref (1 − e^(−(N0 − Nref)/Nref));
     /// `exponential` k Nref (e^((N0 − Nref)/Nref) − 1).
+    ///
+    /// `adhesion`: the two-term law F = μN + A (Derjaguin 1934; Bowden &
+    /// Tabor): an adhesion force A = k in newtons (any finite value) adds to
+    /// the friction force's magnitude while slipping,
+    /// F = −sgn(v) max(0, μ(v, t) N(t) + A), and to the breakaway force,
+    /// max(0, μ_s N + A). No offset of μ; Nref unused.
+    ///
+    /// `scaled`: the whole law scales with the load,
+    /// μ(v, N0) = (N0/Nref)^k (a + b S(c, |v|) + d v²) + σ_μ ξ_μ, and the
+    /// static coefficient's a + b likewise (the noise and any other offset,
+    /// such as a stiction excess, are not scaled); k is an exponent, –.
+    ///
+    /// Every form is the baseline at k = 0.
     #[serde(default)]
     pub form: LoadForm,
-    /// k (see `form`).
+    /// k (see `form`): 1/N (`linear`, `quadratic`, `saturating`,
+    /// `exponential`), an exponent, – (`power`, `scaled`), or the adhesion
+    /// force A, N (`adhesion`).
     pub strength: f64,
     /// q of the `quadratic` form, 1/N² (0 where the table does not say;
     /// only the quadratic form reads it).
@@ -244,11 +307,20 @@ pub enum LoadForm {
     Saturating = 2,
     Exponential = 3,
     Quadratic = 4,
+    Adhesion = 5,
+    Scaled = 6,
 }
 
 impl Form for LoadForm {
-    const ALL: &'static [Self] =
-        &[LoadForm::Linear, LoadForm::Power, LoadForm::Saturating, LoadForm::Exponential, LoadForm::Quadratic];
+    const ALL: &'static [Self] = &[
+        LoadForm::Linear,
+        LoadForm::Power,
+        LoadForm::Saturating,
+        LoadForm::Exponential,
+        LoadForm::Quadratic,
+        LoadForm::Adhesion,
+        LoadForm::Scaled,
+    ];
 
     fn code(self) -> u32 {
         self as u32

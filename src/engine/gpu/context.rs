@@ -11,7 +11,10 @@ use crate::error::{Error, Result};
 pub struct Kernels {
     pub(crate) ensemble_layout: wgpu::BindGroupLayout,
     pub(crate) init_paths: wgpu::ComputePipeline,
-    pub(crate) run_cycles: wgpu::ComputePipeline,
+    /// `run_cycles` of the kernel with each friction memory fixed
+    /// (`source::ensemble_wgsl_with_memory`, by `Memory` code), each
+    /// compiled on first use.
+    run_cycles_with_memory: [std::sync::OnceLock<wgpu::ComputePipeline>; 4],
     /// `run_cycles` of the kernel specialised for models without effects
     /// (`source::ensemble_wgsl_without_effects`), compiled on first use.
     run_cycles_without_effects: std::sync::OnceLock<wgpu::ComputePipeline>,
@@ -96,7 +99,7 @@ impl Kernels {
         });
         Kernels {
             init_paths: compute_pipeline(device, &ensemble_layout, &ensemble, "init_paths"),
-            run_cycles: compute_pipeline(device, &ensemble_layout, &ensemble, "run_cycles"),
+            run_cycles_with_memory: Default::default(),
             run_cycles_without_effects: std::sync::OnceLock::new(),
             philox_check: compute_pipeline(device, &check_layout, &check, "philox_check"),
             ensemble_layout,
@@ -105,10 +108,18 @@ impl Kernels {
     }
 
     /// The `run_cycles` pipeline for a dispatch whose effects' uniform is
-    /// `effects`: the one specialised for no effects where it applies.
+    /// `effects`: the one specialised for no effects where it applies,
+    /// otherwise the one with the uniform's friction memory fixed.
     pub(crate) fn run_cycles_for(&self, device: &wgpu::Device, effects: &EffectParams) -> &wgpu::ComputePipeline {
         if !effects.is_without_effects() {
-            return &self.run_cycles;
+            let memory = effects.memory();
+            return self.run_cycles_with_memory[memory as usize].get_or_init(|| {
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("ensemble.wgsl with its friction memory fixed"),
+                    source: wgpu::ShaderSource::Wgsl(source::ensemble_wgsl_with_memory(memory).into()),
+                });
+                compute_pipeline(device, &self.ensemble_layout, &module, "run_cycles")
+            });
         }
         self.run_cycles_without_effects.get_or_init(|| {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

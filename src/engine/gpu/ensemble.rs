@@ -51,10 +51,13 @@ fn validate(job: &Job<'_>, plan: RunPlan, oscillators: &[Oscillator]) -> Result<
         effects.non_gaussian_strength = 0.0;
         // Per point on the GPU too (`GridPoint`): they scale with N0.
         effects.harmonic_amplitudes_n = [0.0; 4];
+        effects.friction_scale = 1.0;
         Oscillator {
             omega_rad_per_s: 0.0,
             period_s: 0.0,
             normal_force_mean_n: 0.0,
+            // Per point too: a friction memory raises them by frequency.
+            steps_per_period: 0,
             noise_interval_fixed: 0,
             effects,
             ..o.clone()
@@ -170,8 +173,9 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
     let rpp = u64::from(job.realisations);
     let total_invocations = job.points.len() as u64 * rpp;
     let total_cycles = plan.warmup_cycles + plan.measured_cycles;
-    // The most steps of any point (hysteresis `lag` raises them where its
-    // memory time is shorter than a step, by frequency).
+    // The most steps of any point (a friction memory raises them where its
+    // memory time is shorter than a step, by frequency; each point takes
+    // its own, `GridPoint::steps_per_period`).
     let steps = oscillators.iter().map(|o| u64::from(o.steps_per_period)).max().unwrap_or(1);
     let binding_limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
     // Invocations per chunk: whole points, within the dispatch and binding limits.

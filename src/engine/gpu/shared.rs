@@ -6,7 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::RunPlan;
-use crate::engine::effects::{self, Effects, Form};
+use crate::engine::cpu::oscillator::Memory;
+use crate::engine::effects::{self, Effects, Form, HysteresisForm};
 use crate::engine::oscillator::{Oscillator, Point};
 use crate::engine::rng;
 
@@ -35,7 +36,6 @@ pub struct Params {
     pub friction_sigma: f32,
     /// N
     pub normal_force_sigma_n: f32,
-    pub steps_per_period: u32,
     pub warmup_cycles: u32,
     pub seed_lo: u32,
     pub seed_hi: u32,
@@ -75,7 +75,7 @@ pub struct EffectParams {
     pub harmonic_phase_3_rad: f32,
     pub harmonic_phase_4_rad: f32,
     pub hysteresis_form: u32,
-    /// m
+    /// Build-up length, or the slip distance of `slip` and `ageing`, m.
     pub hysteresis_length_m: f32,
     /// s
     pub hysteresis_lag_s: f32,
@@ -99,8 +99,10 @@ pub struct EffectParams {
     pub noise_interval_s: f32,
     /// 1/s²
     pub drift_curvature_per_s2: f32,
-    pub _pad2: u32,
-    pub _pad3: u32,
+    /// B of hysteresis `ageing`, –.
+    pub hysteresis_strength: f32,
+    /// Adhesion force A of load dependence `adhesion`, N.
+    pub adhesion_force_n: f32,
 }
 
 impl EffectParams {
@@ -139,8 +141,8 @@ impl EffectParams {
             drift_rate_per_s: e.drift_rate_per_s as f32,
             noise_interval_s: noise_interval_s as f32,
             drift_curvature_per_s2: e.drift_curvature_per_s2 as f32,
-            _pad2: 0,
-            _pad3: 0,
+            hysteresis_strength: e.hysteresis_strength as f32,
+            adhesion_force_n: e.adhesion_force_n as f32,
         }
     }
 
@@ -149,6 +151,22 @@ impl EffectParams {
     /// (`source::ensemble_wgsl_without_effects`).
     pub fn without_effects() -> EffectParams {
         Self::from_effects(&effects::EffectParams::new(&Effects::default(), 0.0, 0.0, 0.0), 0.0)
+    }
+
+    /// The friction memory the kernel's `memory_form()` decides from this
+    /// uniform (its f32 values, so that the two agree): the one
+    /// `source::ensemble_wgsl_with_memory` fixes.
+    pub(crate) fn memory(&self) -> Memory {
+        let form = |f: HysteresisForm| self.hysteresis_form == f.code();
+        if form(HysteresisForm::Lag) && self.hysteresis_lag_s > 0.0 {
+            Memory::Lag
+        } else if form(HysteresisForm::Slip) && self.hysteresis_length_m > 0.0 {
+            Memory::Slip
+        } else if form(HysteresisForm::Ageing) && self.hysteresis_length_m > 0.0 && self.hysteresis_strength != 0.0 {
+            Memory::Ageing
+        } else {
+            Memory::None
+        }
     }
 
     /// Whether this uniform is [`EffectParams::without_effects`] but for
@@ -195,6 +213,12 @@ pub struct GridPoint {
     pub harmonic_amplitude_2_n: f32,
     pub harmonic_amplitude_3_n: f32,
     pub harmonic_amplitude_4_n: f32,
+    /// Factor (N0/Nref)^k of the law's a, b and d at this point (load
+    /// dependence `scaled`; exactly 1 otherwise), –.
+    pub friction_scale: f32,
+    /// Integration steps per period at this point (the model's, raised by
+    /// frequency where a friction memory needs it: `Oscillator`).
+    pub steps_per_period: u32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -218,10 +242,13 @@ pub struct PathState {
     pub stiction_excess: f32,
     pub colour_state_1: f32,
     pub colour_state_2: f32,
-    /// The lagged friction coefficient of hysteresis `lag`, –.
-    pub lagged_mu: f32,
+    /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
+    /// contact age θ of `ageing` (s).
+    pub memory: f32,
     /// When the current stick began, s from the run's start.
     pub stick_since_s: f32,
+    /// The static coefficient's contact-age term of hysteresis `ageing`, –.
+    pub ageing_excess: f32,
 }
 
 /// Uniform of `check.wgsl` (struct `CheckParams`).
@@ -257,7 +284,6 @@ impl Params {
             friction_d_s2_per_m2: osc.friction_d_s2_per_m2 as f32,
             friction_sigma: osc.friction_sigma as f32,
             normal_force_sigma_n: osc.normal_force_sigma_n as f32,
-            steps_per_period: osc.steps_per_period,
             warmup_cycles: plan.warmup_cycles,
             seed_lo,
             seed_hi,
@@ -296,6 +322,8 @@ impl GridPoint {
             harmonic_amplitude_2_n: o.effects.harmonic_amplitudes_n[1] as f32,
             harmonic_amplitude_3_n: o.effects.harmonic_amplitudes_n[2] as f32,
             harmonic_amplitude_4_n: o.effects.harmonic_amplitudes_n[3] as f32,
+            friction_scale: o.effects.friction_scale as f32,
+            steps_per_period: o.steps_per_period,
         }
     }
 }
