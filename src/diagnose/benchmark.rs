@@ -7,6 +7,8 @@
 //! of the fitted model's error at the withheld load level against the
 //! generator's truth there.
 
+pub mod independent;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
