@@ -2075,7 +2075,7 @@ mod tests {
                     let e = IndependentEffect::preset(family, form, strong, 8.0, &mut rng).expect("a preset");
                     let sigs = run(&test_truth(vec![e]));
                     let mut best = Vec::new();
-                    for j in 0..names.len() {
+                    for (j, name) in names.iter().enumerate() {
                         let (zmax, at) = (0..conditions.len())
                             .map(|ci| {
                                 let (m0, sd0) = spread(&base[ci], j);
@@ -2083,7 +2083,7 @@ mod tests {
                                 ((m1 - m0) / sd0.max(1e-300), ci)
                             })
                             .fold((0.0, 0), |acc, x| if x.0.abs() > f64::abs(acc.0) { x } else { acc });
-                        best.push(format!("{}:{zmax:+.1}@{at}", names[j]));
+                        best.push(format!("{name}:{zmax:+.1}@{at}"));
                     }
                     eprintln!(
                         "{family} form {form} {}: {}",
@@ -2093,6 +2093,236 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A quick version of the characterisation truth: 1 s warm-up, 100 kHz.
+    fn quick(effects: Vec<IndependentEffect>) -> IndependentTruth {
+        let mut t = test_truth(effects);
+        t.integration.warmup_s = 1.0;
+        t.integration.step_rate_hz = MIN_STEP_RATE_HZ;
+        t
+    }
+
+    fn short(duration_s: f64) -> RecordShape {
+        RecordShape { duration_s, ..RecordShape::default() }
+    }
+
+    /// Signatures of `records` runs of `truth` at `c`.
+    fn signatures(truth: &IndependentTruth, c: Condition, records: u32, duration_s: f64) -> Vec<Signature> {
+        (0..records)
+            .into_par_iter()
+            .map(|r| signature(truth, c, &simulate_run(truth, c, 0, r, &short(duration_s), 5).expect("a run")))
+            .collect()
+    }
+
+    fn mean_of(sigs: &[Signature], f: impl Fn(&Signature) -> f64) -> f64 {
+        sigs.iter().map(f).sum::<f64>() / sigs.len() as f64
+    }
+
+    fn strong(family: Effect, form: u32) -> IndependentEffect {
+        IndependentEffect::preset(family, form, true, 8.0, &mut stream_rng(4, 5, 6)).expect("a preset")
+    }
+
+    /// Every form at strength 0 gives the baseline's record bit for bit.
+    #[test]
+    fn zero_strength_effects_equal_the_baseline_path() {
+        let c = at(0.6, 20.0);
+        let shape = short(3.0);
+        let base = simulate_run(&quick(Vec::new()), c, 0, 0, &shape, 9).expect("a run");
+        for (family, forms) in FORMS {
+            for form in 0..forms.len() as u32 {
+                let e = strong(family, form);
+                let zero = simulate_run(&quick(vec![e.with_strength(0.0)]), c, 0, 0, &shape, 9).expect("a run");
+                assert!(zero == base, "{family} form {form} at strength 0 differs from the baseline");
+                let on = simulate_run(&quick(vec![e]), c, 0, 0, &shape, 9).expect("a run");
+                assert!(on != base, "{family} form {form} at its strong preset changes nothing");
+            }
+        }
+        // Two at once, both at zero.
+        let pair = vec![
+            strong(Effect::Stiction, 1).with_strength(0.0),
+            strong(Effect::ColouredFrictionNoise, 0).with_strength(0.0),
+        ];
+        assert!(simulate_run(&quick(pair), c, 0, 0, &shape, 9).expect("a run") == base);
+    }
+
+    #[test]
+    fn load_forms_change_the_friction_level_with_load() {
+        for form in 0..3 {
+            let e = strong(Effect::LoadDependentFriction, form);
+            let mut moved = 0.0f64;
+            for n in [4.0, 16.0] {
+                let c = at(0.7, n);
+                let base = mean_of(&signatures(&quick(Vec::new()), c, 1, 10.0), |s| s.mu_mean);
+                let on = mean_of(&signatures(&quick(vec![e]), c, 1, 10.0), |s| s.mu_mean);
+                moved = moved.max((on - base).abs());
+            }
+            eprintln!("load form {form}: sliding μ moves by {moved}");
+            assert!(moved > 0.01, "load form {form}: sliding μ moves by {moved} only");
+        }
+    }
+
+    #[test]
+    fn memory_forms_separate_the_accelerating_and_decelerating_branches() {
+        let c = at(0.9, 8.0);
+        let base = mean_of(&signatures(&quick(Vec::new()), c, 2, 10.0), |s| s.branch_gap);
+        let lugre =
+            mean_of(&signatures(&quick(vec![strong(Effect::FrictionHysteresis, 0)]), c, 2, 10.0), |s| s.branch_gap);
+        let rate_state =
+            mean_of(&signatures(&quick(vec![strong(Effect::FrictionHysteresis, 1)]), c, 2, 10.0), |s| s.branch_gap);
+        eprintln!("branch gap: baseline {base}, LuGre {lugre}, rate-and-state {rate_state}");
+        assert!(base.abs() < 0.002, "baseline gap {base}");
+        // LuGre: friction builds up over the bristle length after each reversal,
+        // so it is lower while accelerating.
+        assert!(lugre - base < -0.005, "LuGre gap {lugre}");
+        // Rate-and-state: the state lags, so friction is higher while accelerating.
+        assert!(rate_state - base > 0.004, "rate-and-state gap {rate_state}");
+    }
+
+    #[test]
+    fn harmonic_forms_put_harmonics_into_the_normal_force() {
+        let c = at(0.7, 8.0);
+        let base = signatures(&quick(Vec::new()), c, 1, 10.0)[0];
+        assert!(base.n_h1 < 0.003 && base.n_h2 < 0.003, "baseline harmonics {} {}", base.n_h1, base.n_h2);
+        let pos = signatures(&quick(vec![strong(Effect::NormalForceHarmonics, 0)]), c, 1, 10.0)[0];
+        eprintln!("harmonics: baseline {} {}, position-following {} {}", base.n_h1, base.n_h2, pos.n_h1, pos.n_h2);
+        assert!(pos.n_h1 > 0.03 && pos.n_h2 > 0.005, "position-following: 1× {} 2× {}", pos.n_h1, pos.n_h2);
+        let wander = IndependentEffect::NormalForceHarmonics(HarmonicForm::WanderingHarmonic {
+            strength: 0.08,
+            order: 2,
+            phase_diffusion_rad2_per_s: 0.05,
+            initial_phase_rad: 1.0,
+        });
+        let w = signatures(&quick(vec![wander]), c, 1, 10.0)[0];
+        eprintln!("wandering 2×: {} {}", w.n_h1, w.n_h2);
+        assert!(w.n_h2 > 0.04 && w.n_h1 < 0.01, "wandering 2×: 1× {} 2× {}", w.n_h1, w.n_h2);
+    }
+
+    #[test]
+    fn colour_forms_raise_the_residuals_lag_10_autocorrelation() {
+        let c = at(0.7, 8.0);
+        let base = mean_of(&signatures(&quick(Vec::new()), c, 2, 10.0), |s| s.lag10);
+        assert!(base.abs() < 0.05, "baseline lag-10 autocorrelation {base}");
+        for form in 0..2 {
+            let on = mean_of(&signatures(&quick(vec![strong(Effect::ColouredFrictionNoise, form)]), c, 2, 10.0), |s| {
+                s.lag10
+            });
+            eprintln!("colour form {form}: lag-10 {on} (baseline {base})");
+            assert!(on > 0.25, "colour form {form}: lag-10 autocorrelation {on}");
+        }
+    }
+
+    #[test]
+    fn non_gaussian_forms_change_the_residuals_shape() {
+        let c = at(0.7, 8.0);
+        let base = signatures(&quick(Vec::new()), c, 2, 10.0);
+        let (k0, s0) = (mean_of(&base, |s| s.kurtosis), mean_of(&base, |s| s.skewness));
+        assert!((k0 - 3.0).abs() < 0.3 && s0.abs() < 0.1, "baseline kurtosis {k0}, skewness {s0}");
+        let t = IndependentEffect::NonGaussianFriction(ShapeForm::StudentT { strength: 1.0, degrees_of_freedom: 4 });
+        let k = mean_of(&signatures(&quick(vec![t]), c, 2, 10.0), |s| s.kurtosis);
+        eprintln!("shape: baseline kurtosis {k0} skewness {s0}; Student-t kurtosis {k}");
+        assert!(k > 4.5, "Student-t kurtosis {k}");
+        let skew =
+            mean_of(&signatures(&quick(vec![strong(Effect::NonGaussianFriction, 1)]), c, 2, 10.0), |s| s.skewness);
+        eprintln!("bimodal skewness {skew}");
+        assert!(skew > 0.4, "bimodal skewness {skew}");
+    }
+
+    #[test]
+    fn stiction_forms_raise_the_breakaway_friction() {
+        let c = at(0.6, 20.0);
+        let base = mean_of(&signatures(&quick(Vec::new()), c, 2, 10.0), |s| s.stick_mu);
+        assert!(base > 0.25, "the baseline sticks here ({base})");
+        for form in 0..2 {
+            let on = mean_of(&signatures(&quick(vec![strong(Effect::Stiction, form)]), c, 2, 10.0), |s| s.stick_mu);
+            eprintln!("stiction form {form}: breakaway |F|/N {on} against {base}");
+            assert!(on - base > 0.02, "stiction form {form}: breakaway |F|/N {on} against {base}");
+        }
+    }
+
+    #[test]
+    fn drift_forms_move_the_mean_normal_force() {
+        let c = at(0.7, 8.0);
+        let base = mean_of(&signatures(&quick(Vec::new()), c, 4, 10.0), |s| s.n_drift.abs());
+        assert!(base < 0.005, "baseline drift {base}");
+        let thermal =
+            IndependentEffect::NormalForceDrift(DriftForm::ThermalRelaxation { strength: -0.15, time_constant_s: 5.0 });
+        let d = mean_of(&signatures(&quick(vec![thermal]), c, 1, 10.0), |s| s.n_drift);
+        eprintln!("drift: baseline {base}, thermal {d}");
+        assert!(d < -0.06, "thermal relaxation drift {d}");
+        let wear =
+            mean_of(&signatures(&quick(vec![strong(Effect::NormalForceDrift, 1)]), c, 4, 10.0), |s| s.n_drift.abs());
+        eprintln!("Brownian wear |drift| {wear}");
+        assert!(wear > 0.015, "Brownian wear drift {wear}");
+    }
+
+    /// The truth statistics and the records see the same dynamics.
+    #[test]
+    fn truth_statistics_agree_with_the_records() {
+        let truth = quick(Vec::new());
+        for c in [at(0.7, 4.0), at(0.6, 20.0)] {
+            let records = signatures(&truth, c, 2, 10.0);
+            let stats = truth_path_stats(&truth, &[c], 10.0, 4, 3);
+            assert_eq!(stats.len(), 1);
+            assert_eq!(stats[0].len(), 4);
+            let from_stats = stats[0].iter().map(|s| s.peak_mean_m).sum::<f64>() / 4.0;
+            let from_records = mean_of(&records, |s| s.peak_mean);
+            assert!((from_stats / from_records - 1.0).abs() < 0.005, "{from_stats} vs {from_records}");
+            assert!(stats[0].iter().all(|s| s.periods == (10.0 * c.excitation_frequency_hz) as u32));
+        }
+        let stats = truth_path_stats(&truth, &[at(0.6, 20.0)], 10.0, 2, 3);
+        assert!(stats[0][0].stick_fraction > 0.0, "stops at η = 0.6, 20 N");
+        // Same seed, same numbers; another seed, other numbers.
+        assert_eq!(stats, truth_path_stats(&truth, &[at(0.6, 20.0)], 10.0, 2, 3));
+        assert_ne!(stats, truth_path_stats(&truth, &[at(0.6, 20.0)], 10.0, 2, 4));
+        assert!(truth_path_stats(&truth, &[at(0.6, 20.0)], 10.0, 0, 3)[0].is_empty());
+    }
+
+    #[test]
+    fn random_truths_are_deterministic_and_refuse_bad_requests() {
+        let hidden = [(Effect::Stiction, 1, true), (Effect::NormalForceDrift, 0, false)];
+        let (a, ca) = random_truth(5, &hidden, &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).expect("a truth");
+        let (b, cb) = random_truth(5, &hidden, &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).expect("a truth");
+        assert_eq!(a, b);
+        assert_eq!(ca, cb);
+        assert_eq!(ca.len(), 18);
+        assert_eq!(a.families(), vec![Effect::Stiction, Effect::NormalForceDrift]);
+        // The rig and law do not depend on what is hidden.
+        let (plain, _) = random_truth(5, &[], &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).expect("a truth");
+        assert_eq!((plain.rig, plain.friction), (a.rig, a.friction));
+        assert!(random_truth(6, &hidden, &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).expect("a truth").0 != a);
+        assert!(a.description.contains("stiction") && a.description.contains("Dieterich"));
+        // Frequency-major grid.
+        assert_eq!(ca[1].normal_force_n, 8.0);
+        assert_eq!(ca[3].excitation_frequency_hz, 0.7 * a.rig.natural_frequency_hz);
+        let dup = [(Effect::Stiction, 0, true), (Effect::Stiction, 1, true)];
+        assert!(random_truth(5, &dup, &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).is_err());
+        assert!(random_truth(5, &[(Effect::Stiction, 2, true)], &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).is_err());
+        assert!(random_truth(5, &[], &[], &DEFAULT_FREQUENCY_RATIOS).is_err());
+        assert!(random_truth(5, &[], &DEFAULT_LOADS_N, &[0.0]).is_err());
+        // Every family and form has a preset and serialises.
+        for (family, forms) in FORMS {
+            for form in 0..forms.len() as u32 {
+                let (t, _) = random_truth(1, &[(family, form, false)], &[4.0], &[0.8]).expect("a truth");
+                assert_eq!(t.effects[0].family(), family);
+                assert_eq!(t.effects[0].form_index(), form);
+                let json = serde_json::to_value(&t).expect("serialises");
+                assert_eq!(json["effects"][0]["effect"], family.name());
+            }
+        }
+    }
+
+    /// Some drawn truths hold the block at the heaviest load; the
+    /// description says so.
+    #[test]
+    fn a_truth_that_sticks_throughout_says_so() {
+        let stuck = (0..200)
+            .map(|seed| random_truth(seed, &[], &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS).expect("a truth").0)
+            .find(|t| t.conditions.iter().any(|c| c.expected_to_stick_throughout))
+            .expect("some seed draws a heavy friction level");
+        assert!(stuck.description.contains("stay stuck"), "{}", stuck.description);
+        let (n, _) = random_truth(0, &[], &[0.5], &[0.8]).expect("a truth");
+        assert!(!n.description.contains("stay stuck"));
     }
 
     /// Times one 18-run set (3 loads × 6 frequencies × 50 s) and one truth-
