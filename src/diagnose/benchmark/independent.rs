@@ -34,6 +34,36 @@
 //! forces × frequency ratios, with up to one effect per family, each in one
 //! of the forms of [`FORMS`] at a moderate or a strong preset.
 //!
+//! **Presets** (moderate / strong strength; [`IndependentEffect::preset`]),
+//! and how far the strong one moves its family's signature on 50 s records,
+//! in units of the baseline's record-to-record spread (5 records each, the
+//! ignored test `presets_move_their_signatures_beyond_the_record_spread`;
+//! rig m = 1 kg, f0 = 10 Hz, U0 = 2 mm, at 6 Hz/20 N (stops), 7 Hz/4 N,
+//! 9 Hz/8 N):
+//!
+//! | family | form | moderate | strong | strong moves (σ of the baseline) |
+//! | --- | --- | --- | --- | --- |
+//! | load_dependent_friction | hertzian (κ) | 0.8 | 3.0 | sliding \|F\|/N −430, mean peak +32 |
+//! | | logistic (s, ± random) | 0.15 | 0.35 | sliding \|F\|/N −311, mean peak −39 |
+//! | | jkr_adhesion (N_a / N_ref) | 0.3 | 1.0 | sliding \|F\|/N +465, mean peak −36 |
+//! | friction_hysteresis | lugre (L, m) | 1e-4 | 4e-4 | branch gap −52, mean peak −245 |
+//! | | rate_state (b) | 0.015 | 0.035 | branch gap +54, mean peak +45 |
+//! | normal_force_harmonics | position_following (α) | 0.015 | 0.04 | N at 1× +2517, at 2× +1529 |
+//! | | wandering_harmonic (h) | 0.03 | 0.08 | N at its order +1500 |
+//! | coloured_friction_noise | pink (s) | 0.5 | 0.9 | residual lag-10 autocorrelation +130, peak variance +182 |
+//! | | telegraph (s) | 0.35 | 0.7 | lag-10 autocorrelation +126, peak variance +349 |
+//! | non_gaussian_friction | student_t (s) | 0.6 | 1.0 | residual kurtosis +337 |
+//! | | bimodal (s) | 0.5 | 0.85 | residual skewness +57 |
+//! | stiction | karnopp (s) | 0.2 | 0.4 | breakaway \|F\|/N +28, peak variance +20 |
+//! | | dwell_ageing (B) | 0.03 | 0.08 | breakaway \|F\|/N +95, peak variance +148 |
+//! | normal_force_drift | thermal_relaxation (Δ, ± random) | 0.06 | 0.15 | N's last-fifth − first-fifth mean +327 |
+//! | | brownian_wear (σ_w, 1/√s) | 0.008 | 0.02 | N's last-fifth − first-fifth mean −221 |
+//!
+//! Every moderate preset moves its signature by ≥ 18σ there except the
+//! stiction forms (2.8σ and 1.0σ in breakaway friction; 6.6σ and 4.0σ in
+//! the mean peak), which act only where the block stops and grow with the
+//! time it stays stuck.
+//!
 //! **Records** are written in `shared/spec/measurement-format.md`'s format,
 //! with sensor noise on every channel, optionally a `base_x` column and
 //! optionally a free time origin; the truth goes to `truth.json` next to
@@ -1203,7 +1233,8 @@ fn simulate<S: Sink>(plant: &Plant, grid: Grid, seed: u64, path: u64, phase0: f6
     };
     // LuGre: the bristle deflection z (steady at the start).
     let mut z = 0.0;
-    let (k, m, c, u0) = (plant.k, plant.m, plant.c, plant.u0);
+    let (k, c, u0) = (plant.k, plant.c, plant.u0);
+    let dt_over_m = dt / plant.m;
     let (a, b, cs, d) = (plant.a, plant.b, plant.cs, plant.d);
     let draw_scatter = |rng: &mut Gauss| match plant.stiction {
         Some(StaticForm::Karnopp { .. }) => rng.normal(),
@@ -1287,7 +1318,7 @@ fn simulate<S: Sink>(plant: &Plant, grid: Grid, seed: u64, path: u64, phase0: f6
                 sink.step(n - grid.warmup_steps, t, cb, sb, x, v, nf, friction);
             }
             z = zn;
-            v += dt * (p + friction) / m;
+            v += dt_over_m * (p + friction);
             x += dt * v;
         } else if stuck {
             let p = k * (u - x);
@@ -1308,7 +1339,7 @@ fn simulate<S: Sink>(plant: &Plant, grid: Grid, seed: u64, path: u64, phase0: f6
                 if n >= grid.warmup_steps {
                     sink.step(n - grid.warmup_steps, t, cb, sb, x, 0.0, nf, friction);
                 }
-                let vn = dt * (p + friction) / m;
+                let vn = dt_over_m * (p + friction);
                 if vn * dir > 0.0 {
                     stuck = false;
                     t_stick = 0.0;
@@ -1346,7 +1377,7 @@ fn simulate<S: Sink>(plant: &Plant, grid: Grid, seed: u64, path: u64, phase0: f6
                 sink.step(n - grid.warmup_steps, t, cb, sb, x, v, nf, friction);
             }
             let p = k * (u - x) - c * v;
-            let mut vn = v + dt * (p + friction) / m;
+            let mut vn = v + dt_over_m * (p + friction);
             let crossing = vn * v <= 0.0;
             if crossing || (vn.abs() < plant.rest_speed && vn.abs() < s) {
                 // At rest for an instant: stick, or go on in the direction
@@ -1359,7 +1390,7 @@ fn simulate<S: Sink>(plant: &Plant, grid: Grid, seed: u64, path: u64, phase0: f6
                     vn = 0.0;
                 } else if crossing || p0 * v < 0.0 {
                     let dir = sign(p0);
-                    vn = dt * (p0 - dir * mu_k0 * nf) / m;
+                    vn = dt_over_m * (p0 - dir * mu_k0 * nf);
                 }
             }
             v = vn;
@@ -1681,6 +1712,8 @@ pub struct PathStat {
 
 struct PeriodStats {
     dt: f64,
+    /// The time (less half a step) at which the current period ends.
+    boundary: f64,
     period_s: f64,
     periods: u32,
     current: u32,
@@ -1709,8 +1742,13 @@ impl PeriodStats {
 impl Sink for PeriodStats {
     fn step(&mut self, n: u64, t: f64, cos: f64, sin: f64, x: f64, v: f64, _normal: f64, _friction: f64) {
         let _ = n;
-        while self.current < self.periods && t >= f64::from(self.current + 1) * self.period_s - 0.5 * self.dt {
+        while t >= self.boundary {
             self.close();
+            self.boundary = if self.current < self.periods {
+                f64::from(self.current + 1) * self.period_s - 0.5 * self.dt
+            } else {
+                f64::INFINITY
+            };
         }
         if self.current >= self.periods {
             return;
@@ -1775,6 +1813,7 @@ pub fn truth_path_stats(
             grid.record_steps = (f64::from(periods) * period_s / grid.dt).ceil() as u64 + 1;
             let mut sink = PeriodStats {
                 dt: grid.dt,
+                boundary: period_s - 0.5 * grid.dt,
                 period_s,
                 periods,
                 current: 0,
@@ -2325,6 +2364,21 @@ mod tests {
         assert!(!n.description.contains("stay stuck"));
     }
 
+    /// One path's statistics on one thread, and the thread's CPU time, s.
+    fn truth_path_stats_on_one_thread(truth: &IndependentTruth, c: Condition, duration_s: f64) -> (PathStat, f64) {
+        let thread_cpu_s = || {
+            let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+            // SAFETY: clock_gettime writes one timespec into `ts`.
+            unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+            ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+        };
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool").install(|| {
+            let start = thread_cpu_s();
+            let stat = truth_path_stats(truth, &[c], duration_s, 1, 1)[0][0];
+            (stat, thread_cpu_s() - start)
+        })
+    }
+
     /// Times one 18-run set (3 loads × 6 frequencies × 50 s) and one truth-
     /// statistics call (32 paths × 18 conditions × 50 s). Run with
     /// `cargo test --release --lib independent::tests::timing -- --ignored --nocapture`.
@@ -2334,6 +2388,13 @@ mod tests {
         let (truth, conditions) =
             random_truth(7, &[(Effect::FrictionHysteresis, 1, true)], &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS)
                 .expect("a truth");
+        // CPU time per step of one path on one thread (the machine may be shared).
+        for (name, t) in [("baseline", truth.baseline()), ("rate-and-state", truth.clone())] {
+            let (stat, cpu_s) = truth_path_stats_on_one_thread(&t, conditions[4], 50.0);
+            let grid = Grid::new(&t, conditions[4].excitation_frequency_hz, 50.0);
+            let steps = (grid.warmup_steps + grid.record_steps) as f64;
+            eprintln!("{name}: {:.1} ns CPU per step ({} periods, {cpu_s:.2} s)", cpu_s / steps * 1e9, stat.periods);
+        }
         let dir = std::env::temp_dir().join(format!("stickslip-independent-timing-{}", std::process::id()));
         let data = dir.join("data");
         let start = std::time::Instant::now();
