@@ -2383,7 +2383,7 @@ mod tests {
     /// statistics call (32 paths × 18 conditions × 50 s). Run with
     /// `cargo test --release --lib independent::tests::timing -- --ignored --nocapture`.
     #[test]
-    #[ignore = "about a minute on 2 cores: the runtime of a full set and of the truth statistics"]
+    #[ignore = "minutes: the runtime of a full set and of the truth statistics (12.7e9 steps)"]
     fn timing_of_a_full_set_and_the_truth_statistics() {
         let (truth, conditions) =
             random_truth(7, &[(Effect::FrictionHysteresis, 1, true)], &DEFAULT_LOADS_N, &DEFAULT_FREQUENCY_RATIOS)
