@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use stickslip::diagnose::benchmark::independent::{
     IndependentTruth, RecordShape, random_truth, simulate_run, truth_path, write_set,
 };
-use stickslip::diagnose::measure::read_measurement_set;
+use stickslip::diagnose::measure::{TimeOrigin as ReadOrigin, read_measurement_set};
 use stickslip::engine::{Condition, Effect};
 
 /// A scratch directory removed when dropped.
@@ -87,6 +87,7 @@ fn a_default_origin_set_reads_back() {
         assert_eq!(run.t_s[0], 0.0);
         assert!((run.sample_interval_s() - 1.0 / 600.0).abs() < 1e-12);
         assert!(run.v_m_per_s.is_some() && run.normal_force.is_some() && run.friction_force.is_some());
+        assert_eq!(run.time_origin, ReadOrigin::Model);
     }
     // The files hold what the generator simulates, to the digits written.
     let again = simulate_run(&truth, conditions[1], 1, 0, &shape(6.0), 4).expect("a run");
@@ -156,26 +157,36 @@ fn a_free_origin_set_says_so_and_carries_the_base() {
     write_set(&data_b, &truth, &conditions, &b, 4).expect("written");
     let text = std::fs::read_to_string(data_b.join("run-00-0.csv")).unwrap();
     assert_eq!(text.lines().next().unwrap(), "t,x,v,normal_force,friction_force");
-    // Today's reader ignores the unknown key and column and takes both sets.
-    read_measurement_set(&data).expect("the reader takes option C");
-    read_measurement_set(&data_b).expect("the reader takes option B");
+    let set_b = read_measurement_set(&data_b).expect("the reader takes option B");
+    assert!(set_b.runs.iter().all(|r| r.time_origin == ReadOrigin::Free));
 }
 
-/// Waits for the reader: once `read_measurement_set` knows `base_x` and
-/// `"time_origin": "free"` (the lead is adding them), this test should
-/// check that the free-origin runs come back marked free and with their
-/// base column, e.g. `assert!(run.time_origin_free)` and
-/// `assert_eq!(run.base_x.as_ref().unwrap().len(), run.len())` — the
-/// reader's fields do not exist on this branch yet, so only the read is
-/// checked here.
+/// The reader takes option C's base column and moves each run's `t` into
+/// the frame of `u = U0 cos(Ω t)`: the shifted times reproduce the written
+/// base, whatever phase each record started at.
 #[test]
-#[ignore = "waits for the reader to know base_x and time_origin"]
 fn a_free_origin_set_reads_back_with_its_origin_and_base() {
     let scratch = Scratch::new("free-read");
-    let (truth, conditions) = small_truth(&[]);
+    let (truth, conditions) = small_truth(&[(Effect::NormalForceHarmonics, 1, true)]);
+    let u0 = truth.rig.excitation_amplitude_m;
     let data = scratch.0.join("set/data");
-    let shape = RecordShape { duration_s: 6.0, ..RecordShape::free_origin_with_base() };
+    let shape = RecordShape { duration_s: 6.0, runs_per_condition: 2, ..RecordShape::free_origin_with_base() };
     write_set(&data, &truth, &conditions, &shape, 4).expect("written");
     let set = read_measurement_set(&data).expect("the reader takes the set");
-    assert_eq!(set.runs.len(), conditions.len());
+    assert_eq!(set.runs.len(), 2 * conditions.len());
+    let mut shifts = Vec::new();
+    for (i, run) in set.runs.iter().enumerate() {
+        let (condition, index) = (conditions[i / 2], i / 2);
+        let ReadOrigin::BaseChannel { shift_s, amplitude_m } = run.time_origin else {
+            panic!("run {i}: {:?}, not read through its base column", run.time_origin);
+        };
+        assert!((amplitude_m / u0 - 1.0).abs() < 0.01, "run {i}: base amplitude {amplitude_m} vs {u0}");
+        let written = simulate_run(&truth, condition, index, (i % 2) as u32, &shape, 4).expect("a run");
+        let omega = TAU * condition.excitation_frequency_hz;
+        let worst =
+            run.t_s.iter().zip(&written.base_x).map(|(t, b)| (u0 * (omega * t).cos() - b).abs()).fold(0.0, f64::max);
+        assert!(worst < 12e-6, "run {i}: the shifted time misses the written base by {worst} m");
+        shifts.push(shift_s);
+    }
+    assert!(shifts.windows(2).any(|w| (w[0] - w[1]).abs() > 1e-4), "every run at the same phase: {shifts:?}");
 }
