@@ -6,6 +6,7 @@
 //! false-positive rate, a reliability table of the confidence, and the shrink
 //! of the fitted model's error at the withheld load level against the
 //! generator's truth there.
+pub mod independent;
 
 use std::path::PathBuf;
 use std::time::Instant;

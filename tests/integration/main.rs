@@ -9,6 +9,7 @@ mod diagnose;
 mod effects;
 mod features;
 mod hostile;
+mod independent;
 mod layout;
 mod measure;
 mod props;
