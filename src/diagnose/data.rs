@@ -213,7 +213,7 @@ pub(crate) fn levels(values: impl Iterator<Item = f64>) -> Vec<f64> {
 /// `n` items cut into at most [`MAX_FOLDS`] contiguous groups of nearly
 /// equal size: the group of each item.
 fn groups(n: usize) -> Vec<usize> {
-    let k = n.min(MAX_FOLDS).max(1);
+    let k = n.clamp(1, MAX_FOLDS);
     (0..n).map(|i| i * k / n.max(1)).collect()
 }
 
@@ -288,7 +288,7 @@ fn choose_folds(conditions: &[Condition], run_index: Option<&[usize]>) -> Folds 
     if conditions.len() >= 3 {
         let group_of = |i: usize| i % 2;
         let label_of = |units: &[usize]| {
-            if units[0] % 2 == 0 { "even conditions".into() } else { "odd conditions".into() }
+            if units[0].is_multiple_of(2) { "even conditions".into() } else { "odd conditions".into() }
         };
         return make(FoldKind::AlternateConditions, &group_of, &label_of);
     }

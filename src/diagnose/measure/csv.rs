@@ -342,7 +342,7 @@ pub(crate) fn base_phase(t_s: &[f64], base_x_m: &[f64], frequency_hz: f64) -> Op
     let (a, b) = (coefficients[1], coefficients[2]);
     let amplitude = a.hypot(b);
     let scale = base_x_m.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if !(amplitude > 1e-6 * scale.max(1e-12)) {
+    if amplitude.is_nan() || amplitude <= 1e-6 * scale.max(1e-12) {
         return None;
     }
     // a cos Ωt + b sin Ωt = R cos(Ωt − ψ), ψ = atan2(b, a): s = ψ / Ω.

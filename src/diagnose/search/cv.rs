@@ -232,24 +232,64 @@ fn weighted_gap(losses: &UnitLosses, units: &[usize], w: &[f64]) -> (f64, f64) {
     (if n > 0.0 { sum / n } else { 0.0 }, n)
 }
 
-/// One family in a [`contest`]: its out-of-sample losses, and (for the
-/// family whose models were also refitted fold by fold) those of the
-/// refitted models, which it must explain most of the gap with as well.
+/// One family in a round: its out-of-sample losses, and the current
+/// model's in the same yardsticks.
+#[derive(Clone, Copy)]
 pub(crate) struct Entrant<'a> {
     pub(crate) losses: &'a UnitLosses,
-    /// The current model's losses in the same yardsticks.
     pub(crate) reference: &'a UnitLosses,
-    /// The honest refits' losses and the current model's refits' losses.
-    pub(crate) refitted: Option<(&'a UnitLosses, &'a UnitLosses)>,
 }
 
-/// What a contest found.
+/// One weighting of the units (a bootstrap resample's counts) and what it
+/// is judged against.
+pub(crate) struct Weights<'a> {
+    pub(crate) units: &'a [usize],
+    pub(crate) w: &'a [f64],
+    pub(crate) null: NullLoss,
+}
+
+impl Weights<'_> {
+    /// A model's mean loss and the weighted number of scores behind it.
+    pub(crate) fn gap(&self, losses: &UnitLosses) -> (f64, f64) {
+        weighted_gap(losses, self.units, self.w)
+    }
+
+    /// The noise threshold of a gap over `n` weighted scores.
+    pub(crate) fn noise(&self, n: f64) -> f64 {
+        self.null.noise(n.round().max(1.0) as usize)
+    }
+
+    /// Whether the `current` model's gap stands above its noise.
+    pub(crate) fn above_noise(&self, current: &UnitLosses) -> bool {
+        let (gap, n) = self.gap(current);
+        gap - self.null.mean > self.noise(n)
+    }
+
+    /// The share of `reference`'s explainable gap (above the null loss)
+    /// that `losses` close, and whether that fall is beyond the noise.
+    pub(crate) fn share(&self, losses: &UnitLosses, reference: &UnitLosses) -> (f64, bool) {
+        let (r, n) = self.gap(reference);
+        let l = self.gap(losses).0;
+        ((r - l) / (r - self.null.mean).max(1e-12), r - l > self.noise(n))
+    }
+
+    /// The entrant that closes the largest share of the current model's
+    /// gap, when that gap and the fall stand above the noise.
+    pub(crate) fn leader(&self, current: &UnitLosses, entrants: &[Entrant<'_>]) -> Option<(usize, f64)> {
+        if !self.above_noise(current) {
+            return None;
+        }
+        let shares: Vec<(f64, bool)> = entrants.iter().map(|e| self.share(e.losses, e.reference)).collect();
+        let best = (0..entrants.len()).max_by(|&a, &b| shares[a].0.total_cmp(&shares[b].0))?;
+        shares[best].1.then_some((best, shares[best].0))
+    }
+}
+
+/// What one round's contest found.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Contest {
-    /// The share of resamples each entrant won, in entrant order.
-    pub(crate) wins: Vec<f64>,
-    /// The share of resamples nobody won.
-    pub(crate) none: f64,
+    /// The share of resamples each entrant led, in entrant order.
+    pub(crate) leads: Vec<f64>,
     /// The share of resamples in which the current model's gap stood within
     /// its noise of the floor (nothing to explain): how sure "the current
     /// model explains the data" is.
@@ -258,55 +298,33 @@ pub(crate) struct Contest {
     /// explainable gap (its out-of-sample gap less the null loss, in the
     /// entrant's yardstick).
     pub(crate) shares: Vec<f64>,
+    /// Without resampling: the leader, if any.
+    pub(crate) leader: Option<usize>,
     /// Without resampling: the current model's gap out of sample and its
     /// noise threshold.
     pub(crate) gap: f64,
     pub(crate) noise: f64,
 }
 
-impl Contest {
-    /// The entrant that won most often, if it won more than half of the
-    /// resamples.
-    pub(crate) fn winner(&self) -> Option<usize> {
-        let best = (0..self.wins.len()).max_by(|&a, &b| self.wins[a].total_cmp(&self.wins[b]))?;
-        (self.wins[best] > 0.5).then_some(best)
-    }
+/// [`RESAMPLES`] bootstrap weightings of `n` units (counts of each unit in
+/// a draw of `n` with replacement), from `seed`.
+pub(crate) fn resamples(n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..RESAMPLES)
+        .map(|_| {
+            let mut w = vec![0.0; n];
+            for _ in 0..n {
+                w[rng.random_range(0..n)] += 1.0;
+            }
+            w
+        })
+        .collect()
 }
 
-/// Which entrant wins one weighting of the units: the one that closes the
-/// largest share of the current model's explainable gap, if that share is
-/// at least [`MOST`] and the gap stands above its noise; an entrant with
-/// refits must close [`MOST`] with them too.
-fn winner_of(
-    current: &UnitLosses,
-    entrants: &[Entrant<'_>],
-    units: &[usize],
-    w: &[f64],
-    null: NullLoss,
-) -> (Option<usize>, Vec<f64>, f64, f64) {
-    let (gap, n) = weighted_gap(current, units, w);
-    let noise = null.noise(n.round().max(1.0) as usize);
-    let floor = null.mean;
-    let share = |l: &UnitLosses, reference: &UnitLosses| {
-        let r = weighted_gap(reference, units, w).0;
-        (r - weighted_gap(l, units, w).0) / (r - floor).max(1e-12)
-    };
-    let shares: Vec<f64> = entrants.iter().map(|e| share(e.losses, e.reference)).collect();
-    let best = (0..entrants.len()).max_by(|&a, &b| shares[a].total_cmp(&shares[b]));
-    let wins = best.filter(|&b| {
-        let refit_ok = entrants[b].refitted.is_none_or(|(fitted, base)| share(fitted, base) >= MOST);
-        // The gap stands above its noise in the current model's own scales
-        // and in the yardstick the entrant is measured in.
-        let above = gap - floor > noise && weighted_gap(entrants[b].reference, units, w).0 - floor > noise;
-        above && shares[b] >= MOST && refit_ok
-    });
-    (wins, shares, gap, noise)
-}
-
-/// The contest of `entrants` against the `current` model's out-of-sample
-/// losses, over the held-out `units`, with [`RESAMPLES`] bootstrap
-/// resamples of the units drawn from `seed`; `null` is the loss of a model
-/// that is right.
+/// One round's contest of `entrants` against the `current` model's
+/// out-of-sample losses over the held-out `units`: who leads without
+/// resampling and how often each leads over [`resamples`] from `seed`;
+/// `null` is the loss of a model that is right.
 pub(crate) fn contest(
     current: &UnitLosses,
     entrants: &[Entrant<'_>],
@@ -315,27 +333,29 @@ pub(crate) fn contest(
     seed: u64,
 ) -> Contest {
     let ones = vec![1.0; units.len()];
-    let (_, shares, gap, noise) = winner_of(current, entrants, units, &ones, null);
-    let mut wins = vec![0usize; entrants.len()];
-    let (mut none, mut fits) = (0usize, 0usize);
-    let mut rng = StdRng::seed_from_u64(seed);
-    let mut w = vec![0.0; units.len()];
-    for _ in 0..RESAMPLES {
-        w.iter_mut().for_each(|x| *x = 0.0);
-        for _ in 0..units.len() {
-            w[rng.random_range(0..units.len())] += 1.0;
+    let point = Weights { units, w: &ones, null };
+    let shares: Vec<f64> = entrants.iter().map(|e| point.share(e.losses, e.reference).0).collect();
+    let (gap, n) = point.gap(current);
+    let mut leads = vec![0usize; entrants.len()];
+    let mut fits = 0usize;
+    for w in resamples(units.len(), seed) {
+        let weights = Weights { units, w: &w, null };
+        if let Some((i, _)) = weights.leader(current, entrants) {
+            leads[i] += 1;
         }
-        let (winner, _, gap, noise) = winner_of(current, entrants, units, &w, null);
-        match winner {
-            Some(i) => wins[i] += 1,
-            None => none += 1,
-        }
-        if gap - null.mean <= noise {
+        if !weights.above_noise(current) {
             fits += 1;
         }
     }
     let share = |k: usize| k as f64 / RESAMPLES as f64;
-    Contest { wins: wins.into_iter().map(share).collect(), none: share(none), fits: share(fits), shares, gap, noise }
+    Contest {
+        leads: leads.into_iter().map(share).collect(),
+        fits: share(fits),
+        shares,
+        leader: point.leader(current, entrants).map(|(i, _)| i),
+        gap,
+        noise: point.noise(n),
+    }
 }
 
 #[cfg(test)]
@@ -364,62 +384,41 @@ mod tests {
     }
 
     #[test]
-    fn a_family_that_explains_most_of_the_gap_everywhere_wins_with_confidence() {
+    fn the_family_that_closes_most_leads_and_nothing_leads_within_noise() {
         let units: Vec<usize> = (0..12).collect();
         let current = at(&[8.0; 12]);
-        // Leaves z = 2 everywhere: from a loss of 39 to 4, 93% of what is
-        // explainable; its rival closes a third.
         let good = at(&[2.0; 12]);
         let weak = at(&[6.5; 12]);
-        let c = contest(
-            &current,
-            &[
-                Entrant { losses: &weak, reference: &current, refitted: None },
-                Entrant { losses: &good, reference: &current, refitted: None },
-            ],
-            &units,
-            NULL,
-            1,
-        );
-        assert_eq!(c.winner(), Some(1));
-        assert!(c.wins[1] > 0.99, "{c:?}");
-        assert!(c.shares[1] > 0.9 && c.shares[0] < 0.5);
-    }
-
-    #[test]
-    fn nothing_wins_where_the_current_model_fits_within_noise() {
-        let units: Vec<usize> = (0..12).collect();
-        let current = at(&[1.0; 12]);
+        let entrants =
+            [Entrant { losses: &weak, reference: &current }, Entrant { losses: &good, reference: &current }];
+        let c = contest(&current, &entrants, &units, NULL, 1);
+        assert_eq!(c.leader, Some(1));
+        assert!(c.leads[1] > 0.99, "{c:?}");
+        assert!(c.shares[1] > 0.8 && c.shares[0] < 0.3, "{c:?}");
+        assert_eq!(c.fits, 0.0);
+        // A current model within noise: nothing to explain.
+        let fits = at(&[1.0; 12]);
         let better = at(&[0.5; 12]);
-        let c = contest(&current, &[Entrant { losses: &better, reference: &current, refitted: None }], &units, NULL, 1);
-        assert_eq!(c.winner(), None);
-        assert!(c.none > 0.99, "{c:?}");
+        let c = contest(&fits, &[Entrant { losses: &better, reference: &fits }], &units, NULL, 1);
+        assert_eq!(c.leader, None);
+        assert!(c.fits > 0.99, "{c:?}");
     }
 
     #[test]
-    fn a_family_that_helps_only_some_conditions_is_not_sure() {
-        // Closes the whole gap at half the units and none of it at the
-        // others: half of the explainable gap, so about half the resamples.
+    fn two_families_that_close_about_as_much_share_the_lead() {
         let units: Vec<usize> = (0..12).collect();
         let current = at(&[6.0; 12]);
-        let half: Vec<f64> = (0..12).map(|u| if u % 2 == 0 { 1.1 } else { 6.0 }).collect();
-        let half = at(&half);
-        let c = contest(&current, &[Entrant { losses: &half, reference: &current, refitted: None }], &units, NULL, 3);
-        assert!(c.wins[0] > 0.2 && c.wins[0] < 0.8, "{c:?}");
-    }
-
-    #[test]
-    fn refits_that_do_not_hold_refuse_the_family() {
-        let units: Vec<usize> = (0..12).collect();
-        let current = at(&[8.0; 12]);
-        let good = at(&[2.0; 12]);
-        let refit_base = at(&[8.0; 12]);
-        let refit_poor = at(&[7.0; 12]);
-        let e = [Entrant { losses: &good, reference: &current, refitted: Some((&refit_poor, &refit_base)) }];
-        assert_eq!(contest(&current, &e, &units, NULL, 1).winner(), None);
-        let refit_good = at(&[2.5; 12]);
-        let e = [Entrant { losses: &good, reference: &current, refitted: Some((&refit_good, &refit_base)) }];
-        assert_eq!(contest(&current, &e, &units, NULL, 1).winner(), Some(0));
+        let a: Vec<f64> = (0..12).map(|u| if u % 2 == 0 { 2.0 } else { 5.0 }).collect();
+        let b: Vec<f64> = (0..12).map(|u| if u % 2 == 1 { 2.0 } else { 5.0 }).collect();
+        let (a, b) = (at(&a), at(&b));
+        let c = contest(
+            &current,
+            &[Entrant { losses: &a, reference: &current }, Entrant { losses: &b, reference: &current }],
+            &units,
+            NULL,
+            3,
+        );
+        assert!(c.leads[0] > 0.2 && c.leads[1] > 0.2, "{c:?}");
     }
 
     #[test]

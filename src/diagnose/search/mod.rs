@@ -32,6 +32,7 @@
 
 pub(crate) mod cv;
 pub(crate) mod fit;
+pub(crate) mod verdict;
 
 use std::collections::BTreeMap;
 
@@ -191,22 +192,25 @@ pub(crate) fn select(
     let baseline_folds = baseline_folds(baseline, slope, &views, &search, engine)?;
     let mut current = Fitted { model: baseline.clone(), scores: score(engine, baseline, data, &search, Scope::All)? };
     let mut current_folds = baseline_folds.clone();
+    let mut rounds: Vec<verdict::Round> = Vec::new();
     let mut steps: Vec<Step> = Vec::new();
     let mut first_round = Vec::new();
     let mut none_confidence = 1.0;
     let mut noise: f64 = 0.0;
     let seed = settings.seed ^ 0xC0_47E5;
     let null = NullLoss::for_replicates(search.replicates);
-    while steps.len() < MAX_EFFECTS && !units.is_empty() {
+    while rounds.len() < MAX_EFFECTS && !units.is_empty() {
         let current_losses = own_losses(&current.scores, data);
-        // Nothing above the noise to explain: no family can win.
+        // Nothing above the noise to explain: no family can lead.
         let idle = contest(&current_losses, &[], &units, null, seed);
         noise = noise.max(idle.noise);
+        if rounds.is_empty() {
+            none_confidence = idle.fits;
+        }
         if idle.gap - null.mean <= idle.noise {
             if tracing() {
-                eprintln!("round {}: gap {:.2} within its noise {:.2} of the floor", steps.len(), idle.gap, idle.noise);
+                eprintln!("round {}: gap {:.2} within its noise {:.2} of the floor", rounds.len(), idle.gap, idle.noise);
             }
-            none_confidence = idle.fits;
             break;
         }
         let named: Vec<Effect> = steps.iter().map(|s| s.candidate.effect).collect();
@@ -220,75 +224,39 @@ pub(crate) fn select(
             })
             .collect();
         let entrants: Vec<Entrant<'_>> =
-            predictions.iter().map(|(losses, reference, _)| Entrant { losses, reference, refitted: None }).collect();
+            predictions.iter().map(|(losses, reference, _)| Entrant { losses, reference }).collect();
         let pooled = contest(&current_losses, &entrants, &units, null, seed);
         if tracing() {
-            for (f, (losses, reference, picks)) in families.iter().zip(&predictions) {
-                let per_unit: Vec<String> = units
-                    .iter()
-                    .map(|u| {
-                        let l = losses.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
-                        let r = reference.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
-                        format!("{u}: {r:.1}->{l:.1}")
-                    })
-                    .collect();
-                let picked: Vec<String> =
-                    picks.iter().map(|&p| format!("{} {:?}", f.pool[p].form, f.pool[p].values)).collect();
-                eprintln!("round {}: {} picks {picked:?}; by unit {}", steps.len(), f.effect, per_unit.join(", "));
-            }
-            for (f, (w, s)) in families.iter().zip(pooled.wins.iter().zip(&pooled.shares)) {
-                eprintln!(
-                    "round {}: {} [{}] fit {:.2} out-of-sample share {s:.3} wins {w:.3}",
-                    steps.len(),
-                    f.effect,
-                    f.form,
-                    f.best.gap_fit
-                );
-            }
-            eprintln!("round {}: gap {:.2} noise {:.2} none {:.3}", steps.len(), pooled.gap, pooled.noise, pooled.none);
+            trace_round(rounds.len(), &families, &predictions, &pooled, &units);
         }
-        if steps.is_empty() {
+        if rounds.is_empty() {
             first_round = candidates_of(&families, &pooled, &current, data, null);
         }
-        none_confidence = pooled.fits;
-        let Some(top) = pooled.winner() else { break };
+        // The leader, where it closes a share beyond the noise; a further
+        // effect must close most of what is left.
+        let Some(top) = pooled.leader.filter(|&i| rounds.is_empty() || pooled.shares[i] >= cv::MOST) else { break };
         let family = &families[top];
         progress(&format!("refitting {} without each fold", family.effect));
-        let refits = refit_folds(family, &predictions[top].2, &current_folds, slope, &views, &search, engine)?;
-        let Some(refits) = refits else { break };
-        let (base_losses, refit_losses) = fold_pair_losses(&current_folds, &refits, data);
-        let entrants: Vec<Entrant<'_>> = predictions
-            .iter()
-            .enumerate()
-            .map(|(i, (losses, reference, _))| Entrant {
-                losses,
-                reference,
-                refitted: (i == top).then_some((&refit_losses, &base_losses)),
-            })
-            .collect();
-        let judged = contest(&current_losses, &entrants, &units, null, seed);
+        let Some(refits) = refit_folds(family, &predictions[top].2, &current_folds, slope, &views, &search, engine)?
+        else {
+            break;
+        };
+        let refitted = fold_pair_losses(&current_folds, &refits, data);
+        let joint = fold_pair_losses(&baseline_folds, &refits, data);
+        let ones = vec![1.0; units.len()];
+        let point = cv::Weights { units: &units, w: &ones, null };
+        let (share, beyond) = point.share(&refitted.1, &refitted.0);
         if tracing() {
             eprintln!(
-                "round {}: {} refitted: wins {:.3} (pooled {:.3}); refits' gap {:.2} against {:.2}",
-                steps.len(),
+                "round {}: {} refitted without each fold closes {share:.3} of what was left (beyond noise {beyond}), {:.3} of the baseline's gap",
+                rounds.len(),
                 family.effect,
-                judged.wins[top],
-                pooled.wins[top],
-                mean_loss(&refit_losses, units.iter().copied()),
-                mean_loss(&base_losses, units.iter().copied())
+                point.share(&joint.1, &joint.0).0
             );
         }
-        if judged.winner() != Some(top) {
+        if !beyond || (!rounds.is_empty() && share < cv::MOST) {
             break;
         }
-        if steps.is_empty() {
-            first_round = candidates_of(&families, &judged, &current, data, null);
-        }
-        progress(&format!("{} named; polishing its model on every replicate", family.effect));
-        let polished = match polish(&family.best, slope, data, settings, engine)? {
-            Some(t) => t,
-            None => family.best.clone(),
-        };
         let folds: Vec<FoldResult> = (0..views.len())
             .map(|k| {
                 let held = data.folds.folds[k].units.iter().copied();
@@ -296,26 +264,83 @@ pub(crate) fn select(
                 FoldResult { gap_before: before, gap_after: after, after: refits[k].clone() }
             })
             .collect();
-        let before = mean_loss(&base_losses, units.iter().copied());
-        let after = mean_loss(&refit_losses, units.iter().copied());
-        let share = ((before - after) / (before - null.mean).max(1e-12)).clamp(-1.0, 1.0);
+        rounds.push(verdict::Round {
+            current: current_losses,
+            entrants: predictions.iter().map(|(l, r, _)| (l.clone(), r.clone())).collect(),
+            leader: top,
+            refitted,
+            joint,
+        });
+        progress(&format!("{} leads; polishing its model on every replicate", family.effect));
+        let polished = polish(&family.best, slope, data, settings, engine)?.unwrap_or_else(|| family.best.clone());
         let candidate = candidate_of(
             family,
             Fitted::from(polished.clone()),
-            (judged.gap, judged.shares[top]),
-            judged.wins[top],
+            (pooled.gap, pooled.shares[top]),
+            pooled.leads[top],
             &current,
             data,
             null,
         );
-        steps.push(Step { candidate, confidence: judged.wins[top], share, folds });
+        steps.push(Step { candidate, confidence: 0.0, share, folds });
         current = Fitted {
             model: polished.model.clone(),
             scores: score(engine, &polished.model, data, &search, Scope::All)?,
         };
         current_folds = refits;
     }
+    let (count, confidence, each) = verdict::judge(&rounds, &units, null, seed);
+    if tracing() {
+        eprintln!("verdict: {count} of {} leaders named, confidence {confidence:.3}, each {each:?}", rounds.len());
+    }
+    steps.truncate(count);
+    for (step, c) in steps.iter_mut().zip(&each) {
+        step.confidence = *c;
+    }
+    if count > 0 {
+        // The verdict's confidence is that of naming exactly these.
+        steps[0].confidence = confidence;
+    } else if let Some(first) = rounds.first() {
+        // "None" is sure only where the baseline fits: where its gap stands
+        // m noise thresholds above the floor and nothing explains most of
+        // it, the misfit may be an effect no candidate has, and the share
+        // of resamples that name nothing is divided by √m.
+        let ones = vec![1.0; units.len()];
+        let point = cv::Weights { units: &units, w: &ones, null };
+        let (gap, n) = point.gap(&first.current);
+        let m = ((gap - null.mean) / point.noise(n)).max(1.0);
+        none_confidence = confidence / m.sqrt();
+    }
     Ok(Selection { steps, first_round, none_confidence, baseline_folds, noise, null })
+}
+
+/// Prints a round's families, their picks and shares (`STICKSLIP_DEBUG`).
+fn trace_round(
+    round: usize,
+    families: &[Family],
+    predictions: &[(UnitLosses, UnitLosses, Vec<usize>)],
+    pooled: &Contest,
+    units: &[usize],
+) {
+    for (f, (losses, reference, picks)) in families.iter().zip(predictions) {
+        let per_unit: Vec<String> = units
+            .iter()
+            .map(|u| {
+                let l = losses.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
+                let r = reference.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
+                format!("{u}: {r:.2}->{l:.2}")
+            })
+            .collect();
+        let picked: Vec<String> = picks.iter().map(|&p| format!("{} {:?}", f.pool[p].form, f.pool[p].values)).collect();
+        eprintln!("round {round}: {} picks {picked:?}; by unit {}", f.effect, per_unit.join(", "));
+    }
+    for (f, (w, s)) in families.iter().zip(pooled.leads.iter().zip(&pooled.shares)) {
+        eprintln!(
+            "round {round}: {} [{}] fit {:.2} out-of-sample share {s:.3} leads {w:.3}",
+            f.effect, f.form, f.best.gap_fit
+        );
+    }
+    eprintln!("round {round}: gap {:.2} noise {:.2} fits {:.3}", pooled.gap, pooled.noise, pooled.fits);
 }
 
 /// The report's candidate for a family: its best full-data fit, what it
@@ -375,7 +400,7 @@ fn candidates_of(
         .enumerate()
         .map(|(i, f)| {
             let fitted = Fitted { model: f.best.model.clone(), scores: f.best.scores.clone() };
-            candidate_of(f, fitted, (contest.gap, contest.shares[i]), contest.wins[i], current, data, null)
+            candidate_of(f, fitted, (contest.gap, contest.shares[i]), contest.leads[i], current, data, null)
         })
         .collect();
     out.sort_by(|a, b| b.wins.total_cmp(&a.wins).then(b.cv_share.total_cmp(&a.cv_share)));
