@@ -187,10 +187,14 @@ fn stribeck_factor(c_s_per_m: f32, speed_m_per_s: f32) -> f32 {
 }
 
 fn steady_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
+    return mean_law(speed_m_per_s, v_m_per_s) + path.friction_noise;
+}
+
+// The steady law without its random part: what a friction memory follows.
+fn mean_law(speed_m_per_s: f32, v_m_per_s: f32) -> f32 {
     return law_a + point.friction_offset
         + law_b * stribeck_factor(params.friction_c_s_per_m, speed_m_per_s)
-        + law_d * v_m_per_s * v_m_per_s
-        + path.friction_noise;
+        + law_d * v_m_per_s * v_m_per_s;
 }
 
 // Which friction memory the slip ODE carries (the CPU's Memory::of; the
@@ -214,7 +218,7 @@ fn memory_form() -> i32 {
 fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f32) -> f32 {
     let slipped_m = abs(x_m - path.slip_start_x_m);
     let form = memory_form();
-    var mu = memory;
+    var mu = memory + path.friction_noise;
     if (form == MEMORY_AGEING) {
         mu = ageing_coefficient(speed_m_per_s, v_m_per_s, memory);
     } else if (form == MEMORY_NONE) {
@@ -264,7 +268,7 @@ fn lag_start_coefficient() -> f32 {
     if (released) {
         excess = path.stiction_excess;
     }
-    return static_coefficient() - excess;
+    return static_coefficient() - excess - path.friction_noise;
 }
 
 // μ_s N, plus the adhesion force (the sum clipped at 0).
@@ -281,10 +285,10 @@ fn breakaway_force() -> f32 {
 fn memory_rate(speed_m_per_s: f32, v_m_per_s: f32, memory: f32) -> f32 {
     let form = memory_form();
     if (form == MEMORY_LAG) {
-        return (steady_law(speed_m_per_s, v_m_per_s) - memory) / effects.hysteresis_lag_s;
+        return (mean_law(speed_m_per_s, v_m_per_s) - memory) / effects.hysteresis_lag_s;
     }
     if (form == MEMORY_SLIP) {
-        return slip_law_rate(steady_law(speed_m_per_s, v_m_per_s), memory, abs(v_m_per_s));
+        return slip_law_rate(mean_law(speed_m_per_s, v_m_per_s), memory, abs(v_m_per_s));
     }
     if (form == MEMORY_AGEING) {
         return ageing_rate(memory, abs(v_m_per_s));

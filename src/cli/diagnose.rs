@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::{BackendArg, Progress, open_engine};
-use crate::diagnose::benchmark::{BenchmarkSettings, run_benchmark as run_benchmark_sets};
+use crate::diagnose::benchmark::{BenchmarkSettings, Generator, Origins, run_benchmark as run_benchmark_sets};
 use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{RunInfo, write_diagnosis_with};
 use crate::diagnose::synthetic::SetShape;
@@ -88,6 +88,34 @@ pub(crate) struct BenchmarkArgs {
     /// each keeps the data and seed it has in the full run, so one verdict can be re-checked alone.
     #[arg(long, value_delimiter = ',')]
     pub(crate) sets: Vec<usize>,
+    /// Which generator makes the sets: stickslip's own engine with its withheld effect forms, or the
+    /// independent one (its own integrator at 200 kHz with explicit stick/slip switching, and effect forms
+    /// from the literature that no candidate has; loads from --loads).
+    #[arg(long, value_enum, default_value = "engine")]
+    pub(crate) generator: GeneratorArg,
+    /// Normal forces of the independent generator's sets, N (comma list).
+    #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::benchmark::independent::DEFAULT_LOADS_N)]
+    pub(crate) loads: Vec<f64>,
+    /// The time frame of the independent generator's records: `t` in the model's frame, a free time origin
+    /// (declared in the manifest), a free one with a base_x column, or the three in turn.
+    #[arg(long, value_enum, default_value = "mixed")]
+    pub(crate) time_origin: OriginArg,
+}
+
+/// `--generator`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum GeneratorArg {
+    Engine,
+    Independent,
+}
+
+/// `--time-origin`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum OriginArg {
+    Model,
+    Free,
+    BaseX,
+    Mixed,
 }
 
 /// Fewest simulated replicates per condition: a spread needs two.
@@ -197,6 +225,12 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
             args.frequency_ratios
         );
     }
+    if args.loads.is_empty() || args.loads.len() > 8 || args.loads.iter().any(|n| !(n.is_finite() && *n > 0.0)) {
+        anyhow::bail!("invalid --loads {:?}: 1 to 8 normal forces, each > 0 N", args.loads);
+    }
+    if args.generator == GeneratorArg::Independent && args.phase_only > 0 {
+        anyhow::bail!("invalid --phase-only {}: the independent generator writes records only", args.phase_only);
+    }
     if args.load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
     }
@@ -219,6 +253,18 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         seed: args.seed,
         replicates: args.replicates,
         sets: args.sets,
+        generator: match args.generator {
+            GeneratorArg::Engine => Generator::Engine,
+            GeneratorArg::Independent => Generator::Independent {
+                loads_n: args.loads.clone(),
+                origins: match args.time_origin {
+                    OriginArg::Model => Origins::Model,
+                    OriginArg::Free => Origins::Free,
+                    OriginArg::BaseX => Origins::BaseX,
+                    OriginArg::Mixed => Origins::Mixed,
+                },
+            },
+        },
     };
     let planned: Vec<usize> = settings.plan().into_iter().map(|(i, _)| i).collect();
     if let Some(i) = settings.sets.iter().find(|i| !planned.contains(i)) {

@@ -12,9 +12,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::diagnose::candidates::NULL_HUBER;
+use crate::diagnose::data::condition_key;
 use crate::diagnose::measure::{MeasurementSet, RigInfo, SummaryRow, read_measurement_set};
 use crate::diagnose::report::write_diagnosis;
-use crate::diagnose::simulate::{PathStats, path_stats_per_condition, record_path_stats};
+use crate::diagnose::simulate::{path_stats_per_condition, record_path_stats};
 use crate::diagnose::synthetic::{PlannedSet, SetShape, benchmark_plan, random_truth, write_set};
 use crate::diagnose::{DiagnoseSettings, diagnose_set, mean, sd};
 use crate::engine::reduce::circular_mean_var;
@@ -50,6 +51,50 @@ pub struct BenchmarkSettings {
     pub replicates: u32,
     /// Only these sets of the plan, by index (all when empty).
     pub sets: Vec<usize>,
+    /// Which generator makes the sets.
+    pub generator: Generator,
+}
+
+/// Which generator makes a benchmark's sets.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Generator {
+    /// stickslip's own engine with its effect library's withheld forms
+    /// ([`crate::diagnose::synthetic`]), loads as shares of the no-stop
+    /// threshold.
+    Engine,
+    /// The independent generator ([`independent`]): its own integrator and
+    /// effect forms from the literature, at fixed loads in newtons, with the
+    /// records' time frames as `origins` says.
+    Independent { loads_n: Vec<f64>, origins: Origins },
+}
+
+/// The time frames of an independent benchmark's records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origins {
+    /// `t` in the model's frame.
+    Model,
+    /// A free time origin, declared in the manifest.
+    Free,
+    /// A free time origin with a `base_x` column.
+    BaseX,
+    /// The three in turn, set by set.
+    Mixed,
+}
+
+impl Origins {
+    /// The record shape of set `index`.
+    fn shape(self, index: usize, runs_per_condition: u32, duration_s: f64) -> independent::RecordShape {
+        let pick = match self {
+            Origins::Mixed => [Origins::Model, Origins::Free, Origins::BaseX][index % 3],
+            other => other,
+        };
+        let shape = match pick {
+            Origins::Free => independent::RecordShape::free_origin(),
+            Origins::BaseX => independent::RecordShape::free_origin_with_base(),
+            _ => independent::RecordShape::default(),
+        };
+        independent::RecordShape { runs_per_condition, duration_s, ..shape }
+    }
 }
 
 impl BenchmarkSettings {
@@ -122,10 +167,58 @@ impl BenchmarkRow {
     }
 }
 
-/// The error of `model` against `truth` at `conditions`: the mean over
-/// conditions of the squared differences of the ensemble mean peak, peak
-/// variance and phase, each in units of the truth's per-record noise (the
-/// spread over paths of one record's statistic over `runs` records).
+/// One path's statistics over a record: mean peak (m), peak variance (m²)
+/// and circular mean phase (degrees).
+pub type TruthStat = (f64, f64, f64);
+
+/// The error of `model`'s statistics against the truth's (`truth[i]`: its
+/// paths' statistics at `conditions[i]`): the mean over conditions of the
+/// squared differences of the ensemble mean peak, peak variance and phase,
+/// each in units of the truth's per-record noise (the spread over paths of
+/// one record's statistic over `runs` records).
+pub fn error_against_stats(
+    model: &Model,
+    truth: &[Vec<TruthStat>],
+    conditions: &[Condition],
+    shape: SetShape,
+    engine: &Engine,
+) -> Result<f64> {
+    let m = record_path_stats(engine, model, conditions, shape.duration_s, 32, 77, 60)?;
+    let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
+    let mut terms = Vec::new();
+    for (pt, pm) in truth.iter().zip(&m) {
+        let pm: Vec<TruthStat> = pm.iter().map(|p| (p.peak_mean_m, p.peak_var_m2, p.phase_mean_deg)).collect();
+        let stat = |p: &[TruthStat], f: fn(&TruthStat) -> f64| p.iter().map(f).collect::<Vec<f64>>();
+        for f in [|p: &TruthStat| p.0, |p: &TruthStat| p.1] {
+            let (a, b) = (stat(pt, f), stat(&pm, f));
+            terms.push(((mean(&b) - mean(&a)) / (sd(&a).max(1e-30) / runs)).powi(2));
+        }
+        let phases = |p: &[TruthStat]| p.iter().map(|s| s.2.to_radians()).collect::<Vec<f64>>();
+        let (a, b) = (phases(pt), phases(&pm));
+        let (ca, va) = circular_mean_var(&a);
+        let (cb, _) = circular_mean_var(&b);
+        let d = crate::engine::reduce::wrap_angle(cb - ca);
+        terms.push((d / (va.sqrt().max(1e-9) / runs)).powi(2));
+    }
+    Ok(mean(&terms))
+}
+
+/// The paths' statistics of an engine model at `conditions` over records of
+/// the benchmark's length.
+fn engine_stats(
+    model: &Model,
+    conditions: &[Condition],
+    shape: SetShape,
+    engine: &Engine,
+) -> Result<Vec<Vec<TruthStat>>> {
+    Ok(record_path_stats(engine, model, conditions, shape.duration_s, 32, 77, 60)?
+        .into_iter()
+        .map(|paths| paths.iter().map(|p| (p.peak_mean_m, p.peak_var_m2, p.phase_mean_deg)).collect())
+        .collect())
+}
+
+/// The error of `model` against `truth` at `conditions` (both simulated by
+/// the engine; see [`error_against_stats`]).
 pub fn error_against_truth(
     model: &Model,
     truth: &Model,
@@ -133,24 +226,7 @@ pub fn error_against_truth(
     shape: SetShape,
     engine: &Engine,
 ) -> Result<f64> {
-    let t = record_path_stats(engine, truth, conditions, shape.duration_s, 32, 77, 60)?;
-    let m = record_path_stats(engine, model, conditions, shape.duration_s, 32, 77, 60)?;
-    let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
-    let mut terms = Vec::new();
-    for (pt, pm) in t.iter().zip(&m) {
-        let stat = |p: &[PathStats], f: fn(&PathStats) -> f64| p.iter().map(f).collect::<Vec<f64>>();
-        for f in [|p: &PathStats| p.peak_mean_m, |p: &PathStats| p.peak_var_m2] {
-            let (a, b) = (stat(pt, f), stat(pm, f));
-            terms.push(((mean(&b) - mean(&a)) / (sd(&a).max(1e-30) / runs)).powi(2));
-        }
-        let phases = |p: &[PathStats]| p.iter().map(|s| s.phase_mean_deg.to_radians()).collect::<Vec<f64>>();
-        let (a, b) = (phases(pt), phases(pm));
-        let (ca, va) = circular_mean_var(&a);
-        let (cb, _) = circular_mean_var(&b);
-        let d = crate::engine::reduce::wrap_angle(cb - ca);
-        terms.push((d / (va.sqrt().max(1e-9) / runs)).powi(2));
-    }
-    Ok(mean(&terms))
+    error_against_stats(model, &engine_stats(truth, conditions, shape, engine)?, conditions, shape, engine)
 }
 
 /// A phase-only summary set: one record's phase mean and variance per
@@ -200,6 +276,51 @@ fn phase_only_set(
     })
 }
 
+/// A benchmark set's truth: an engine model, or an independent one (with
+/// the set's seed).
+enum Truth {
+    Engine(Model),
+    Independent(Box<independent::IndependentTruth>, u64),
+}
+
+impl Truth {
+    /// Its paths' statistics at `conditions` over records of the set's
+    /// length (the independent truth simulated by its own generator).
+    fn stats(&self, conditions: &[Condition], shape: SetShape, engine: &Engine) -> Result<Vec<Vec<TruthStat>>> {
+        match self {
+            Truth::Engine(m) => engine_stats(m, conditions, shape, engine),
+            Truth::Independent(t, seed) => {
+                Ok(independent::truth_path_stats(t, conditions, shape.duration_s, 16, *seed)
+                    .into_iter()
+                    .map(|paths| paths.iter().map(|p| (p.peak_mean_m, p.peak_var_m2, p.phase_mean_deg)).collect())
+                    .collect())
+            }
+        }
+    }
+
+    /// The engine model without effects nearest the truth (an independent
+    /// truth's rig and eq. 7 law).
+    fn engine_baseline(&self) -> Model {
+        match self {
+            Truth::Engine(m) => Model { effects: Default::default(), ..m.clone() },
+            Truth::Independent(t, _) => {
+                let mut m = Model::default();
+                m.rig.mass_kg = t.rig.mass_kg;
+                m.rig.natural_frequency_hz = t.rig.natural_frequency_hz;
+                m.rig.damping_ratio = t.rig.damping_ratio;
+                m.excitation.amplitude_m = t.rig.excitation_amplitude_m;
+                m.friction.a = t.friction.a;
+                m.friction.b = t.friction.b;
+                m.friction.c = t.friction.c_s_per_m;
+                m.friction.d = t.friction.d_s2_per_m2;
+                m.friction.sigma = t.friction.sigma_mu;
+                m.normal_force.sigma = t.friction.sigma_n_n;
+                m
+            }
+        }
+    }
+}
+
 /// Writes, diagnoses and scores every set of the plan; `line` receives one
 /// line per set as it finishes. Returns the rows and the summary text
 /// (also written to `OUT/summary.txt`).
@@ -219,17 +340,31 @@ pub fn run_benchmark(
     let started = Instant::now();
     for &(i, ref planned) in &plan {
         let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-        let (truth, conditions) =
-            random_truth(seed, &planned.hidden, &settings.frequency_ratios, &settings.load_shares)?;
         let dir = settings.out.join(format!("set-{i:03}"));
         // The truth beside (not inside) the data, for whoever checks a verdict.
         create_dir(&dir)?;
-        write_atomically(&dir.join("truth-model.toml"), |w| w.write_all(truth.to_toml_string().as_bytes()))?;
-        let set = if planned.phase_only {
-            phase_only_set(&truth, &conditions, shape, seed, engine)?
-        } else {
-            write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
-            read_measurement_set(&dir.join("data"))?
+        let (truth, conditions, set) = match &settings.generator {
+            Generator::Engine => {
+                let (truth, conditions) =
+                    random_truth(seed, &planned.hidden, &settings.frequency_ratios, &settings.load_shares)?;
+                write_atomically(&dir.join("truth-model.toml"), |w| w.write_all(truth.to_toml_string().as_bytes()))?;
+                let set = if planned.phase_only {
+                    phase_only_set(&truth, &conditions, shape, seed, engine)?
+                } else {
+                    write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
+                    read_measurement_set(&dir.join("data"))?
+                };
+                (Truth::Engine(truth), conditions, set)
+            }
+            Generator::Independent { loads_n, origins } => {
+                let hidden: Vec<independent::HiddenForm> =
+                    planned.hidden.iter().map(|h| (h.effect, h.form.saturating_sub(1), h.level == 1)).collect();
+                let (truth, conditions) =
+                    independent::random_truth(seed, &hidden, loads_n, &settings.frequency_ratios)?;
+                let record = origins.shape(i, shape.runs_per_condition, shape.duration_s);
+                independent::write_set(&dir.join("data"), &truth, &conditions, &record, seed)?;
+                (Truth::Independent(Box::new(truth), seed), conditions, read_measurement_set(&dir.join("data"))?)
+            }
         };
         let t0 = Instant::now();
         let d = diagnose_set(&set, &diagnose_settings, engine, &mut |_| {})?;
@@ -241,36 +376,50 @@ pub fn run_benchmark(
         let (truth_shrink, worst_fold, moves_statistics) = if d.folds.folds.is_empty() || planned.hidden.is_empty() {
             (None, None, false)
         } else {
-            let mut without = truth.clone();
-            without.effects = Default::default();
-            let moved = error_against_truth(&without, &truth, &conditions, shape, engine)?;
+            let all = truth.stats(&conditions, shape, engine)?;
+            let moved = error_against_stats(&truth.engine_baseline(), &all, &conditions, shape, engine)?;
+            let at = |fold: &crate::diagnose::data::Fold| -> Vec<Vec<TruthStat>> {
+                fold.conditions
+                    .iter()
+                    .map(|c| {
+                        let k = conditions.iter().position(|x| condition_key(*x) == condition_key(*c)).unwrap_or(0);
+                        all[k].clone()
+                    })
+                    .collect()
+            };
             let (mut base, mut fitted, mut worst) = (0.0, 0.0, f64::INFINITY);
             for (fold, (b, f)) in d.folds.folds.iter().zip(&d.fold_models) {
-                let eb = error_against_truth(b, &truth, &fold.conditions, shape, engine)?;
-                let ef = error_against_truth(f, &truth, &fold.conditions, shape, engine)?;
+                let stats = at(fold);
+                let eb = error_against_stats(b, &stats, &fold.conditions, shape, engine)?;
+                let ef = error_against_stats(f, &stats, &fold.conditions, shape, engine)?;
                 base += eb;
                 fitted += ef;
                 if eb > 0.0 {
                     worst = worst.min(1.0 - ef / eb);
                 }
             }
-            ((base > 0.0).then(|| 1.0 - fitted / base), worst.is_finite().then_some(worst), moved > 4.0)
+            // Engine truths: whether the effects move the statistics beyond
+            // their noise; an independent truth's presets are made to.
+            let moves = match &truth {
+                Truth::Engine(_) => moved > 4.0,
+                Truth::Independent(..) => true,
+            };
+            ((base > 0.0).then(|| 1.0 - fitted / base), worst.is_finite().then_some(worst), moves)
         };
         // How far the data move without each of two hidden effects: the
         // generator's "strong" and "moderate" are levels of different
         // effects, and the data may weigh the moderate one more.
-        let data_weights = if planned.hidden.len() >= 2 {
-            planned
+        let data_weights = match &truth {
+            Truth::Engine(truth) if planned.hidden.len() >= 2 => planned
                 .hidden
                 .iter()
                 .map(|h| {
                     let mut without = truth.clone();
                     without.effects.remove(h.effect);
-                    error_against_truth(&without, &truth, &conditions, shape, engine)
+                    error_against_truth(&without, truth, &conditions, shape, engine)
                 })
-                .collect::<Result<Vec<f64>>>()?
-        } else {
-            Vec::new()
+                .collect::<Result<Vec<f64>>>()?,
+            _ => Vec::new(),
         };
         let key0 = report.gap.heldout_baseline.unwrap_or(report.gap.baseline);
         let baseline_within_noise = key0 - NULL_HUBER <= report.gap.noise_threshold;
@@ -351,7 +500,7 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     let shape = settings.shape;
     let mut text = String::new();
     text.push_str(&format!(
-        "blind benchmark of the diagnosis: {} sets ({} single-effect, {} two-effect, {} phase-only, {} null), {} run(s) x {} s per condition, {} frequencies x loads at {:?} of the no-stop threshold, baselines from the whole eq. 7 family, effects in forms no candidate has; {}\n",
+        "blind benchmark of the diagnosis: {} sets ({} single-effect, {} two-effect, {} phase-only, {} null), {} run(s) x {} s per condition, {} frequencies x {}, baselines from the whole eq. 7 family, effects in forms no candidate has; {}\n",
         rows.len(),
         singles.len(),
         pairs.len(),
@@ -360,7 +509,12 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         shape.runs_per_condition,
         shape.duration_s,
         settings.frequency_ratios.len(),
-        settings.load_shares,
+        match &settings.generator {
+            Generator::Engine => format!("loads at {:?} of the no-stop threshold, stickslip's own generator", settings.load_shares),
+            Generator::Independent { loads_n, origins } => format!(
+                "loads {loads_n:?} N, the independent generator (its own integrator and literature forms), time origins {origins:?}"
+            ),
+        },
         engine.description()
     ));
     text.push_str("confusion matrix of the leading verdict (rows: leading hidden effect, columns: verdict)\n");

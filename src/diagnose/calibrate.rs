@@ -460,6 +460,20 @@ fn simulated_law(
     Ok(fitting_records(engine, model, data, settings)?.law)
 }
 
+/// `model` with its friction law moved one step of the indirect inference
+/// from its own replicate records of the view's fitting units (the records
+/// that score it: simulated once for both), or unchanged where the data have
+/// no force channels or the records give no law.
+pub(crate) fn law_step(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, engine: &Engine) -> Result<Model> {
+    let mut m = model.clone();
+    if let Some(measured) = data.measured_law
+        && let Some(simulated) = simulated_law(engine, model, data, settings)?
+    {
+        step_law(&mut m, &measured, &simulated);
+    }
+    Ok(m)
+}
+
 /// One step of the indirect inference, in curve space: the model's law
 /// μ(v) is moved at the measured slipping speeds' deciles by what the
 /// measured fit and the fit on its own simulated records differ by there,

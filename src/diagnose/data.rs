@@ -14,7 +14,6 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::simulate::{RecordCache, UnitGrids};
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
-use crate::engine::cpu::effects::drift_factor;
 use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
 
@@ -506,22 +505,13 @@ impl<'a> Data<'a> {
         let Some(&measured) = self.measured_normal_force_n.get(&condition_key(u.condition)) else { return u.condition };
         let start = f64::from(warmup_cycles) / u.condition.excitation_frequency_hz;
         let length = self.longest_record_s;
-        let factor = match &model.effects.normal_force_drift {
-            Some(d) => {
-                (0..64)
-                    .map(|i| {
-                        drift_factor(
-                            d.form,
-                            d.rate_per_s,
-                            d.curvature_per_s2,
-                            start + length * (f64::from(i) + 0.5) / 64.0,
-                        )
-                    })
-                    .sum::<f64>()
-                    / 64.0
-            }
-            None => 1.0,
-        };
+        // The engine scales N0 by the drift's nominal scale (where the model
+        // says over which window N0 is the mean force), then by the drift.
+        let factor = model
+            .effects
+            .normal_force_drift
+            .as_ref()
+            .map_or(1.0, |d| d.mean_factor(start, start + length) * d.nominal_scale());
         Condition { normal_force_n: measured / factor, ..u.condition }
     }
 }

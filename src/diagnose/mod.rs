@@ -398,10 +398,19 @@ pub fn diagnose_set(
                 .collect(),
         })
         .collect();
-    let (fitted, fitted_scores) = match selection.steps.last() {
+    let (mut fitted, fitted_scores) = match selection.steps.last() {
         Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),
     };
+    // A drift fitted to records whose nominal force is their measured mean
+    // means the same in the model file: the nominal force is the mean over
+    // the records' window (the replicates' warm-up at the data's mean
+    // frequency, then the records' length), and a sweep at it gives it.
+    if let Some(d) = fitted.effects.normal_force_drift.as_mut() {
+        let frequency = mean(&data.units.iter().map(|u| u.condition.excitation_frequency_hz).collect::<Vec<_>>());
+        let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
+        d.mean_over_s = Some([start, start + data.longest_record_s.max(1e-3)]);
+    }
     let fitted_folds = selection.fitted_folds();
     let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())
         .map(|k| {

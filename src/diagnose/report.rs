@@ -369,6 +369,12 @@ pub fn write_diagnosis_with(
         w.write_all(
             header(&format!("The baseline plus the verdict's effects ({})", diagnosis.verdict_names())).as_bytes(),
         )?;
+        if let Some([start, end]) = diagnosis.fitted.effects.normal_force_drift.as_ref().and_then(|d| d.mean_over_s) {
+            writeln!(
+                w,
+                "# normal_force_drift: a sweep's normal force is the drifting force's mean over {start:.3} s to {end:.3} s of each run\n# (normal_force_drift.mean_over_s), as the measured records' nominal force was their mean.\n"
+            )?;
+        }
         w.write_all(diagnosis.fitted.to_toml_string().as_bytes())
     })?;
     let files = chart::write_gap_chart(out, diagnosis)?;
@@ -383,9 +389,9 @@ pub fn write_diagnosis_with(
 pub fn parameter_meaning(name: &str) -> &'static str {
     match name {
         "scale" => "–, a factor on the harmonics' amplitudes (1 = as estimated from the data)",
-        "strength" => "–, the strength of the effect's shape (skew, tail weight or slope; 0 = off)",
+        "strength" => "–, the strength of the effect's shape (skew, tail weight, or the ageing law's B; 0 = off)",
         "load_exponent" => "–, how the strength grows with load: × (N0 / reference)^exponent",
-        "length_m" => "m, the slip distance over which friction builds up",
+        "length_m" => "m, the slip distance over which friction builds up or relaxes",
         "time_constant_s" => "s, the memory time of friction",
         "correlation_time_s" => "s, how long the friction noise stays correlated",
         "coloured_share" => "–, the share (0–1) of the noise variance that is correlated",
@@ -395,6 +401,11 @@ pub fn parameter_meaning(name: &str) -> &'static str {
         "strength_per_n" => "1/N, the change of the friction coefficient per newton of normal force",
         "exponent" => "–, the power of the load dependence",
         "rate_per_s" => "1/s, the relative change of the normal force per second",
+        "curvature_per_s2" => "1/s², the relative bend of the normal force's drift",
+        "adhesion_n" => "N, the adhesion force added to μN (F = μN + A)",
+        "bend" => "–, how the slope of friction against load bends (× (1 + bend (N0 − Nref)/Nref))",
+        "phase_shift_rad" => "rad, a common phase turn of the harmonics (records without an absolute phase)",
+        "slow_share" => "–, the share (0–1) of the noise variance in its slow part",
         _ => "",
     }
 }

@@ -173,6 +173,7 @@ pub fn random_truth(
                     form: if first { DriftForm::Saturating } else { DriftForm::Wander },
                     curvature_per_s2: 0.0,
                     rate_per_s: pick(0.006, 0.012),
+                    mean_over_s: None,
                 });
             }
         }

@@ -164,7 +164,8 @@ impl Oscillator {
             friction_c_s_per_m: model.friction.c,
             friction_d_s2_per_m2: model.friction.d,
             friction_sigma: model.friction.sigma,
-            normal_force_mean_n: condition.normal_force_n,
+            normal_force_mean_n: condition.normal_force_n
+                * model.effects.normal_force_drift.as_ref().map_or(1.0, |d| d.nominal_scale()),
             normal_force_sigma_n: model.normal_force.sigma,
             steps_per_period: Self::steps_resolving(model, condition)?,
             noise_interval_s: model.noise.interval_s,

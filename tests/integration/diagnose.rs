@@ -220,3 +220,44 @@ fn a_phase_only_null_calibrates_the_baseline_from_its_phases() {
     assert!((0.67..1.5).contains(&sigma_ratio), "sigma_mu off by {sigma_ratio}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A null set whose records started at arbitrary phases of the base
+/// without saying so (each run's clock shifted by a different amount):
+/// scored, the phase means would disagree with every model by tens of
+/// thousands of spreads and look like an effect. The diagnosis sets them
+/// aside, says so in the report, and names nothing.
+#[test]
+fn records_with_an_undeclared_free_time_origin_do_not_make_an_effect() {
+    use stickslip::diagnose::synthetic::{SetShape, random_truth, write_set};
+    use stickslip::diagnose::{DiagnoseSettings, diagnose_set, measure::read_measurement_set};
+    let dir = scratch("free-origin");
+    let set_dir = dir.join("set");
+    let (truth, conditions) = random_truth(4, &[], &[0.65, 0.8], &[0.4, 0.65, 0.9]).unwrap();
+    let shape = SetShape { runs_per_condition: 1, duration_s: 10.0, sample_rate_hz: 600.0 };
+    write_set(&set_dir, &truth, &conditions, shape, 4).unwrap();
+    // Every run's clock moved by a different share of its period.
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&set_dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .collect();
+    files.sort();
+    for (k, file) in files.iter().enumerate() {
+        let text = std::fs::read_to_string(file).unwrap();
+        let mut lines = text.lines();
+        let mut out = format!("{}\n", lines.next().unwrap());
+        for line in lines {
+            let (t, rest) = line.split_once(',').unwrap();
+            let t: f64 = t.parse().unwrap();
+            out += &format!("{},{rest}\n", t + 0.0137 * (k as f64 * 2.7).fract() * 7.0);
+        }
+        std::fs::write(file, out).unwrap();
+    }
+    let set = read_measurement_set(&set_dir).unwrap();
+    let engine = stickslip::engine::Engine::cpu("test");
+    let settings = DiagnoseSettings { replicates: 6, ..DiagnoseSettings::default() };
+    let d = diagnose_set(&set, &settings, &engine, &mut |_| {}).unwrap();
+    assert!(d.notes.iter().any(|n| n.contains("time origin looks free")), "{:?}", d.notes);
+    assert!(d.effects.is_empty(), "named {}", d.verdict_names());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -706,3 +706,30 @@ fn the_new_forms_parameters_are_refused_by_name() {
     model(&["load_dependent_friction.form=\"adhesion\"", "load_dependent_friction.strength=500"]);
     model(&["load_dependent_friction.form=\"adhesion\"", "load_dependent_friction.strength=-2.5"]);
 }
+
+/// A drift whose model file says over which window the nominal normal force
+/// is its mean: swept at 10 N, the force over that window averages 10 N
+/// (without it, 10 N is the force at the run's start and the mean drifts
+/// away with it).
+#[test]
+fn a_drift_with_a_mean_window_gives_its_nominal_force_there() {
+    let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 10.0 };
+    let with = |window: &str| {
+        let mut overrides =
+            vec!["normal_force.sigma=0.0", "normal_force_drift.form=\"linear\"", "normal_force_drift.rate_per_s=0.02"];
+        if !window.is_empty() {
+            overrides.push(window);
+        }
+        let overrides: Vec<String> = overrides.into_iter().map(String::from).collect();
+        Model::paper_rig(&overrides).unwrap()
+    };
+    // Seven warm-up periods at 7 Hz: the record spans 1 s to 21 s.
+    let mean_force = |model: &Model| {
+        let samples = common::record(model, condition, 3, 7, 20.0, 600.0);
+        samples.iter().map(|s| s.normal_force_n).sum::<f64>() / samples.len() as f64
+    };
+    let windowed = mean_force(&with("normal_force_drift.mean_over_s=[1.0, 21.0]"));
+    assert!((windowed / 10.0 - 1.0).abs() < 2e-3, "mean force {windowed} N over the window");
+    let unwindowed = mean_force(&with(""));
+    assert!((unwindowed / (10.0 * (1.0 + 0.02 * 11.0)) - 1.0).abs() < 2e-3, "{unwindowed} N");
+}

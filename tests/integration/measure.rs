@@ -433,3 +433,58 @@ fn phase_only_summary_rows() {
     );
     refused(&s.0, "s.csv", Some(2), &["`west` is not a number"]);
 }
+
+/// A run file with a `base_x` column: the base `U0 cos(2π 7 (t + offset))`
+/// recorded from a clock that started `offset` seconds into the base's
+/// cycle, and a response 30° behind it.
+fn run_csv_with_base(n: usize, offset_s: f64) -> String {
+    let mut text = String::from("t,x,base_x\n");
+    for i in 0..n {
+        let t = i as f64 / 600.0;
+        let theta = std::f64::consts::TAU * 7.0 * (t + offset_s);
+        text += &format!("{t},{},{}\n", 0.004 * (theta - 30f64.to_radians()).cos(), 0.0025 * theta.cos());
+    }
+    text
+}
+
+#[test]
+fn a_base_x_column_puts_the_record_in_the_model_frame() {
+    use stickslip::diagnose::features::run_features;
+    use stickslip::diagnose::measure::TimeOrigin;
+    let s = Scratch::new("base-x");
+    s.write("manifest.json", &manifest_with_run("7.0"));
+    s.write("run.csv", &run_csv_with_base(1200, 0.031));
+    let set = read_measurement_set(&s.0).unwrap();
+    let run = &set.runs[0];
+    let TimeOrigin::BaseChannel { shift_s, amplitude_m } = run.time_origin else { panic!("{:?}", run.time_origin) };
+    // The record's clock started 0.031 s into the base's cycle: its t is
+    // moved back by the rest of that cycle (mod one period), and the base's
+    // amplitude is read too.
+    let period = 1.0 / 7.0;
+    assert!(((shift_s + 0.031) / period - ((shift_s + 0.031) / period).round()).abs() < 1e-6, "{shift_s}");
+    assert!((amplitude_m - 0.0025).abs() < 1e-9, "{amplitude_m}");
+    // The response's phase lag is then read as the 30° it is.
+    let phase = run_features(run).peaks.unwrap().phase_mean_deg;
+    assert!((phase - 30.0).abs() < 0.5, "phase {phase}");
+}
+
+#[test]
+fn a_free_time_origin_is_declared_by_name_and_anything_else_refused() {
+    use stickslip::diagnose::features::run_features;
+    use stickslip::diagnose::measure::TimeOrigin;
+    let s = Scratch::new("free-origin");
+    let manifest = manifest_with_run("7.0").replacen("{ \"format\"", "{ \"time_origin\": \"free\", \"format\"", 1);
+    s.write("manifest.json", &manifest);
+    s.write("run.csv", &run_csv(1200));
+    let set = read_measurement_set(&s.0).unwrap();
+    assert_eq!(set.runs[0].time_origin, TimeOrigin::Free);
+    // No absolute phase is read from it; its spread still is.
+    let names: Vec<_> = run_features(&set.runs[0]).named_values().into_iter().map(|(o, _)| o.name()).collect();
+    assert!(!names.contains(&"phase_mean_deg") && names.contains(&"phase_var_deg2"), "{names:?}");
+    // Per run, too; a value that is not "free" is refused by key.
+    let per_run = manifest_with_run("7.0")
+        .replace("\"normal_force_n\": 16.0", "\"normal_force_n\": 16.0, \"time_origin\": \"model\"");
+    s.write("manifest.json", &per_run);
+    let e = read_measurement_set(&s.0).unwrap_err().to_string();
+    assert!(e.contains("runs[0].time_origin") && e.contains("free"), "{e}");
+}

@@ -389,8 +389,7 @@ mod tests {
         let current = at(&[8.0; 12]);
         let good = at(&[2.0; 12]);
         let weak = at(&[6.5; 12]);
-        let entrants =
-            [Entrant { losses: &weak, reference: &current }, Entrant { losses: &good, reference: &current }];
+        let entrants = [Entrant { losses: &weak, reference: &current }, Entrant { losses: &good, reference: &current }];
         let c = contest(&current, &entrants, &units, NULL, 1);
         assert_eq!(c.leader, Some(1));
         assert!(c.leads[1] > 0.99, "{c:?}");

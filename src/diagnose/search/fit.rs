@@ -3,7 +3,7 @@
 //! the parameters, and the polish of the best trial on every replicate.
 
 use crate::diagnose::DiagnoseSettings;
-use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
+use crate::diagnose::calibrate::{calibrate_and_score, converge_law, law_step};
 use crate::diagnose::candidates::{Param, Variant};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{Scope, Score, add_heldout, count_of, gap_noise, gap_of, score};
@@ -25,6 +25,10 @@ pub(crate) struct Trial {
     /// yardstick ([`crate::diagnose::search::cv::pair_losses`]), –: 1 is no
     /// change. A trial cannot lower it by widening its simulated spreads.
     pub(crate) objective: f64,
+    /// The model with its friction law moved one more step from this
+    /// trial's own records: where the next trials of a search start, so the
+    /// law follows the search without a simulation of its own per trial.
+    pub(crate) carry: Model,
 }
 
 /// Replicates per condition while a form's parameters are searched: half
@@ -49,13 +53,14 @@ pub(crate) fn tracing() -> bool {
     std::env::var_os("STICKSLIP_DEBUG").is_some()
 }
 
-/// Evaluates one set of parameter values on top of `base` (whose friction
-/// law is the starting point of `law_steps` steps of its recalibration) on
-/// the view `data`, its objective measured against `reference` (the scores
-/// of the model the effect is added to); `None` when they give no valid
-/// model, or a model the oscillator cannot run (friction turned negative,
-/// say): such a trial is passed over like an invalid one instead of ending
-/// the diagnosis.
+/// Evaluates one set of parameter values on top of `base` on the view
+/// `data`, its friction law first stepped `law_steps` times by the
+/// indirect inference (0: scored at `base`'s law, as a search's trials are,
+/// each starting from the [`Trial::carry`] of the point it moves from), its
+/// objective measured against `reference` (the scores of the model the
+/// effect is added to); `None` when the values give no valid model, or a
+/// model the oscillator cannot run (friction turned negative, say): such a
+/// trial is passed over like an invalid one instead of ending the diagnosis.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn evaluate(
     variant: &Variant,
@@ -72,26 +77,39 @@ pub(crate) fn evaluate(
     if trial.validate().is_err() {
         return Ok(None);
     }
-    let (model, scores, _) =
-        match calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps, Scope::Fitting) {
-            Err(Error::Diverged { point, message }) => {
-                if tracing() {
-                    eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
-                }
-                return Ok(None);
+    let outcome = if law_steps == 0 && data.measured_law.is_some() {
+        score(engine, &trial, data, settings, Scope::Fitting).map(|scores| (trial, scores))
+    } else {
+        calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps.max(1), Scope::Fitting)
+            .map(|(m, s, _)| (m, s))
+    };
+    let (model, scores) = match outcome {
+        Err(Error::Diverged { point, message }) => {
+            if tracing() {
+                eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
             }
-            other => other?,
-        };
+            return Ok(None);
+        }
+        other => other?,
+    };
+    let carry = law_step(&model, data, settings, engine)?;
     let gap_fit = gap_of(&scores, false);
     let objective = fitting_ratio(reference, &scores, data);
     if tracing() {
         let f = &model.friction;
         eprintln!(
-            "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {gap_fit:.2} ratio {objective:.4}",
-            variant.effect, variant.form, f.a, f.b, f.c, f.d, f.sigma
+            "{} [{}] {values:?}: a {:.4} b {:.4} c {:.2} d {:.4} sigma {:.4} gap {gap_fit:.2} ratio {objective:.4} | {}",
+            variant.effect,
+            variant.form,
+            f.a,
+            f.b,
+            f.c,
+            f.d,
+            f.sigma,
+            observable_changes(reference, &scores)
         );
     }
-    Ok(Some(Trial { values: values.to_vec(), model, scores, gap_fit, objective }))
+    Ok(Some(Trial { values: values.to_vec(), model, scores, gap_fit, objective, carry }))
 }
 
 /// The loss of `after` over the fitting units of the view `data` as a share
@@ -217,5 +235,33 @@ pub(crate) fn polish(
         }
         _ => (model, scores),
     };
-    Ok(Some(Trial { gap_fit: gap_of(&scores, false), objective: t.objective, values: t.values.clone(), model, scores }))
+    Ok(Some(Trial {
+        gap_fit: gap_of(&scores, false),
+        objective: t.objective,
+        values: t.values.clone(),
+        carry: model.clone(),
+        model,
+        scores,
+    }))
+}
+
+/// The observables whose mean loss changes most from `before` to `after`
+/// (each in `after`'s yardstick), for tracing.
+fn observable_changes(before: &[Score], after: &[Score]) -> String {
+    use std::collections::BTreeMap;
+    let key = |s: &Score| (s.unit, s.observable);
+    let scale: BTreeMap<_, f64> = after.iter().map(|s| (key(s), s.scale)).collect();
+    let mut by: BTreeMap<crate::diagnose::observable::Observable, (f64, f64, usize)> = BTreeMap::new();
+    let after_z: BTreeMap<_, f64> = after.iter().map(|s| (key(s), s.z)).collect();
+    for b in before {
+        let (Some(&r), Some(&za)) = (scale.get(&key(b)), after_z.get(&key(b))) else { continue };
+        let zb = if r > 0.0 && b.scale > 0.0 { b.z * b.scale / r.max(0.1 * b.scale) } else { b.z };
+        let e = by.entry(b.observable).or_insert((0.0, 0.0, 0));
+        e.0 += crate::diagnose::search::cv::loss(zb);
+        e.1 += crate::diagnose::search::cv::loss(za);
+        e.2 += 1;
+    }
+    let mut v: Vec<_> = by.into_iter().map(|(o, (b, a, n))| (o, b / n as f64, a / n as f64)).collect();
+    v.sort_by(|x, y| (y.2 - y.1).abs().total_cmp(&(x.2 - x.1).abs()));
+    v.iter().take(5).map(|(o, b, a)| format!("{o} {b:.2}->{a:.2}")).collect::<Vec<_>>().join(", ")
 }

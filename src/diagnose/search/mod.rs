@@ -209,7 +209,12 @@ pub(crate) fn select(
         }
         if idle.gap - null.mean <= idle.noise {
             if tracing() {
-                eprintln!("round {}: gap {:.2} within its noise {:.2} of the floor", rounds.len(), idle.gap, idle.noise);
+                eprintln!(
+                    "round {}: gap {:.2} within its noise {:.2} of the floor",
+                    rounds.len(),
+                    idle.gap,
+                    idle.noise
+                );
             }
             break;
         }
@@ -297,6 +302,9 @@ pub(crate) fn select(
     for (step, c) in steps.iter_mut().zip(&each) {
         step.confidence = *c;
     }
+    if count > 1 {
+        lead_by_response(&mut steps, data, &search, engine)?;
+    }
     if count > 0 {
         // The verdict's confidence is that of naming exactly these.
         steps[0].confidence = confidence;
@@ -312,6 +320,49 @@ pub(crate) fn select(
         none_confidence = confidence / m.sqrt();
     }
     Ok(Selection { steps, first_round, none_confidence, baseline_folds, noise, null })
+}
+
+/// Orders the named effects by how much the fitted model's response (the
+/// peak's and the phase's mean and variance, at every unit) needs each: the
+/// rise of the response observables' mean loss when that effect alone is
+/// taken out of the fitted model, in the fitted model's yardstick. The
+/// effect that shapes the frequency response most leads; the gap counts
+/// every observable, and an effect seen plainly in another channel (a
+/// normal-force harmonic in the normal force) can close the largest share
+/// of it while a friction memory beside it is what moves the peaks. A
+/// removal the model cannot run leaves that effect where it was.
+fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettings, engine: &Engine) -> Result<()> {
+    let Some(last) = steps.last() else { return Ok(()) };
+    let fitted = last.candidate.model.clone();
+    let fitted_scores = score(engine, &fitted, data, search, Scope::All)?;
+    let response =
+        |scores: &[Score]| -> Vec<Score> { scores.iter().filter(|s| s.observable.is_response()).cloned().collect() };
+    let kept = response(&fitted_scores);
+    let mut weights = Vec::new();
+    for step in steps.iter() {
+        let mut without = fitted.clone();
+        without.effects.remove(step.candidate.effect);
+        let weight = match score(engine, &without, data, search, Scope::All) {
+            Ok(scores) => {
+                let (with, wout) = pair_losses(&response(&scores), &kept, data);
+                let all = || with.keys().copied();
+                // Both in the fitted model's yardstick: `with` is the model
+                // without the effect, `wout` the fitted one.
+                mean_loss(&with, all()) - mean_loss(&wout, all())
+            }
+            Err(Error::Diverged { .. }) => f64::NEG_INFINITY,
+            Err(e) => return Err(e),
+        };
+        if tracing() {
+            eprintln!("response weight of {}: {weight:.3}", step.candidate.effect);
+        }
+        weights.push(weight);
+    }
+    let mut order: Vec<usize> = (0..steps.len()).collect();
+    order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]));
+    let reordered: Vec<Step> = order.iter().map(|&i| steps[i].clone()).collect();
+    steps.clone_from_slice(&reordered);
+    Ok(())
 }
 
 /// Prints a round's families, their picks and shares (`STICKSLIP_DEBUG`).
@@ -439,40 +490,103 @@ fn round(
         }
         progress(&format!("trying {effect} (a coarse fit of each of its {} forms)", forms.len()));
         let mut starts: Vec<Option<Trial>> = Vec::new();
+        let mut pool = Vec::new();
         for v in &forms {
-            starts.push(evaluate(v, &v.start(), &current.model, &current.scores, 1, slope, data, search, engine)?);
+            let coarse = coarse_fit(v, current, slope, data, search, engine)?;
+            pool.extend(coarse.iter().map(|t| Member::of(v.form, t, current, data)));
+            starts.push(coarse.into_iter().min_by(|a, b| a.objective.total_cmp(&b.objective)));
         }
         let objective = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
         let best = (0..forms.len()).min_by(|&a, &b| objective(a).total_cmp(&objective(b)));
         let Some((best, Some(trial))) = best.map(|i| (i, starts[i].clone())) else { continue };
-        let pool = forms
-            .iter()
-            .zip(&starts)
-            .filter_map(|(v, t)| t.as_ref().map(|t| Member::of(v.form, t, current, data)))
-            .collect();
         let (form, parameters) = (forms[best].form, forms[best].describe(&trial.values));
         families.push((Family { effect, best: trial, form, parameters, pool, refined: false }, starts));
     }
     families.sort_by(|a, b| a.0.best.objective.total_cmp(&b.0.best.objective));
-    for (family, starts) in families.iter_mut().take(REFINED_FAMILIES) {
-        // A family whose best coarse fit is no closer than the current
-        // model has nothing to refine from.
-        if family.best.objective >= 1.0 {
-            continue;
-        }
+    // The first round searches every form of the closest family and the
+    // best form of the next; a further round, where the question is only
+    // whether anything explains most of what is left, the best form of the
+    // closest.
+    let refined = if named.is_empty() { REFINED_FAMILIES } else { 1 };
+    for (rank, (family, starts)) in families.iter_mut().take(refined).enumerate() {
         progress(&format!("searching {} in full", family.effect));
-        refine(family, std::mem::take(starts), current, slope, &ctx, data, search, engine)?;
+        let mut starts = std::mem::take(starts);
+        if rank > 0 || !named.is_empty() {
+            // Only the form whose coarse fit came closest.
+            let best = (0..starts.len())
+                .min_by(|&a, &b| {
+                    let o = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
+                    o(a).total_cmp(&o(b))
+                })
+                .unwrap_or(0);
+            for (i, s) in starts.iter_mut().enumerate() {
+                if i != best {
+                    *s = None;
+                }
+            }
+            refine(family, starts, true, current, slope, &ctx, data, search, engine)?;
+        } else {
+            refine(family, starts, false, current, slope, &ctx, data, search, engine)?;
+        }
     }
     Ok(families.into_iter().map(|(f, _)| f).collect())
 }
 
+/// A form's coarse fit: its start (the parameters the data point to) at the
+/// current model's friction law and with the law stepped once with it (a
+/// law step reads the measured law against the simulated one as if the
+/// form were the data's, and a form of another shape can move the law the
+/// wrong way: both are tried), then from the better of the two its first
+/// parameter two steps either way (a start that overshoots or falls short
+/// by a factor of a few is not taken for the form's best). Every trial.
+fn coarse_fit(
+    v: &Variant,
+    current: &Fitted,
+    slope: f64,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Vec<Trial>> {
+    let start = v.start();
+    let mut out = Vec::new();
+    let mut best: Option<(Model, f64)> = None;
+    for steps in [0, 1] {
+        if steps == 0 && data.measured_law.is_none() {
+            continue;
+        }
+        if let Some(t) = evaluate(v, &start, &current.model, &current.scores, steps, slope, data, search, engine)? {
+            // The base the moves below start from: the unstepped law, or
+            // the stepped one carried on.
+            let base = if steps == 0 { current.model.clone() } else { t.carry.clone() };
+            if best.as_ref().is_none_or(|b| t.objective < b.1) {
+                best = Some((base, t.objective));
+            }
+            out.push(t);
+        }
+    }
+    let (Some((base, _)), Some(p)) = (best, v.params.first()) else { return Ok(out) };
+    for k in [-2.0, 2.0] {
+        let mut values = start.clone();
+        values[0] = p.moved(values[0], k);
+        if values[0] == start[0] {
+            continue;
+        }
+        if let Some(t) = evaluate(v, &values, &base, &current.scores, 0, slope, data, search, engine)? {
+            out.push(t);
+        }
+    }
+    Ok(out)
+}
+
 /// The full search of every form of a family from its coarse fit
-/// (`starts`, one trial per form in the order of its variants; a linear
-/// load dependence that fitted is then bent), every trial joining the pool.
+/// (`starts`, one trial per form in the order of its variants; with
+/// `given_only`, only the forms that have one; a linear load dependence
+/// that fitted is then bent), every trial joining the pool.
 #[allow(clippy::too_many_arguments)]
 fn refine(
     family: &mut Family,
     starts: Vec<Option<Trial>>,
+    given_only: bool,
     current: &Fitted,
     slope: f64,
     ctx: &Context<'_>,
@@ -481,11 +595,19 @@ fn refine(
     engine: &Engine,
 ) -> Result<()> {
     let forms = variants(family.effect, ctx);
+    let starts_len = starts.len();
     let mut queue: Vec<(Variant, Option<Trial>)> = forms.into_iter().zip(starts).collect();
     let mut i = 0;
     while i < queue.len() {
         let start = queue[i].1.take();
         let variant = &queue[i].0;
+        // Where only the given starts are searched, a form without one is
+        // passed over (its bent form, queued below, has none and is
+        // searched from its own start).
+        if given_only && start.is_none() && i < queue.len().min(starts_len) {
+            i += 1;
+            continue;
+        }
         let start = match start {
             Some(t) => t,
             None => match evaluate(
@@ -511,7 +633,7 @@ fn refine(
         let best = coordinate_search(
             &variant.params,
             start,
-            |b: &Trial, v: &[f64]| evaluate(variant, v, &b.model, &current.scores, 1, slope, data, search, engine),
+            |b: &Trial, v: &[f64]| evaluate(variant, v, &b.carry, &current.scores, 0, slope, data, search, engine),
             &mut record,
         )?;
         family.pool.extend(seen);
@@ -564,7 +686,7 @@ fn refit_folds(
             start = coordinate_search(
                 &variant.params,
                 start,
-                |b: &Trial, v: &[f64]| evaluate(&variant, v, &b.model, &base.scores, 1, slope, view, search, engine),
+                |b: &Trial, v: &[f64]| evaluate(&variant, v, &b.carry, &base.scores, 0, slope, view, search, engine),
                 &mut |_| {},
             )?;
         }

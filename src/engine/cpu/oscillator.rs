@@ -406,12 +406,22 @@ impl<'a> Path<'a> {
     /// (a, b and d at this point's load), –.
     #[inline(always)]
     fn steady_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+        self.mean_law(speed_m_per_s, v_m_per_s) + self.friction_noise
+    }
+
+    /// The steady law without its random part, `a + Δa + b S(c, s) + d v²`:
+    /// what a friction memory that relaxes (`lag`, `slip`) follows, the
+    /// random part added on top. The random part of friction comes from
+    /// asperity contacts faster than any memory of the contact's state (the
+    /// rate-and-state and bristle laws carry no noise): a memory that
+    /// filtered it would lower and colour the record's friction noise, –.
+    #[inline(always)]
+    fn mean_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
         let o = self.osc;
         self.law_a
             + o.effects.friction_offset
             + self.law_b * stribeck_factor(o.friction_c_s_per_m, speed_m_per_s)
             + self.law_d * v_m_per_s * v_m_per_s
-            + self.friction_noise
     }
 
     /// Friction coefficient while slipping with speed `speed` (m/s) at
@@ -426,7 +436,7 @@ impl<'a> Path<'a> {
         let e = &self.osc.effects;
         let slipped_m = (x_m - self.slip_start_x_m).abs();
         let mut mu = match self.memory_form {
-            Memory::Lag | Memory::Slip => memory,
+            Memory::Lag | Memory::Slip => memory + self.friction_noise,
             Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
             Memory::None => {
                 self.steady_law(speed_m_per_s, v_m_per_s)
@@ -494,7 +504,8 @@ impl<'a> Path<'a> {
         let e = &self.osc.effects;
         let released = e.stiction_form == StictionForm::Decaying
             || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
-        self.static_coefficient() - if released { self.stiction_excess } else { 0.0 }
+        // The memory holds the mean part: the noise is added on top.
+        self.static_coefficient() - if released { self.stiction_excess } else { 0.0 } - self.friction_noise
     }
 
     /// Breakaway force `μ_s N` (plus the adhesion force under load
@@ -513,9 +524,9 @@ impl<'a> Path<'a> {
     fn memory_rate(&self, speed_m_per_s: f64, v_m_per_s: f64, memory: f64) -> f64 {
         let e = &self.osc.effects;
         match self.memory_form {
-            Memory::Lag => (self.steady_law(speed_m_per_s, v_m_per_s) - memory) / e.hysteresis_lag_s,
+            Memory::Lag => (self.mean_law(speed_m_per_s, v_m_per_s) - memory) / e.hysteresis_lag_s,
             Memory::Slip => effects::slip_law_rate(
-                self.steady_law(speed_m_per_s, v_m_per_s),
+                self.mean_law(speed_m_per_s, v_m_per_s),
                 memory,
                 v_m_per_s.abs(),
                 e.hysteresis_length_m,

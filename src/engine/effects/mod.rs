@@ -309,6 +309,17 @@ impl Effects {
         if let Some(d) = &self.normal_force_drift {
             check("normal_force_drift.rate_per_s", d.rate_per_s, true, "must be finite")?;
             check("normal_force_drift.curvature_per_s2", d.curvature_per_s2, true, "must be finite")?;
+            if let Some([start, end]) = d.mean_over_s {
+                check("normal_force_drift.mean_over_s[0]", start, start >= 0.0, "must be >= 0 s")?;
+                check("normal_force_drift.mean_over_s[1]", end, end > start, "must be after the window's start, s")?;
+                let m = d.mean_factor(start, end);
+                check(
+                    "normal_force_drift.mean_over_s",
+                    m,
+                    m > 0.0,
+                    "the drift's mean over the window must be a positive share of N0",
+                )?;
+            }
         }
         Ok(())
     }

@@ -343,6 +343,41 @@ pub struct NormalForceDrift {
     /// others).
     #[serde(default)]
     pub curvature_per_s2: f64,
+    /// Where the nominal normal force is the drifting force's mean: a window
+    /// `[start, end]` of each run, s from its start (warm-up included). With
+    /// it, N0 is divided by the drift factor's mean over the window, so a
+    /// sweep at a nominal force gives that mean force there (a model fitted
+    /// to records whose nominal force is their measured mean means what the
+    /// records meant); without it, N0 is the force at the run's start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_over_s: Option<[f64; 2]>,
+}
+
+impl NormalForceDrift {
+    /// The drift factor's mean over `[start, end]` (s from the run's start),
+    /// by the midpoint rule on 64 intervals.
+    pub fn mean_factor(&self, start_s: f64, end_s: f64) -> f64 {
+        let n = 64;
+        (0..n)
+            .map(|i| {
+                let t = start_s + (end_s - start_s) * (f64::from(i) + 0.5) / f64::from(n);
+                crate::engine::cpu::effects::drift_factor(self.form, self.rate_per_s, self.curvature_per_s2, t)
+            })
+            .sum::<f64>()
+            / f64::from(n)
+    }
+
+    /// What N0 is multiplied by so that the nominal force is the mean over
+    /// [`NormalForceDrift::mean_over_s`] (1 without it).
+    pub fn nominal_scale(&self) -> f64 {
+        match self.mean_over_s {
+            Some([start, end]) => {
+                let m = self.mean_factor(start, end);
+                if m > 0.0 { 1.0 / m } else { 1.0 }
+            }
+            None => 1.0,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
