@@ -279,7 +279,7 @@ fn phase_only_set(
 /// A benchmark set's truth: an engine model, or an independent one (with
 /// the set's seed).
 enum Truth {
-    Engine(Model),
+    Engine(Box<Model>),
     Independent(Box<independent::IndependentTruth>, u64),
 }
 
@@ -302,7 +302,7 @@ impl Truth {
     /// truth's rig and eq. 7 law).
     fn engine_baseline(&self) -> Model {
         match self {
-            Truth::Engine(m) => Model { effects: Default::default(), ..m.clone() },
+            Truth::Engine(m) => Model { effects: Default::default(), ..(**m).clone() },
             Truth::Independent(t, _) => {
                 let mut m = Model::default();
                 m.rig.mass_kg = t.rig.mass_kg;
@@ -354,7 +354,7 @@ pub fn run_benchmark(
                     write_set(&dir.join("data"), &truth, &conditions, shape, seed)?;
                     read_measurement_set(&dir.join("data"))?
                 };
-                (Truth::Engine(truth), conditions, set)
+                (Truth::Engine(Box::new(truth)), conditions, set)
             }
             Generator::Independent { loads_n, origins } => {
                 let hidden: Vec<independent::HiddenForm> =

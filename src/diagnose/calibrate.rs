@@ -460,16 +460,40 @@ fn simulated_law(
     Ok(fitting_records(engine, model, data, settings)?.law)
 }
 
-/// `model` with its friction law moved one step of the indirect inference
-/// from its own replicate records of the view's fitting units (the records
-/// that score it: simulated once for both), or unchanged where the data have
-/// no force channels or the records give no law.
-pub(crate) fn law_step(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, engine: &Engine) -> Result<Model> {
+/// `model` with its friction law moved one step towards the data from what
+/// scoring it gave (`scores`, on the view's fitting units), without a
+/// simulation of its own: with force channels one step of the indirect
+/// inference from its replicate records (those that scored it); without
+/// them, a Newton step of the friction level `a` on `slope` (d level error /
+/// d a) from the mean level error of its scores; unchanged where neither
+/// applies.
+pub(crate) fn law_step(
+    model: &Model,
+    scores: &[Score],
+    slope: f64,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Model> {
     let mut m = model.clone();
-    if let Some(measured) = data.measured_law
-        && let Some(simulated) = simulated_law(engine, model, data, settings)?
-    {
-        step_law(&mut m, &measured, &simulated);
+    if let Some(measured) = data.measured_law {
+        if let Some(simulated) = simulated_law(engine, model, data, settings)? {
+            step_law(&mut m, &measured, &simulated);
+        }
+        return Ok(m);
+    }
+    let Some(targets) = ResponseTargets::of(data) else { return Ok(m) };
+    let errors: Vec<f64> = scores
+        .iter()
+        .filter(|s| !s.heldout && s.observable == targets.level && s.measured.is_finite())
+        .filter_map(|s| match targets.level {
+            Observable::PeakMeanM => (s.measured > 0.0).then(|| s.simulated / s.measured - 1.0),
+            _ => Some(wrap_angle((s.simulated - s.measured).to_radians())),
+        })
+        .collect();
+    if !errors.is_empty() && slope.is_finite() && slope != 0.0 {
+        let lowest = (-m.friction.b).max(0.0);
+        m.friction.a = (m.friction.a - mean(&errors) / slope).clamp(lowest, (m.friction.a + 0.5).min(5.0));
     }
     Ok(m)
 }

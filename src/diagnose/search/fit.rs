@@ -54,8 +54,9 @@ pub(crate) fn tracing() -> bool {
 }
 
 /// Evaluates one set of parameter values on top of `base` on the view
-/// `data`, its friction law first stepped `law_steps` times by the
-/// indirect inference (0: scored at `base`'s law, as a search's trials are,
+/// `data`, its friction law first calibrated with `law_steps` steps (the
+/// indirect inference, or the level's solve without force channels; 0:
+/// scored at `base`'s law, as a search's trials are,
 /// each starting from the [`Trial::carry`] of the point it moves from), its
 /// objective measured against `reference` (the scores of the model the
 /// effect is added to); `None` when the values give no valid model, or a
@@ -77,7 +78,7 @@ pub(crate) fn evaluate(
     if trial.validate().is_err() {
         return Ok(None);
     }
-    let outcome = if law_steps == 0 && data.measured_law.is_some() {
+    let outcome = if law_steps == 0 {
         score(engine, &trial, data, settings, Scope::Fitting).map(|scores| (trial, scores))
     } else {
         calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps.max(1), Scope::Fitting)
@@ -92,7 +93,7 @@ pub(crate) fn evaluate(
         }
         other => other?,
     };
-    let carry = law_step(&model, data, settings, engine)?;
+    let carry = law_step(&model, &scores, slope, data, settings, engine)?;
     let gap_fit = gap_of(&scores, false);
     let objective = fitting_ratio(reference, &scores, data);
     if tracing() {
