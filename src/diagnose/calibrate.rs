@@ -684,7 +684,9 @@ const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
 /// [`SLIP_SPEED_NOISE_SDS`] standard deviations of the velocity sensor's
 /// white noise `v_noise_m_per_s` (m/s; the data's estimate, which the
 /// simulated records carry too, so both sides pick alike), the friction
-/// opposes the motion and N > 0. Empty without force channels.
+/// opposes the motion and N is at least a tenth of its median
+/// ([`crate::diagnose::features::normal_force_floor`]). Empty without force
+/// channels.
 fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut speed, mut mu) = (Vec::new(), Vec::new());
     let (Some(v), Some(f), Some(n)) = (&run.v_m_per_s, &run.friction_force, &run.normal_force) else {
@@ -692,8 +694,9 @@ fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
     };
     let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
+    let floor = crate::diagnose::features::normal_force_floor(n);
     for i in 0..v.len().min(f.len()).min(n.len()) {
-        if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] > 0.0 {
+        if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] >= floor {
             speed.push(v[i].abs());
             mu.push(f[i].abs() / n[i]);
         }

@@ -12,6 +12,7 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::diagnose::Diagnosis;
+use crate::diagnose::observable::Observable;
 use crate::error::{Error, Result};
 use crate::figure::{FONT, colour, legend_box, plot_error, render};
 use crate::sweep::plot::{decade_tick, tick};
@@ -46,9 +47,13 @@ impl ScoreRow {
     }
 
     fn label(&self) -> String {
+        let observable: &str = match Observable::named(&self.observable) {
+            Some(o) => o.label(),
+            None => &self.observable,
+        };
         format!(
             "{} at {} Hz, {} N{}",
-            self.observable,
+            observable,
             tick((self.excitation_frequency_hz * 100.0).round() / 100.0),
             tick((self.normal_force_n * 100.0).round() / 100.0),
             if self.heldout { " (held out)" } else { "" }

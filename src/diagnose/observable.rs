@@ -39,6 +39,52 @@ pub enum Observable {
     StickFraction,
 }
 
+/// The unit an observable is measured in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// m (shown in mm).
+    Metre,
+    /// m² (shown in mm²).
+    SquareMetre,
+    /// Degrees.
+    Degree,
+    /// Degrees².
+    SquareDegree,
+    /// N.
+    Newton,
+    /// N².
+    SquareNewton,
+    /// N/s.
+    NewtonPerSecond,
+    /// 1/s.
+    PerSecond,
+    /// 1/s².
+    PerSecondSquared,
+    /// A count.
+    Count,
+    /// A dimensionless number.
+    Dimensionless,
+}
+
+impl Unit {
+    /// A value in this unit as a person reads it: lengths in mm, their
+    /// squares in mm², with the unit's symbol; `sig` formats the number.
+    pub fn show(self, v: f64, sig: impl Fn(f64) -> String) -> String {
+        match self {
+            Unit::Metre => format!("{} mm", sig(v * 1e3)),
+            Unit::SquareMetre => format!("{} mm²", sig(v * 1e6)),
+            Unit::Degree => format!("{}°", sig(v)),
+            Unit::SquareDegree => format!("{} deg²", sig(v)),
+            Unit::Newton => format!("{} N", sig(v)),
+            Unit::SquareNewton => format!("{} N²", sig(v)),
+            Unit::NewtonPerSecond => format!("{} N/s", sig(v)),
+            Unit::PerSecond => format!("{} 1/s", sig(v)),
+            Unit::PerSecondSquared => format!("{} 1/s²", sig(v)),
+            Unit::Count | Unit::Dimensionless => sig(v),
+        }
+    }
+}
+
 /// Which part of the motion an observable describes (for `locations`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MotionPhase {
@@ -154,6 +200,80 @@ impl Observable {
             Observable::FrictionStictionExcess => "friction_stiction_excess",
             Observable::StickFraction => "stick_fraction",
         }
+    }
+
+    /// Its unit.
+    pub fn unit(self) -> Unit {
+        use Observable as O;
+        match self {
+            O::PeakMeanM => Unit::Metre,
+            O::PeakVarM2 => Unit::SquareMetre,
+            O::PhaseMeanDeg => Unit::Degree,
+            O::PhaseVarDeg2 => Unit::SquareDegree,
+            O::NormalForceMeanN
+            | O::NormalForceHarmonic1N
+            | O::NormalForceHarmonic2N
+            | O::NormalForceHarmonic3N
+            | O::NormalForceHarmonic4N => Unit::Newton,
+            O::NormalForceVarN2 | O::NormalForceResidualVarN2 => Unit::SquareNewton,
+            O::NormalForceDriftNPerS => Unit::NewtonPerSecond,
+            O::NormalForceDriftPerS | O::PeakTrendPerS => Unit::PerSecond,
+            O::NormalForceCurvaturePerS2 => Unit::PerSecondSquared,
+            O::PeakCount | O::FrictionSlipSamples => Unit::Count,
+            O::PeakSkewness
+            | O::FrictionMuMean
+            | O::FrictionResidualStd
+            | O::FrictionResidualSkewness
+            | O::FrictionResidualTailWeight
+            | O::FrictionResidualAutocorrLag1
+            | O::FrictionResidualAutocorrLag10
+            | O::FrictionHysteresis
+            | O::FrictionBreakawayMean
+            | O::FrictionLowSpeedMuMean
+            | O::FrictionStictionExcess
+            | O::StickFraction => Unit::Dimensionless,
+        }
+    }
+
+    /// What it is, in words a reader of a report understands.
+    pub fn label(self) -> &'static str {
+        use Observable as O;
+        match self {
+            O::PeakCount => "number of peaks",
+            O::PeakMeanM => "mean peak amplitude",
+            O::PeakVarM2 => "variance of the peak amplitude",
+            O::PeakSkewness => "skewness of the peak amplitude",
+            O::PeakTrendPerS => "trend of the peaks over the record",
+            O::PhaseMeanDeg => "phase lag behind the base",
+            O::PhaseVarDeg2 => "variance of the phase lag",
+            O::NormalForceMeanN => "mean normal force",
+            O::NormalForceVarN2 => "variance of the normal force",
+            O::NormalForceHarmonic1N => "normal force at 1× the excitation",
+            O::NormalForceHarmonic2N => "normal force at 2× the excitation",
+            O::NormalForceHarmonic3N => "normal force at 3× the excitation",
+            O::NormalForceHarmonic4N => "normal force at 4× the excitation",
+            O::NormalForceResidualVarN2 => "normal force's random variance",
+            O::NormalForceDriftNPerS => "normal force's drift",
+            O::NormalForceDriftPerS => "normal force's relative drift",
+            O::NormalForceCurvaturePerS2 => "normal force's drift curvature",
+            O::FrictionSlipSamples => "slipping samples",
+            O::FrictionMuMean => "mean friction coefficient while slipping",
+            O::FrictionResidualStd => "spread of the friction coefficient's random part",
+            O::FrictionResidualSkewness => "skewness of the friction's random part",
+            O::FrictionResidualTailWeight => "tail weight of the friction's random part",
+            O::FrictionResidualAutocorrLag1 => "friction noise's correlation over one sample",
+            O::FrictionResidualAutocorrLag10 => "friction noise's correlation over ten samples",
+            O::FrictionHysteresis => "friction speeding up less slowing down",
+            O::FrictionBreakawayMean => "friction coefficient at breakaway",
+            O::FrictionLowSpeedMuMean => "friction coefficient at low sliding speed",
+            O::FrictionStictionExcess => "breakaway above low-speed friction",
+            O::StickFraction => "share of time stuck",
+        }
+    }
+
+    /// The observable whose [`Observable::name`] is `name`, if any.
+    pub fn named(name: &str) -> Option<Observable> {
+        Observable::ALL.into_iter().find(|o| o.name() == name)
     }
 
     /// The normal-force harmonic at `k`× the excitation frequency (`k` in 1..=4).

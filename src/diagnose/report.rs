@@ -428,28 +428,13 @@ fn sig(v: f64) -> String {
     if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
-/// A value of `observable` in a readable unit: lengths in mm, their squares
-/// in mm², angles in degrees, forces in N.
+/// A value of the observable named `observable` in a readable unit
+/// ([`crate::diagnose::observable::Unit::show`]); the bare number for a
+/// name that is no observable.
 pub fn readable(observable: &str, v: f64) -> String {
-    let ends = |suffix: &str| observable.ends_with(suffix);
-    if ends("_m2") {
-        format!("{} mm²", sig(v * 1e6))
-    } else if ends("_m") {
-        format!("{} mm", sig(v * 1e3))
-    } else if ends("_deg2") {
-        format!("{} deg²", sig(v))
-    } else if ends("_deg") {
-        format!("{}°", sig(v))
-    } else if ends("_n_per_s") {
-        format!("{} N/s", sig(v))
-    } else if ends("_n2") {
-        format!("{} N²", sig(v))
-    } else if ends("_n") {
-        format!("{} N", sig(v))
-    } else if ends("_per_s") {
-        format!("{} 1/s", sig(v))
-    } else {
-        sig(v)
+    match Observable::named(observable) {
+        Some(o) => o.unit().show(v, sig),
+        None => sig(v),
     }
 }
 
@@ -568,11 +553,12 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     for sc in departures.iter().take(30) {
         let name = sc.observable.name();
         s.push_str(&format!(
-            "<tr><td>{} Hz, {} N{}</td><td>{}</td><td>{:.1}</td><td style=\"text-align:left\">{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{} Hz, {} N{}</td><td title=\"{}\">{}</td><td>{:.1}</td><td style=\"text-align:left\">{}</td><td>{}</td><td>{}</td></tr>",
             sig(sc.excitation_frequency_hz),
             sig(sc.normal_force_n),
             if sc.heldout { " (held out)" } else { "" },
             escape(name),
+            escape(sc.observable.label()),
             sc.z.abs(),
             escape(sc.observable.phase().describe()),
             escape(&readable(name, sc.measured)),

@@ -24,7 +24,8 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
     if v_max <= 0.0 {
         return None;
     }
-    let usable = |i: usize| v[i].is_finite() && force[i].is_finite() && normal[i].is_finite() && normal[i] > 0.0;
+    let floor = super::normal_force_floor(normal);
+    let usable = |i: usize| v[i].is_finite() && force[i].is_finite() && normal[i].is_finite() && normal[i] >= floor;
     let slipping: Vec<bool> =
         (0..n).map(|i| usable(i) && v[i].abs() > SLIP_SPEED_FRACTION * v_max && force[i] * v[i] < 0.0).collect();
     let idx: Vec<usize> = (0..n).filter(|&i| slipping[i]).collect();

@@ -53,6 +53,24 @@ pub const HARMONIC_RATE_LIMIT: f64 = 0.45;
 pub const MIN_PAIRS: usize = 10;
 /// Fewest slipping samples behind the friction features.
 pub const MIN_SLIP_SAMPLES: usize = 20;
+/// A sample's friction coefficient |F|/N is read only where the normal
+/// force is at least this share of the record's median: where N nears zero
+/// (a load that follows a large motion, a contact that lifts), the force
+/// sensors' noise divided by it is not friction, and a few such samples
+/// would make the friction noise look hundreds of times larger than it is.
+pub const MIN_NORMAL_FORCE_SHARE: f64 = 0.1;
+
+/// The smallest normal force at which a record's |F|/N is read:
+/// [`MIN_NORMAL_FORCE_SHARE`] of its median (positive), N.
+pub fn normal_force_floor(normal_n: &[f64]) -> f64 {
+    let mut finite: Vec<f64> = normal_n.iter().copied().filter(|x| x.is_finite()).collect();
+    if finite.is_empty() {
+        return f64::INFINITY;
+    }
+    let mid = finite.len() / 2;
+    let median = *finite.select_nth_unstable_by(mid, f64::total_cmp).1;
+    (MIN_NORMAL_FORCE_SHARE * median).max(f64::MIN_POSITIVE)
+}
 
 /// All features of one record.
 #[derive(Clone, Debug, PartialEq)]

@@ -551,6 +551,9 @@ fn coarse_fit(
     let mut out = Vec::new();
     let mut best: Option<(Model, f64)> = None;
     for steps in [0, 1] {
+        if steps == 0 && data.measured_law.is_none() {
+            continue;
+        }
         if let Some(t) = evaluate(v, &start, &current.model, &current.scores, steps, slope, data, search, engine)? {
             // The base the moves below start from: the unstepped law, or
             // the stepped one carried on.
