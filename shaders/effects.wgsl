@@ -19,6 +19,12 @@ fn harmonic_term(amplitude_n: f32, phase_rad: f32, multiple: f32, theta: f32) ->
     return amplitude_n * harmonic_wave(cos(multiple * theta + phase_rad));
 }
 
+// The `position` form's part of the normal force, (αN0 + βN0 r) r, N, with
+// r = x/U0 at the interval's start.
+fn position_load(linear_n: f32, quadratic_n: f32, r: f32) -> f32 {
+    return (linear_n + quadratic_n * r) * r;
+}
+
 fn non_gaussian(s: f32, g: f32, g2: f32) -> f32 {
     if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_LOGNORMAL) {
         if (s == 0.0) {

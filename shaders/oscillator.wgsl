@@ -77,6 +77,24 @@ fn rotated(a: vec2<f32>, by: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(a.x * by.x - a.y * by.y, a.y * by.x + a.x * by.y);
 }
 
+// The normal force's harmonics (N) at the interval's start: Σ A_k w(cos(kθ + φ_k))
+// at θ = 2π interval_phase, or the `position` form's αN0 r + βN0 r² with
+// r = x_per_u0, the displacement over the base amplitude.
+fn harmonics_n(interval_phase: f32, x_per_u0: f32) -> f32 {
+    if (point.harmonic_amplitude_1_n == 0.0 && point.harmonic_amplitude_2_n == 0.0
+        && point.harmonic_amplitude_3_n == 0.0 && point.harmonic_amplitude_4_n == 0.0) {
+        return 0.0;
+    }
+    if (effects.harmonic_form == HARMONIC_FORM_POSITION) {
+        return position_load(point.harmonic_amplitude_1_n, point.harmonic_amplitude_2_n, x_per_u0);
+    }
+    let theta = TAU * interval_phase;
+    return harmonic_term(point.harmonic_amplitude_1_n, effects.harmonic_phase_1_rad, 1.0, theta)
+        + harmonic_term(point.harmonic_amplitude_2_n, effects.harmonic_phase_2_rad, 2.0, theta)
+        + harmonic_term(point.harmonic_amplitude_3_n, effects.harmonic_phase_3_rad, 3.0, theta)
+        + harmonic_term(point.harmonic_amplitude_4_n, effects.harmonic_phase_4_rad, 4.0, theta);
+}
+
 fn ar1(state: f32, rho: f32, innovation: f32) -> f32 {
     if (path.interval == 0u) {
         return innovation;
@@ -132,12 +150,8 @@ fn draw_noise() {
     path.friction_noise = params.friction_sigma * xi_mu;
     let t_s = f32(path.interval) * effects.noise_interval_s;
     let mean_n = point.normal_force_mean_n * drift_factor(t_s);
-    let theta = TAU * path.interval_phase;
-    let harmonics_n = harmonic_term(point.harmonic_amplitude_1_n, effects.harmonic_phase_1_rad, 1.0, theta)
-        + harmonic_term(point.harmonic_amplitude_2_n, effects.harmonic_phase_2_rad, 2.0, theta)
-        + harmonic_term(point.harmonic_amplitude_3_n, effects.harmonic_phase_3_rad, 3.0, theta)
-        + harmonic_term(point.harmonic_amplitude_4_n, effects.harmonic_phase_4_rad, 4.0, theta);
-    path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonics_n, 0.0);
+    let harmonic_part_n = harmonics_n(path.interval_phase, path.x_m / params.base_amplitude_m);
+    path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonic_part_n, 0.0);
     path.stiction_excess = effects.stiction_excess;
     if (effects.stiction_form == STICTION_FORM_NOISY && effects.stiction_excess != 0.0) {
         path.stiction_excess = effects.stiction_excess * max(1.0 + 0.5 * pair_b(main).y, 0.0);

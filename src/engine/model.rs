@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::effects::{Effect, Effects, LoadForm};
+use crate::engine::effects::{Effect, Effects, HarmonicForm, LoadForm};
 use crate::error::{Error, Result};
 
 /// The physically sensible ranges that every parameter and grid coordinate
@@ -432,6 +432,15 @@ impl Model {
                 bound(&format!("normal_force_harmonics.phases_rad[{k}]"), *p, 1e3, "rad")?;
             }
             bound("normal_force_harmonics.shape", h.shape, RATE_MAX, "")?;
+            let on = h.amplitudes_per_n0[0] != 0.0 || h.amplitudes_per_n0[1] != 0.0;
+            if h.form == HarmonicForm::Position && on && self.excitation.amplitude_m == 0.0 {
+                return Err(Error::InvalidParameter {
+                    key: "normal_force_harmonics.form".into(),
+                    value: "\"position\"".into(),
+                    message: "measures the displacement in units of excitation.amplitude_m, which must then be > 0 m"
+                        .into(),
+                });
+            }
         }
         if let Some(g) = &e.non_gaussian_friction {
             bound("non_gaussian_friction.strength", g.strength, RATE_MAX, "")?;

@@ -12,7 +12,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 37] = [
+const ZERO: [&[&str]; 38] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -23,6 +23,7 @@ const ZERO: [&[&str]; 37] = [
         "normal_force_harmonics.amplitudes_per_n0=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[1.0, 2.0, 0.0, 0.0]",
     ],
+    &["normal_force_harmonics.amplitudes_per_n0=[0.0, 0.0, 0.3, 0.3]", "normal_force_harmonics.form=\"position\""],
     &["non_gaussian_friction.strength=0.0"],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"tukey_h\""],
@@ -67,7 +68,7 @@ const ZERO: [&[&str]; 37] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 38] = [
+const ON: [&[&str]; 39] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -86,6 +87,7 @@ const ON: [&[&str]; 38] = [
         "normal_force_harmonics.amplitudes_per_n0=[0.02, 0.01, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[1.0, 2.0, 0.0, 0.0]",
     ],
+    &["normal_force_harmonics.amplitudes_per_n0=[0.05, -0.03, 0.0, 0.0]", "normal_force_harmonics.form=\"position\""],
     &["non_gaussian_friction.strength=0.8"],
     &["non_gaussian_friction.strength=0.7", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.2", "non_gaussian_friction.form=\"tukey_h\""],
@@ -192,6 +194,35 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
     s / n as f64
 }
 
+/// α and β of N = N0 (1 + α r + β r²), r = x/U0, by least squares on a
+/// record (Cramer's rule on the 3×3 normal equations).
+fn position_fit(r: &[Sample], u0: f64, n0: f64) -> (f64, f64) {
+    let mut a = [[0.0f64; 3]; 3];
+    let mut b = [0.0f64; 3];
+    for s in r {
+        let x = s.x_m / u0;
+        let row = [1.0, x, x * x];
+        for i in 0..3 {
+            b[i] += row[i] * s.normal_force_n;
+            for j in 0..3 {
+                a[i][j] += row[i] * row[j];
+            }
+        }
+    }
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let column = |k: usize| {
+        let mut m = a;
+        for i in 0..3 {
+            m[i][k] = b[i];
+        }
+        det(m) / det(a)
+    };
+    (column(1) / n0, column(2) / n0)
+}
+
 #[test]
 fn each_effect_does_what_it_says() {
     // Drift: the normal force's mean in the last fifth exceeds the first fifth's.
@@ -208,6 +239,19 @@ fn each_effect_does_what_it_says() {
     });
     let amplitude = 2.0 * (c * c + s * s).sqrt() / n.len() as f64;
     assert!((amplitude - 0.5).abs() < 0.02, "2x harmonic amplitude {amplitude}");
+    // Position: without noise, N is N0 (1 + α r + β r²) with r = x/U0 at
+    // the start of the noise interval; a least-squares fit of N on the
+    // recorded x and x² gives α and β back to the drift of x within one
+    // interval.
+    let m = model(&[
+        "normal_force_harmonics.amplitudes_per_n0=[0.05, -0.03, 0.0, 0.0]",
+        "normal_force_harmonics.form=\"position\"",
+        "normal_force.sigma=0",
+    ]);
+    let u0 = m.excitation.amplitude_m;
+    let n = record(&m, 10.0);
+    let (alpha, beta) = position_fit(&n, u0, COND.normal_force_n);
+    assert!((alpha - 0.05).abs() < 0.005 && (beta + 0.03).abs() < 0.005, "position: alpha {alpha}, beta {beta}");
     let run = |m: &Model| common::paths(common::cpu(), m, COND, InitialState::steady(m, COND), 3, 32, PLAN);
     let mean_peak = |m: &Model| mean(run(m).iter().flat_map(|p| p.peaks_m.clone()));
     let stick_time = |m: &Model| run(m).iter().map(|p| p.stick_time_s).sum::<f64>();

@@ -8,13 +8,22 @@ use crate::engine::effects::{
     DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, HarmonicForm, HysteresisForm, NonGaussianForm,
 };
 
-/// Harmonic waveform g(c) of a form, c = cos(kθ + φ).
+/// Harmonic waveform g(c) of a form, c = cos(kθ + φ). The `position` form
+/// has none (it follows x: [`position_load`]); it reads as `fourier`'s.
 pub fn harmonic_wave(form: HarmonicForm, c: f64, shape: f64, shape_mean: f64) -> f64 {
     match form {
         HarmonicForm::Bumps => c.max(0.0).powf(shape) - shape_mean,
         HarmonicForm::Square => (shape * c).tanh() / shape.tanh(),
-        HarmonicForm::Fourier => c,
+        HarmonicForm::Fourier | HarmonicForm::Position => c,
     }
+}
+
+/// The `position` form's part of the normal force, N: `(αN0 + βN0 r) r`
+/// with `linear_n` = αN0 (N per U0), `quadratic_n` = βN0 (N per U0²) and
+/// `r` = x/U0 (–), the displacement at the interval's start over the base
+/// amplitude.
+pub fn position_load(linear_n: f64, quadratic_n: f64, r: f64) -> f64 {
+    (linear_n + quadratic_n * r) * r
 }
 
 /// Standardised non-Gaussian transform of a standard normal `g`, with an

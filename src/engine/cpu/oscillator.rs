@@ -35,7 +35,7 @@
 
 use crate::engine::cpu::effects;
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HysteresisForm, STICTION_DECAY_M, StictionForm,
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
@@ -127,9 +127,14 @@ impl Trig {
 /// period, –): Σ A_k w(cos((k+1)θ + φ_k)), θ = 2π · `interval_phase`, each
 /// cosine by angle addition from one `sin_cos` of θ ((k+1)θ by repeated
 /// rotation, then φ_k's stored cos and sin) instead of a `cos` per harmonic.
-fn harmonics_n(e: &EffectParams, interval_phase: f64) -> f64 {
+/// The `position` form instead follows `x_per_u0`, the displacement at the
+/// interval's start over the base amplitude (–): αN0 r + βN0 r².
+fn harmonics_n(e: &EffectParams, interval_phase: f64, x_per_u0: f64) -> f64 {
     if e.harmonic_amplitudes_n.iter().all(|&a| a == 0.0) {
         return 0.0;
+    }
+    if e.harmonic_form == HarmonicForm::Position {
+        return effects::position_load(e.harmonic_amplitudes_n[0], e.harmonic_amplitudes_n[1], x_per_u0);
     }
     let base = Trig::at(std::f64::consts::TAU * interval_phase);
     let mut multiple = base;
@@ -349,7 +354,7 @@ impl<'a> Path<'a> {
         let t_s = self.interval as f64 * o.noise_interval_s;
         let mean_n = o.normal_force_mean_n
             * effects::drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
-        let harmonics_n = harmonics_n(e, self.interval_phase);
+        let harmonics_n = harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m);
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
             StictionForm::Noisy if e.stiction_excess != 0.0 => {
@@ -1162,9 +1167,31 @@ mod tests {
             let direct: f64 = (0..4)
                 .map(|k| e.harmonic_amplitudes_n[k] * ((k + 1) as f64 * theta + e.harmonic_phases_rad[k]).cos())
                 .sum();
-            assert!((harmonics_n(&e, phase) - direct).abs() < 1e-14, "phase {phase}");
+            assert!((harmonics_n(&e, phase, 0.37) - direct).abs() < 1e-14, "phase {phase}");
         }
-        assert_eq!(harmonics_n(&EffectParams::default(), 0.3), 0.0);
+        assert_eq!(harmonics_n(&EffectParams::default(), 0.3, 0.37), 0.0);
+    }
+
+    #[test]
+    fn the_position_form_follows_the_displacement_not_the_phase() {
+        let effects = crate::engine::effects::Effects {
+            normal_force_harmonics: Some(crate::engine::effects::NormalForceHarmonics {
+                form: HarmonicForm::Position,
+                amplitudes_n: [1.5, 0.0, 0.7, 0.3],
+                amplitudes_per_n0: [0.04, 0.02, 0.5, 0.5],
+                phases_rad: [0.4, -2.0, 3.1, -0.9],
+                shape: 2.0,
+            }),
+            ..Default::default()
+        };
+        let e = EffectParams::new(&effects, 20.0, 0.3, 1.0 / 600.0);
+        assert_eq!(e.harmonic_amplitudes_n, [0.04 * 20.0, 0.02 * 20.0, 0.0, 0.0]);
+        for r in [-3.0, -1.0, -0.25, 0.0, 0.5, 1.0, 2.7] {
+            let expected = 20.0 * (0.04 * r + 0.02 * r * r);
+            for phase in [0.0, 0.3, 0.77] {
+                assert!((harmonics_n(&e, phase, r) - expected).abs() < 1e-14, "r {r}, phase {phase}");
+            }
+        }
     }
 
     #[test]

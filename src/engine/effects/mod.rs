@@ -7,7 +7,11 @@
 //! the others exist so synthetic data can carry an effect whose shape no
 //! candidate matches exactly. Grounding in the literature:
 //! - harmonics of the normal force: the paper's Figure 4 (misalignment 1×,
-//!   uneven wear 2×, bumps higher);
+//!   uneven wear 2×, bumps higher); and a normal force that follows the
+//!   block's position, N0 (1 + α x/U0 + β (x/U0)²) (`position`: the load of
+//!   a leaf-spring or flexure stage changes with its deflection through the
+//!   springs' tilt and arc shortening, S. T. Smith, *Flexures*, 2000), held
+//!   over each noise interval at the interval's start like the rest;
 //! - non-Gaussian friction noise: the paper's Figure 6 (skew growing with load);
 //! - hysteresis: frictional memory (Hess & Soom 1990), Dahl's pre-sliding
 //!   build-up of friction over a characteristic displacement after reversal,

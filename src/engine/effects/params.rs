@@ -9,7 +9,9 @@ use super::{ColourForm, DriftForm, Effects, HarmonicForm, HysteresisForm, LoadFo
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EffectParams {
     pub harmonic_form: HarmonicForm,
-    /// Amplitudes at this point's N0 (load scaling applied), N.
+    /// Amplitudes at this point's N0 (load scaling applied), N; for the
+    /// `position` form α N0 and β N0 (N per U0 and per U0² of
+    /// displacement), the other two 0.
     pub harmonic_amplitudes_n: [f64; 4],
     /// rad
     pub harmonic_phases_rad: [f64; 4],
@@ -80,7 +82,10 @@ impl EffectParams {
         };
         if let Some(h) = &effects.normal_force_harmonics {
             p.harmonic_form = h.form;
-            p.harmonic_amplitudes_n = std::array::from_fn(|k| h.amplitudes_n[k] + h.amplitudes_per_n0[k] * n0);
+            p.harmonic_amplitudes_n = match h.form {
+                HarmonicForm::Position => [h.amplitudes_per_n0[0] * n0, h.amplitudes_per_n0[1] * n0, 0.0, 0.0],
+                _ => std::array::from_fn(|k| h.amplitudes_n[k] + h.amplitudes_per_n0[k] * n0),
+            };
             p.harmonic_phases_rad = h.phases_rad;
             p.harmonic_phase_cos_sin = h.phases_rad.map(|phase| {
                 let (sin, cos) = phase.sin_cos();

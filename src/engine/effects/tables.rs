@@ -5,22 +5,44 @@ use serde::{Deserialize, Serialize};
 
 use super::Form;
 
-/// Periodic parts of N(t) at 1×..4× the excitation frequency.
+/// Periodic parts of N(t) at 1×..4× the excitation frequency, or (form
+/// `position`) a normal force that follows the block's position.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NormalForceHarmonics {
     /// `fourier`: Σ A_k cos(kΩt + φ_k); `bumps`: Σ A_k (max(0, cos(kΩt + φ_k))^shape − its mean);
     /// `square`: Σ A_k tanh(shape·cos(kΩt + φ_k)) / tanh(shape).
+    ///
+    /// `position`: the normal force follows the block's displacement x
+    /// instead of the base's phase, N0 (α x/U0 + β (x/U0)²) added to the
+    /// mean, so N = N0 (1 + α x/U0 + β (x/U0)²) + σ_N ξ_N (clipped at 0 as
+    /// always): a leaf-spring or linkage geometry that tilts and shortens as
+    /// the block moves (the normal load of a parallel-spring flexure stage
+    /// changes with its deflection through the springs' tilt and arc
+    /// shortening, to first order in the deflection and to second: S. T.
+    /// Smith, *Flexures: Elements of Elastic Mechanisms*, 2000). α =
+    /// `amplitudes_per_n0[0]` (–, share of N0 per U0 of displacement) and
+    /// β = `amplitudes_per_n0[1]` (–, share of N0 per U0²), U0 =
+    /// `excitation.amplitude_m` (m; the form needs it > 0 where α or β is
+    /// not 0). x is the displacement at the start of each noise interval,
+    /// held over the interval like every time-varying part, so breakaway
+    /// stays closed-form. N0 is the point's nominal normal force, as in
+    /// the other forms' `amplitudes_per_n0` (a `normal_force_drift` moves
+    /// the mean, not this term). `amplitudes_n`, `amplitudes_per_n0[2..]`,
+    /// `phases_rad` and `shape` are unused by this form. At α = β = 0 it is
+    /// the baseline.
     #[serde(default)]
     pub form: HarmonicForm,
-    /// Amplitudes A_1..A_4, N.
+    /// Amplitudes A_1..A_4, N (unused by `position`).
     #[serde(default)]
     pub amplitudes_n: [f64; 4],
     /// Amplitudes that scale with the load, as shares of N0 (each harmonic's
-    /// amplitude is `amplitudes_n[k] + amplitudes_per_n0[k]·N0`), –.
+    /// amplitude is `amplitudes_n[k] + amplitudes_per_n0[k]·N0`), –; for
+    /// `position`, α (per U0) and β (per U0²) of the first two (the other
+    /// two unused).
     #[serde(default)]
     pub amplitudes_per_n0: [f64; 4],
-    /// Phases φ_1..φ_4, rad.
+    /// Phases φ_1..φ_4, rad (unused by `position`).
     #[serde(default)]
     pub phases_rad: [f64; 4],
     /// Shape of `bumps` (power) and `square` (sharpness), –.
@@ -35,10 +57,12 @@ pub enum HarmonicForm {
     Fourier = 0,
     Bumps = 1,
     Square = 2,
+    Position = 3,
 }
 
 impl Form for HarmonicForm {
-    const ALL: &'static [Self] = &[HarmonicForm::Fourier, HarmonicForm::Bumps, HarmonicForm::Square];
+    const ALL: &'static [Self] =
+        &[HarmonicForm::Fourier, HarmonicForm::Bumps, HarmonicForm::Square, HarmonicForm::Position];
 
     fn code(self) -> u32 {
         self as u32
