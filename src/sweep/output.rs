@@ -1,4 +1,4 @@
-//! A sweep's output set: `sweep.csv` (the columns of `interfaces.md`),
+//! A sweep's output set: `sweep.csv` (the columns of `docs/formats.md`),
 //! `histograms.csv`, `accumulators.json` (what `merge` combines), the
 //! figures and the `sweep.json` sidecar. The set is built in a temporary
 //! sibling directory and swapped in whole ([`OutputSet`]): the output
@@ -15,7 +15,7 @@ use crate::sweep::SweepResult;
 use crate::sweep::plot;
 use crate::sweep::shard::{AccumulatorFile, RunIdentity, Shard};
 
-/// The columns of `sweep.csv` (`interfaces.md`).
+/// The columns of `sweep.csv` (`docs/formats.md`).
 pub const SWEEP_COLUMNS: [&str; 12] = [
     "excitation_frequency_hz",
     "normal_force_n",

@@ -395,7 +395,7 @@ fn cli_completions_and_man_page() {
 fn plot_redraws_a_sweep_with_the_measured_overlay() {
     let dir = scratch("plot");
     let sweep = dir.join("sweep");
-    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/figure8");
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
     let (ok, _, err) = stickslip_out(&[
         "sweep",
         "--backend",
