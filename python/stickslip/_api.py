@@ -1,20 +1,5 @@
-"""stickslip from Python: ensembles of a stochastic stick-slip friction oscillator.
-
-The engine runs in-process (the Rust library through PyO3, no subprocess):
-
-- :func:`sweep` runs a frequency x normal-force grid and returns an
-  ``xarray.Dataset`` (a ``pandas.DataFrame`` when xarray is not installed),
-  every variable with its ``units`` attribute;
-- :func:`simulate` returns time-series records (t, x, v, N, F) as numpy arrays;
-- :func:`diagnose` diagnoses a measurement set and returns the report as
-  Python objects, with the baseline and fitted model files;
-- :func:`load` reads any output set stickslip wrote (a sweep, a diagnosis, a
-  simulated or measured set);
-- :func:`model` resolves a model (file, dict or the embedded paper rig, with
-  ``--set``-style overrides) into a dict.
-
-Everything is in SI units (m, s, N, Hz); phases are in degrees.
-"""
+"""The implementation of the ``stickslip`` package; import ``stickslip``, not
+this module (its names are re-exported there)."""
 
 from __future__ import annotations
 
@@ -36,20 +21,6 @@ import numpy as np
 import pandas as pd
 
 from . import _native
-
-__all__ = [
-    "Diagnosis",
-    "Records",
-    "backend",
-    "diagnose",
-    "load",
-    "model",
-    "model_toml",
-    "peak_density",
-    "simulate",
-    "sweep",
-    "__version__",
-]
 
 __version__: str = _native.version()
 
@@ -194,10 +165,14 @@ def model_toml(model: ModelSpec = None, overrides: Overrides = None) -> str:
     return _resolve(model, overrides)[0]
 
 
-def backend(backend: str = "auto") -> Tuple[str, str]:
+def backend(backend: str = "auto", *, allow_software_gpu: bool = False) -> Tuple[str, str]:
     """Opens a backend ("auto", "gpu" or "cpu") and returns ``(kind, description)``:
-    ``kind`` is ``"gpu"`` (the WGSL kernel, f32) or ``"cpu"`` (the f64 reference)."""
-    return _native.open_backend(backend)
+    ``kind`` is ``"gpu"`` (the WGSL kernel, f32) or ``"cpu"`` (the f64 reference).
+
+    The command line's policy: ``"gpu"`` refuses a software adapter (Mesa's
+    lavapipe) with a ``RuntimeError`` unless ``allow_software_gpu=True``
+    (``--allow-software-gpu``); ``"auto"`` takes a hardware GPU, else the CPU."""
+    return _native.open_backend(backend, allow_software_gpu=bool(allow_software_gpu))
 
 
 # ----------------------------------------------------------------------------
@@ -225,6 +200,9 @@ def _payload_to_object(payload: str, histograms: bytes, attrs: Dict[str, Any], a
     meta = json.loads(payload)
     rows = pd.DataFrame(meta.pop("rows"))
     bins = int(meta.pop("histogram_bins"))
+    refined = meta.pop("refined_frequencies_hz", None)
+    if refined is not None:
+        attrs = {**attrs, "refined_frequencies_hz": [float(f) for f in refined]}
     counts = np.frombuffer(histograms, dtype="<u8").reshape(len(rows), bins)
     attrs = {**{k: v for k, v in meta.items() if not isinstance(v, (list, dict))}, **attrs}
     if as_xarray is None:
@@ -313,6 +291,9 @@ def sweep(
     model: ModelSpec = None,
     overrides: Overrides = None,
     backend: str = "auto",
+    allow_software_gpu: bool = False,
+    refine: bool = True,
+    refine_max: int = 16,
     out: Optional[PathLike] = None,
     plots: bool = True,
     fig8_frequency: float = 7.0,
@@ -325,8 +306,13 @@ def sweep(
     numbers, or the command line's text (``"6,7,8"``, ``"5:15:41"``).
     ``cycles`` are the measured periods per realisation (one peak each),
     after ``warmup_cycles``. ``backend`` is ``"auto"`` (a hardware GPU, else
-    the f64 CPU reference), ``"gpu"`` (any wgpu adapter, lavapipe included)
-    or ``"cpu"``. With ``out``, the output set of the command line
+    the f64 CPU reference), ``"gpu"`` (a GPU; a software one such as lavapipe
+    only with ``allow_software_gpu=True``, as ``--allow-software-gpu``) or
+    ``"cpu"``. ``refine`` adds up to ``refine_max`` frequencies where the
+    response changes fast (resonance, stick onset), as ``stickslip sweep``
+    does unless ``--no-refine``; only increasing frequency lists of two or
+    more are refined, and ``ds.attrs["refined_frequencies_hz"]`` lists what
+    was added. With ``out``, the output set of the command line
     (``sweep.csv``, ``histograms.csv``, ``accumulators.json``, ``sweep.json``
     and, with ``plots``, the figures) is written there too.
 
@@ -346,6 +332,9 @@ def sweep(
         cycles=int(cycles),
         seed=int(seed),
         backend=backend,
+        allow_software_gpu=bool(allow_software_gpu),
+        refine=bool(refine),
+        refine_max=int(refine_max),
         out=None if out is None else os.fspath(out),
         fig8_frequency_hz=float(fig8_frequency) if plots else None,
         progress=progress,
@@ -548,20 +537,24 @@ def diagnose(
     *,
     out: Optional[PathLike] = None,
     backend: str = "auto",
+    allow_software_gpu: bool = False,
     seed: int = 20_251_122,
     replicates: int = 8,
     realisations: int = 64,
-    progress: bool = False,
+    progress: bool = True,
 ) -> Diagnosis:
     """Diagnoses the gap between a measurement set (a directory with
     ``manifest.json``) and the model, as ``stickslip diagnose`` does: where,
     which effect, how far the gap shrinks. With ``out``, ``report.json``,
     ``report.html``, the charts and the two model files are written there.
-    ``progress`` prints each step to stderr."""
+    A diagnosis takes from seconds to minutes: each step is printed to stderr
+    as it starts (``progress=False`` silences it). ``backend`` and
+    ``allow_software_gpu`` are those of :func:`sweep`."""
     report, baseline, fitted, description = _native.run_diagnose(
         os.fspath(path),
         out=None if out is None else os.fspath(out),
         backend=backend,
+        allow_software_gpu=bool(allow_software_gpu),
         seed=int(seed),
         replicates=int(replicates),
         realisations=int(realisations),
