@@ -360,10 +360,13 @@ impl Layout {
     /// Half the width of the frequency axis of a one-frequency grid, Hz.
     const HALF_SPAN: f64 = 0.5;
 
+    /// The centre and width of curve `curve`'s slot: the slots fill the axis
+    /// from 0.9 of its half-span left of the frequency to 0.6 right of it,
+    /// leaving room for the last slot's label.
     fn slot(&self, curve: usize) -> Option<(f64, f64)> {
         self.single.map(|f| {
-            let width = 2.0 * 0.8 * Self::HALF_SPAN / self.curves as f64;
-            (f - 0.8 * Self::HALF_SPAN + (curve as f64 + 0.5) * width, width)
+            let width = 1.5 * Self::HALF_SPAN / self.curves as f64;
+            (f - 0.9 * Self::HALF_SPAN + (curve as f64 + 0.5) * width, width)
         })
     }
 
@@ -452,19 +455,70 @@ where
         .label(legend.to_string())
         .legend(move |(x, y)| Circle::new((x + LEGEND_ICON / 2, y), r.min(8), BLACK.stroke_width(w)));
     let font = (FONT, look.px(12)).into_font();
-    // Labels alternate above and below their points, so close ones stay apart;
-    // right of a point in the panel's left half, left of it in the right half.
+    // Labels sit beside their points, right where they fit in the panel, else
+    // left, and are stacked so that close ones stay apart.
     let mut order: Vec<usize> = (0..points.len()).filter(|&i| !points[i].5.is_empty()).collect();
     order.sort_by(|&a, &b| points[a].1.total_cmp(&points[b].1));
-    let x_range = chart.x_range();
-    let middle = 0.5 * (x_range.start + x_range.end);
+    let (left, right) = {
+        let range = chart.plotting_area().get_pixel_range().0;
+        (range.start, range.end)
+    };
+    let gap = look.signed(10);
+    let line_height = look.signed(14);
+    let style = TextStyle::from(font.clone());
+    // Each label: its point, side, lines, and pixel position (x, y of the point).
+    let mut marks: Vec<(usize, i32, HPos, Vec<String>, i32)> = order
+        .iter()
+        .map(|&i| {
+            let (x, y, _, _, _, label) = &points[i];
+            // A long label breaks before its parenthesis: "7.519 N" over "(nearest ...)".
+            let lines: Vec<String> = match label.find(" (") {
+                Some(at) => vec![label[..at].to_string(), label[at + 1..].to_string()],
+                None => vec![label.clone()],
+            };
+            let (px, py) = chart.backend_coord(&(*x, *y));
+            let width = lines
+                .iter()
+                .map(|l| chart.plotting_area().estimate_text_size(l, &style).map_or(0, |(w, _)| w as i32))
+                .max()
+                .unwrap_or(0);
+            let (room_right, room_left) = (right - px - gap, px - gap - left);
+            // Right of the point where the label fits, else left where it fits there,
+            // else on the side with more room.
+            let (dx, h) =
+                if width <= room_right || room_right >= room_left { (gap, HPos::Left) } else { (-gap, HPos::Right) };
+            (i, dx, h, lines, py)
+        })
+        .collect();
+    // Labels centred on their points, pushed down where they would overlap the
+    // label above them on the same side.
+    marks.sort_by_key(|m| m.4);
+    let mut bottom: [Option<i32>; 2] = [None, None];
+    let tops: Vec<i32> = marks
+        .iter()
+        .map(|(_, _, h, lines, py)| {
+            let side = usize::from(matches!(h, HPos::Right));
+            let height = lines.len() as i32 * line_height;
+            let mut top = py - height / 2;
+            if let Some(b) = bottom[side] {
+                top = top.max(b + look.signed(2));
+            }
+            bottom[side] = Some(top + height);
+            top - py
+        })
+        .collect();
     chart
-        .draw_series(order.iter().enumerate().map(|(k, &i)| {
-            let (x, y, _, _, c, label) = &points[i];
-            let dy = if k % 2 == 0 { look.signed(-18) } else { look.signed(6) };
-            let (dx, h) = if *x >= middle { (look.signed(-10), HPos::Right) } else { (look.signed(10), HPos::Left) };
-            let style = font.clone().color(c).pos(Pos::new(h, VPos::Top));
-            EmptyElement::at((*x, *y)) + Text::new(label.clone(), (dx, dy), style)
+        .draw_series(marks.iter().zip(tops).flat_map(|((i, dx, h, lines, _), top)| {
+            let (x, y, _, _, c, _) = &points[*i];
+            let style = font.clone().color(c).pos(Pos::new(*h, VPos::Top));
+            lines
+                .iter()
+                .enumerate()
+                .map(move |(j, line)| {
+                    EmptyElement::at((*x, *y))
+                        + Text::new(line.clone(), (*dx, top + j as i32 * line_height), style.clone())
+                })
+                .collect::<Vec<_>>()
         }))
         .map_err(e)?;
     Ok(())
@@ -626,11 +680,15 @@ where
                     }))
                     .map_err(e)?;
             }
-            (Spread::Bars, _) => {
+            (Spread::Bars, single) => {
+                let (stroke, cap) = if single.is_some() { (look.px(2), look.px(10)) } else { (look.px(1), look.px(5)) };
                 chart
-                    .draw_series(s.points.iter().filter(inside).map(|p| {
-                        ErrorBar::new_vertical(p.x, p.lo, p.y, p.hi, c.mix(0.9).stroke_width(look.px(1)), look.px(6))
-                    }))
+                    .draw_series(
+                        s.points
+                            .iter()
+                            .filter(inside)
+                            .map(|p| ErrorBar::new_vertical(p.x, p.lo, p.y, p.hi, c.stroke_width(stroke), cap)),
+                    )
                     .map_err(e)?;
             }
         }
@@ -656,7 +714,14 @@ where
                 + PathElement::new(vec![(0, 0), (LEGEND_ICON, 0)], c.stroke_width(look.px(2)))
                 + Circle::new((LEGEND_ICON / 2, 0), look.px(3), c.filled())
         });
-        let r = if layout.single.is_some() { look.px(5) } else { look.px(3) };
+        // Error bars are the point's own uncertainty, often smaller than a dot: a
+        // smaller dot leaves their caps in view.
+        let r = match (spread, layout.single.is_some()) {
+            (Spread::Band, true) => look.px(5),
+            (Spread::Band, false) => look.px(3),
+            (Spread::Bars, true) => look.px(3),
+            (Spread::Bars, false) => look.px(2),
+        };
         chart.draw_series(s.points.iter().filter(inside).map(|p| Circle::new((p.x, p.y), r, c.filled()))).map_err(e)?;
     }
     Ok(())
@@ -1101,9 +1166,12 @@ where
     let axis = Axis::Log { lo: v_lo.log10().round(), hi: v_hi.log10().round(), powers: true };
     let Axis::Log { lo: y_lo, hi: y_hi, .. } = axis else { unreachable!() };
     let x = frequency_span(result, opts.measured);
+    let what = match layout.single {
+        Some(f) => format!("at {} Hz, one colour per normal force N0, the normal forces side by side", tick(f)),
+        None => "against excitation frequency, one colour per normal force N0".to_string(),
+    };
     let caption = format!(
-        "Figure 9(b). Variance of the peak amplitude against excitation frequency, one colour per normal force N0, \
-         on a logarithmic axis. Error bars on the simulated points: 95% chi-square intervals from the point's peaks, \
+        "Figure 9(b). Variance of the peak amplitude {what}, on a logarithmic axis. Error bars on the simulated points: 95% chi-square intervals from the point's peaks, \
          with degrees of freedom reduced for heavy tails (from the kurtosis of its histogram); they assume \
          independent peaks, and successive peaks of one realisation are correlated, most near resonance, so they \
          understate the uncertainty there.{}",
@@ -1206,9 +1274,14 @@ where
     let layout = Layout::new(result);
     let (f_lo, f_hi) = frequency_span(result, opts.measured);
     let caption = format!(
-        "Figure 9(c). Phase lag of the response's fundamental behind the base motion against excitation frequency, \
-         one colour per normal force N0 (circular mean over every measured period of every realisation); the band \
-         is ± one circular standard deviation of the per-period lag.{}",
+        "Figure 9(c). Phase lag of the response's fundamental behind the base motion {}, one colour per normal \
+         force N0 (circular mean over every measured period of every realisation); the {} is ± one circular \
+         standard deviation of the per-period lag.{}",
+        match layout.single {
+            Some(f) => format!("at {} Hz, the normal forces side by side", tick(f)),
+            None => "against excitation frequency".to_string(),
+        },
+        if layout.single.is_some() { "box" } else { "band" },
         pairing_note(result, opts.measured, &format!("{}: mean ± standard error", opts.measured_label))
     );
     let plot = caption_below(&root, &caption, look, "fig9c")?;
@@ -1591,6 +1664,42 @@ mod tests {
         let axis = Axis::Log { lo: -1.0, hi: 3.0, powers: false };
         assert_eq!((axis.label(-1.0), axis.label(2.0), axis.label(0.5)), ("0.1".into(), "100".into(), String::new()));
         assert_eq!(axis.map(0.0), -1.0);
+    }
+
+    #[test]
+    fn plot_variance_intervals_are_chi_square_and_widen_with_tails() {
+        // Normal values: n − 1 degrees of freedom; about ±3.5% at n = 6400.
+        let (lo, hi) = variance_interval(1.0, 6400, 0.0).unwrap();
+        assert!((0.96..0.97).contains(&lo) && (1.03..1.04).contains(&hi), "{lo} {hi}");
+        // n = 350 (the paper's records): about −14% / +16%.
+        let (lo, hi) = variance_interval(1.0, 350, 0.0).unwrap();
+        assert!((0.85..0.88).contains(&lo) && (1.15..1.18).contains(&hi), "{lo} {hi}");
+        // Heavy tails widen it; it never claims more than n − 1 degrees of freedom.
+        let (lo_t, hi_t) = variance_interval(1.0, 350, 3.0).unwrap();
+        assert!(lo_t < lo && hi_t > hi);
+        assert_eq!(variance_interval(1.0, 350, -1.9), variance_interval(1.0, 350, 0.0).map(|_| (lo, hi)));
+        assert!(variance_interval(1.0, 1, 0.0).is_none());
+    }
+
+    #[test]
+    fn plot_pairs_measured_loads_with_their_own_or_the_nearest_curve() {
+        let point = |n: f64| MeasuredPoint {
+            excitation_frequency_hz: 7.0,
+            normal_force_n: n,
+            peak_mean_m: 4e-3,
+            peak_var_m2: None,
+            n_peaks: None,
+            phase_deg: None,
+            peaks_m: Vec::new(),
+        };
+        let forces = [4.0, 8.0, 12.0, 16.39];
+        assert_eq!(pair(&forces, &point(16.39)), Some(Pairing { curve: 3, force_n: 16.39, same_load: true }));
+        assert_eq!(pair(&forces, &point(16.4)).map(|p| p.same_load), Some(true));
+        assert_eq!(pair(&forces, &point(7.519)), Some(Pairing { curve: 1, force_n: 8.0, same_load: false }));
+        assert_eq!(pair(&forces, &point(15.3)).map(|p| p.force_n), Some(16.39));
+        assert_eq!(pair(&[], &point(1.0)), None);
+        assert_eq!(percent(-2.94), "−2.9%");
+        assert_eq!(percent(0.044), "+0.04%");
     }
 
     #[test]

@@ -514,6 +514,49 @@ fn simulate_writes_exact_sample_times() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The paper's Figure 8 workflow: a one-frequency grid at the measured loads
+/// shows the simulated means beside the measured ones, with the miss in per
+/// cent; a grid at other loads sets each measured point against the nearest
+/// simulated load and says so; titles are captions.
+#[test]
+fn plot_sets_measured_points_against_their_loads() {
+    let dir = scratch("figure8-plot");
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
+    let sweep = |forces: &str, out: &Path| {
+        let (ok, _, err) = stickslip_out(&[
+            "sweep",
+            "--backend",
+            "cpu",
+            "--frequencies",
+            "7",
+            "--normal-forces",
+            forces,
+            "--realisations",
+            "4",
+            "--cycles",
+            "20",
+            "--warmup-cycles",
+            "20",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+        let (ok, _, err) = stickslip_out(&["plot", out.to_str().unwrap(), "--measured", figure8.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        (std::fs::read_to_string(out.join("fig9a.svg")).unwrap(), err)
+    };
+    let (same, _) = sweep("7.519,11.5,15.3,16.39", &dir.join("same"));
+    for load in ["7.519 N: simulated", "11.5 N: simulated", "15.3 N: simulated", "16.39 N: simulated"] {
+        assert!(same.contains(load), "fig9a lacks `{load}`");
+    }
+    assert!(same.contains("Figure 9(a) at one frequency") && !same.contains("nearest simulated load"));
+    let (nearest, err) = sweep("4,8,12,16.39", &dir.join("nearest"));
+    assert!(nearest.contains("nearest simulated load 8 N"), "7.519 N is not set against 8 N");
+    assert!(nearest.contains("nearest simulated load 16.39 N"), "15.3 N is not set against 16.39 N");
+    assert!(err.contains("against the nearest simulated load 8 N"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `plot` redraws a sweep without simulating, with the measured Figure 8
 /// statistics drawn over it, at a journal size; and a diagnosis's charts.
 #[test]
