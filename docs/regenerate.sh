@@ -41,6 +41,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 echo "regenerate: the README's commands ($mode), with $STICKSLIP" >&2
+cut -d' ' -f1 /proc/loadavg >"$work/load.txt" 2>/dev/null || echo 0 >"$work/load.txt"
 if [ "$mode" = check ]; then
     backend=(--backend cpu --no-plots)
 else
@@ -64,7 +65,6 @@ if [ "$mode" = write ]; then
     cp "$work/fig8/fig8.png" docs/fig8-measured.png
     cp "$work/fig8/fig9a.png" docs/fig9a-measured.png
     cp "$work/sweep/fig9a.png" docs/fig9a-main.png
-    cp "$work/sweep/fig9b.png" docs/fig9b-main.png
     "$STICKSLIP" -q diagnose data/figure8 --out "$work/figure8" >"$work/diagnose.txt"
     (
         started=$(date +%s.%N)
@@ -162,6 +162,10 @@ if mode == "write":
         timed["machine"] = f"a {cores}-core {model}" + (f" (CPU family {family.group(1).strip()})" if family else "")
     except Exception:
         timed["machine"] = f"a {os.cpu_count()}-core machine"
+    # A machine shared with other work makes every timing longer: say so.
+    load = float(open(os.path.join(work, "load.txt")).read().split()[0])
+    if load > 0.5 * (os.cpu_count() or 1):
+        timed["machine"] += f", shared with other work (load average {load:.1f} at the start)"
     builds = os.path.join(work, "builds.txt")
     if os.path.exists(builds):
         install, test_build, wheel = map(int, open(builds).read().split())
