@@ -277,13 +277,6 @@ fn run_sweep(
     let (grid, refinement) =
         py.detach(|| sweep::refined_grid(&model, grid, warmup_cycles, refine)).map_err(py_err)?;
     let conditions = grid.conditions();
-    if conditions.len() > Job::MAX_POINTS {
-        return Err(value_error(format!(
-            "invalid grid: {} points after refinement, over the limit of {} per run; lower refine_max",
-            conditions.len(),
-            Job::MAX_POINTS
-        )));
-    }
     let points = sweep::steady_points(&model, &conditions);
     sweep::sweep_job(&model, &points, &settings).validate().map_err(py_err)?;
     let prepared = match &out {

@@ -10,7 +10,9 @@ use super::emit;
 use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{ChartData, write_charts};
 use crate::engine::model::fmt_value;
-use crate::sweep::plot::{AmplitudeAxis, PlotOptions, SizePreset, measured_points, pair, write_sweep_plots_with};
+use crate::sweep::plot::{
+    AmplitudeAxis, PlotOptions, SizePreset, loads, measured_points, pair, write_sweep_plots_with,
+};
 use crate::sweep::read_accumulators;
 
 #[derive(Args, Debug)]
@@ -96,15 +98,9 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
                 if points.is_empty() {
                     anyhow::bail!("invalid --measured {}: the set has no peak statistics to draw", dir.display());
                 }
-                let mut forces: Vec<f64> = result.conditions.iter().map(|c| c.normal_force_n).collect();
-                forces.sort_by(f64::total_cmp);
-                forces.dedup();
+                let forces = loads(&result);
                 for p in &points {
-                    let on_grid = result.conditions.iter().any(|c| {
-                        (c.excitation_frequency_hz - p.excitation_frequency_hz).abs()
-                            <= 1e-6 * p.excitation_frequency_hz
-                            && (c.normal_force_n - p.normal_force_n).abs() <= 0.01 * p.normal_force_n.abs().max(1e-9)
-                    });
+                    let on_grid = result.conditions.iter().any(|c| p.matches(c));
                     if !on_grid {
                         let against = match pair(&forces, p) {
                             Some(q) if !q.same_load => {

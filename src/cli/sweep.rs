@@ -183,13 +183,6 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
         ));
     }
     let all_conditions = grid.conditions();
-    if all_conditions.len() > Job::MAX_POINTS {
-        anyhow::bail!(
-            "invalid grid: {} points after refinement, over the limit of {} per run; lower --refine-max or split the grid",
-            all_conditions.len(),
-            Job::MAX_POINTS
-        );
-    }
     let conditions = &all_conditions[shard.points(all_conditions.len())];
     if !conditions.is_empty() {
         let points = sweep::steady_points(&model, conditions);

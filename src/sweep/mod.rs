@@ -70,7 +70,8 @@ impl Grid {
 /// refined where the response changes fast ([`refine_frequencies`]). The
 /// refinement is returned when it was applied (`None` without `refine`, and
 /// for a grid it cannot refine: see [`not_refinable`]). Every condition of
-/// `grid` must already be valid for `model`.
+/// `grid` must already be valid for `model`; a refined grid of more than
+/// [`Job::MAX_POINTS`] points is refused.
 pub fn refined_grid(
     model: &Model,
     grid: Grid,
@@ -80,6 +81,16 @@ pub fn refined_grid(
     match refine {
         Some(settings) if not_refinable(&grid.frequencies_hz).is_none() => {
             let r = refine_frequencies(model, &grid.frequencies_hz, &grid.normal_forces_n, warmup_cycles, settings)?;
+            let points = r.frequencies_hz.len() * grid.normal_forces_n.len();
+            if points > Job::MAX_POINTS {
+                return Err(Error::setting(
+                    "--refine-max",
+                    format!(
+                        "the refined grid has {points} points, over the limit of {} per run; lower it or split the grid",
+                        Job::MAX_POINTS
+                    ),
+                ));
+            }
             Ok((Grid { frequencies_hz: r.frequencies_hz.clone(), normal_forces_n: grid.normal_forces_n }, Some(r)))
         }
         _ => Ok((grid, None)),

@@ -162,17 +162,11 @@ impl MeasuredPoint {
         }
     }
 
-    /// The standard error of the peak variance, m² (normal approximation; 0 when unknown).
-    pub fn var_standard_error_m2(&self) -> f64 {
-        match (self.peak_var_m2, self.n_peaks) {
-            (Some(v), Some(n)) if n > 1 => v.max(0.0) * (2.0 / (n - 1) as f64).sqrt(),
-            _ => 0.0,
-        }
-    }
-
-    fn matches(&self, c: &Condition) -> bool {
+    /// Whether this is the grid point `c`: its frequency (within 1e-6) and
+    /// its normal force (within 1%).
+    pub fn matches(&self, c: &Condition) -> bool {
         (self.excitation_frequency_hz - c.excitation_frequency_hz).abs() <= 1e-6 * c.excitation_frequency_hz.abs()
-            && (self.normal_force_n - c.normal_force_n).abs() <= 0.01 * c.normal_force_n.abs().max(1e-9)
+            && same_load(self.normal_force_n, c.normal_force_n)
     }
 }
 
@@ -291,6 +285,11 @@ fn curves(result: &SweepResult) -> Vec<(f64, Vec<(Condition, &PointAccumulator)>
             (n, pts)
         })
         .collect()
+}
+
+/// The normal forces of the grid, increasing: one curve each.
+pub fn loads(result: &SweepResult) -> Vec<f64> {
+    curves(result).iter().map(|(n, _)| *n).collect()
 }
 
 /// Whether two normal forces are the same load (within 1%).
@@ -782,7 +781,7 @@ fn pairing_note(result: &SweepResult, measured: &[MeasuredPoint], label: &str) -
     if measured.is_empty() {
         return String::new();
     }
-    let forces: Vec<f64> = curves(result).iter().map(|(n, _)| *n).collect();
+    let forces = loads(result);
     let mut nearest: Vec<String> = measured
         .iter()
         .filter_map(|m| pair(&forces, m).filter(|p| !p.same_load).map(|p| (m.normal_force_n, p.force_n)))
@@ -960,7 +959,7 @@ where
     mesh.draw().map_err(e)?;
     draw_minor(&mut chart, axis, x, look, "fig9a")?;
     let ymap = |v_m: f64| axis.map(v_m * 1e3);
-    let forces: Vec<f64> = curves(result).iter().map(|(n, _)| *n).collect();
+    let forces = loads(result);
     let paired: Vec<usize> = opts.measured.iter().filter_map(|m| pair(&forces, m)).map(|p| p.curve).collect();
     let keep = |i: usize| !zoom || paired.contains(&i);
     let series = figure9a_series(result, layout, &ymap, &keep);
@@ -1071,7 +1070,7 @@ where
 /// The amplitude range (mm) of a zoom over frequencies `x`: the measured
 /// points with their error bars and the curves they are set against.
 fn zoom_range(result: &SweepResult, opts: &PlotOptions, x: (f64, f64)) -> (f64, f64) {
-    let forces: Vec<f64> = curves(result).iter().map(|(n, _)| *n).collect();
+    let forces = loads(result);
     let paired: Vec<f64> = opts.measured.iter().filter_map(|m| pair(&forces, m)).map(|p| p.force_n).collect();
     let mut zy = (f64::INFINITY, f64::NEG_INFINITY);
     for (c, a) in result.conditions.iter().zip(&result.accumulators) {
@@ -1228,7 +1227,7 @@ where
         })
         .collect();
     draw_simulated(&mut chart, &series, Spread::Bars, layout, look, "fig9b")?;
-    let forces: Vec<f64> = curves(result).iter().map(|(n, _)| *n).collect();
+    let forces = loads(result);
     let labels = labels_fit(layout, opts.measured);
     let measured: Vec<MeasuredMark> = opts
         .measured
@@ -1327,7 +1326,7 @@ where
         })
         .collect();
     draw_simulated(&mut chart, &series, Spread::Band, layout, look, "fig9c")?;
-    let forces: Vec<f64> = curves(result).iter().map(|(n, _)| *n).collect();
+    let forces = loads(result);
     let labels = labels_fit(layout, opts.measured);
     let measured: Vec<MeasuredMark> = opts
         .measured
