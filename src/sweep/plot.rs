@@ -745,6 +745,38 @@ fn wrap<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, style: &T
     lines
 }
 
+/// A caption's font size, line height and margin, px on the screen layout.
+const CAPTION_FONT: u32 = 14;
+const CAPTION_LINE: u32 = 19;
+const CAPTION_PAD: u32 = 12;
+
+/// The look of a figure designed at `design` px on the screen with `caption`
+/// set below it: the canvas grows by the caption's height, so a long caption
+/// never squeezes the plot (a slide keeps its 16:9 and gives the plot less).
+/// The height is estimated generously (0.62 em a character); what the
+/// wrapped caption does not use goes to the plot.
+fn with_caption(size: SizePreset, design: (u32, u32), caption: &str) -> Look {
+    let look = size.look(design);
+    if size == SizePreset::Slide {
+        return look;
+    }
+    let width = f64::from(look.size.0.saturating_sub(2 * look.px(CAPTION_PAD)));
+    let per_line = (width / (0.62 * f64::from(look.px(CAPTION_FONT)))).floor().max(10.0) as usize;
+    let mut lines = 1;
+    let mut used = 0;
+    for word in caption.split_whitespace() {
+        let n = word.chars().count();
+        if used > 0 && used + 1 + n > per_line {
+            lines += 1;
+            used = n;
+        } else {
+            used += n + usize::from(used > 0);
+        }
+    }
+    let strip = 2 * look.px(CAPTION_PAD) + look.px(CAPTION_LINE) * lines;
+    Look { size: (look.size.0, look.size.1 + strip), scale: look.scale }
+}
+
 /// Writes `caption` below the figure, as a journal sets it, and returns the
 /// area above it for the plot: the figure's number in bold-face words, then
 /// what is drawn. The caption is outside every plot area.
@@ -760,11 +792,11 @@ where
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error(what, e);
     let (w, h) = root.dim_in_pixel();
     let ink = RGBColor(40, 40, 40);
-    let style = TextStyle::from((FONT, look.px(14)).into_font()).color(&ink);
-    let pad = look.px(12);
+    let style = TextStyle::from((FONT, look.px(CAPTION_FONT)).into_font()).color(&ink);
+    let pad = look.px(CAPTION_PAD);
     let lines = wrap(root, caption, &style, w.saturating_sub(2 * pad));
-    let line_h = look.px(19);
-    let strip = (2 * pad + line_h * lines.len() as u32).min(h / 3);
+    let line_h = look.px(CAPTION_LINE);
+    let strip = (2 * pad + line_h * lines.len() as u32).min(h / 2);
     let (plot, below) = root.split_vertically(h - strip);
     for (i, line) in lines.iter().enumerate() {
         below
@@ -978,15 +1010,11 @@ where
 /// a box on a one-frequency grid). With measured data over a grid of several
 /// frequencies, a second panel zooms on the measured conditions and the
 /// curves they are set against. The caption is set below the plot.
-fn figure9a<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    result: &SweepResult,
-    opts: &PlotOptions,
-    look: Look,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
+/// The amplitudes (mm) Figure 9(a)'s full panel spans: every simulated 5–95%
+/// range and mean, and the measured means with their error bars, down to a
+/// decade below the lowest mean (a block that sticks can have a 5% quantile
+/// far below it).
+fn figure9a_extent(result: &SweepResult, opts: &PlotOptions) -> (f64, f64) {
     let means: Vec<f64> =
         result.accumulators.iter().map(|a| a.moments().0 * 1e3).filter(|v| v.is_finite() && *v > 0.0).collect();
     let values: Vec<f64> = result
@@ -1002,15 +1030,19 @@ where
         .chain(means.iter().copied())
         .collect();
     let mean_lo = means.iter().copied().fold(f64::INFINITY, f64::min);
-    // The band may reach far below the lowest mean (a block that sticks);
-    // the axis stops a decade below it.
     let lo = values.iter().copied().fold(f64::INFINITY, f64::min).max(mean_lo / 10.0);
     let hi = values.iter().copied().fold(0.0, f64::max);
-    let x = frequency_span(result, opts.measured);
+    (lo, hi)
+}
+
+/// Figure 9(a)'s caption: what is drawn, on which axis, and how the measured
+/// points meet the curves.
+fn figure9a_caption(result: &SweepResult, opts: &PlotOptions) -> String {
+    let (lo, hi) = figure9a_extent(result, opts);
     let layout = Layout::new(result);
     let zoom = !opts.measured.is_empty() && layout.single.is_none();
     let single_zoomed = !opts.measured.is_empty() && layout.single.is_some();
-    // The caption names the axis: the panel's own rule, on the same range.
+    // The axis by the full panel's own rule, on the same range.
     let log = match opts.amplitude_axis {
         _ if single_zoomed => false,
         AmplitudeAxis::Auto => lo > 0.0 && hi / lo > 30.0,
@@ -1037,7 +1069,25 @@ where
     if zoom {
         caption.push_str(" Right: zoom on the measured conditions, with only the curves they are set against.");
     }
-    let plot = caption_below(&root, &caption, look, "fig9a")?;
+    caption
+}
+
+fn figure9a<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    result: &SweepResult,
+    opts: &PlotOptions,
+    look: Look,
+    caption: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (lo, hi) = figure9a_extent(result, opts);
+    let x = frequency_span(result, opts.measured);
+    let layout = Layout::new(result);
+    let zoom = !opts.measured.is_empty() && layout.single.is_none();
+    let single_zoomed = !opts.measured.is_empty() && layout.single.is_some();
+    let plot = caption_below(&root, caption, look, "fig9a")?;
     if single_zoomed {
         // Zoom on the values: the measured points and the boxes they meet.
         return figure9a_panel(
@@ -1127,6 +1177,27 @@ fn histogram_kurtosis(a: &PointAccumulator) -> f64 {
     if m2 > 0.0 { m4 / (m2 * m2) - 3.0 } else { 0.0 }
 }
 
+/// Figure 9(b)'s caption.
+fn figure9b_caption(result: &SweepResult, opts: &PlotOptions) -> String {
+    let layout = Layout::new(result);
+    let what = match layout.single {
+        Some(f) => format!("at {} Hz, one colour per normal force N0, the normal forces side by side", tick(f)),
+        None => "against excitation frequency, one colour per normal force N0".to_string(),
+    };
+    format!(
+        "Figure 9(b). Variance of the peak amplitude {what}, on a logarithmic axis. Error bars on the simulated \
+         points: 95% chi-square intervals from the point's peaks, with degrees of freedom reduced for heavy tails \
+         (from the kurtosis of its histogram); they assume \
+         independent peaks, and successive peaks of one realisation are correlated, most near resonance, so they \
+         understate the uncertainty there.{}",
+        pairing_note(
+            result,
+            opts.measured,
+            &format!("{}: variance with its 95% chi-square interval", opts.measured_label)
+        )
+    )
+}
+
 /// Figure 9(b): the peak variance on a log axis from decade to decade, each
 /// decade labelled 10ⁿ, with 95% intervals on the simulated and the measured
 /// variances. The caption is set below the plot.
@@ -1135,6 +1206,7 @@ fn figure9b<DB: DrawingBackend>(
     result: &SweepResult,
     opts: &PlotOptions,
     look: Look,
+    caption: &str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
@@ -1165,22 +1237,7 @@ where
     let axis = Axis::Log { lo: v_lo.log10().round(), hi: v_hi.log10().round(), powers: true };
     let Axis::Log { lo: y_lo, hi: y_hi, .. } = axis else { unreachable!() };
     let x = frequency_span(result, opts.measured);
-    let what = match layout.single {
-        Some(f) => format!("at {} Hz, one colour per normal force N0, the normal forces side by side", tick(f)),
-        None => "against excitation frequency, one colour per normal force N0".to_string(),
-    };
-    let caption = format!(
-        "Figure 9(b). Variance of the peak amplitude {what}, on a logarithmic axis. Error bars on the simulated points: 95% chi-square intervals from the point's peaks, \
-         with degrees of freedom reduced for heavy tails (from the kurtosis of its histogram); they assume \
-         independent peaks, and successive peaks of one realisation are correlated, most near resonance, so they \
-         understate the uncertainty there.{}",
-        pairing_note(
-            result,
-            opts.measured,
-            &format!("{}: variance with its 95% chi-square interval", opts.measured_label)
-        )
-    );
-    let plot = caption_below(&root, &caption, look, "fig9b")?;
+    let plot = caption_below(&root, caption, look, "fig9b")?;
     let mut chart = ChartBuilder::on(&plot)
         .margin(look.px(14))
         .x_label_area_size(look.px(52))
@@ -1257,22 +1314,10 @@ where
     legend_box(&mut chart, look.px(15), SeriesLabelPosition::UpperRight, "fig9b")
 }
 
-/// Figure 9's phase panel: the circular mean phase lag of the response's
-/// fundamental (degrees) against frequency, one curve per normal force, with
-/// a band of ± one circular standard deviation. The caption is set below.
-fn figure9c<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    result: &SweepResult,
-    opts: &PlotOptions,
-    look: Look,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9c", e);
+/// Figure 9(c)'s caption.
+fn figure9c_caption(result: &SweepResult, opts: &PlotOptions) -> String {
     let layout = Layout::new(result);
-    let (f_lo, f_hi) = frequency_span(result, opts.measured);
-    let caption = format!(
+    format!(
         "Figure 9(c). Phase lag of the response's fundamental behind the base motion {}, one colour per normal \
          force N0 (circular mean over every measured period of every realisation); the {} is ± one circular \
          standard deviation of the per-period lag.{}",
@@ -1282,8 +1327,26 @@ where
         },
         if layout.single.is_some() { "box" } else { "band" },
         pairing_note(result, opts.measured, &format!("{}: mean ± standard error", opts.measured_label))
-    );
-    let plot = caption_below(&root, &caption, look, "fig9c")?;
+    )
+}
+
+/// Figure 9's phase panel: the circular mean phase lag of the response's
+/// fundamental (degrees) against frequency, one curve per normal force, with
+/// a band of ± one circular standard deviation. The caption is set below.
+fn figure9c<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    result: &SweepResult,
+    opts: &PlotOptions,
+    look: Look,
+    caption: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9c", e);
+    let layout = Layout::new(result);
+    let (f_lo, f_hi) = frequency_span(result, opts.measured);
+    let plot = caption_below(&root, caption, look, "fig9c")?;
     let mut chart = ChartBuilder::on(&plot)
         .margin(look.px(14))
         .x_label_area_size(look.px(52))
@@ -1426,16 +1489,8 @@ fn measured_density(peaks_m: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64,
     outline
 }
 
-fn figure8<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    points: &[(Condition, &PointAccumulator)],
-    opts: &PlotOptions,
-    look: Look,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig8", e);
+/// Figure 8's caption.
+fn figure8_caption(points: &[(Condition, &PointAccumulator)], opts: &PlotOptions) -> String {
     let frequency =
         points.first().map_or(String::new(), |(c, _)| format!(" at {} Hz", tick(c.excitation_frequency_hz)));
     let with_measured = points.iter().any(|(c, _)| opts.measured.iter().any(|m| m.matches(c)));
@@ -1451,7 +1506,21 @@ where
             opts.measured_label
         ));
     }
-    let root = caption_below(&root, &caption, look, "fig8")?;
+    caption
+}
+
+fn figure8<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    points: &[(Condition, &PointAccumulator)],
+    opts: &PlotOptions,
+    look: Look,
+    caption: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig8", e);
+    let root = caption_below(&root, caption, look, "fig8")?;
     let cols = points.len().clamp(1, 2);
     let rows = points.len().div_ceil(cols).max(1);
     let panels = root.split_evenly((rows, cols));
@@ -1621,21 +1690,27 @@ pub fn write_sweep_plots(dir: &Path, result: &SweepResult, figure8_frequency_hz:
 /// says; returns the files.
 pub fn write_sweep_plots_with(dir: &Path, result: &SweepResult, opts: &PlotOptions) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    let look = opts.size.look((1000, 720));
-    files.extend(render(dir, "fig9a", look.size, &|r| figure9a(r, result, opts, look), &|r| {
-        figure9a(r, result, opts, look)
+    let caption = figure9a_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9a", look.size, &|r| figure9a(r, result, opts, look, &caption), &|r| {
+        figure9a(r, result, opts, look, &caption)
     })?);
-    files.extend(render(dir, "fig9b", look.size, &|r| figure9b(r, result, opts, look), &|r| {
-        figure9b(r, result, opts, look)
+    let caption = figure9b_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9b", look.size, &|r| figure9b(r, result, opts, look, &caption), &|r| {
+        figure9b(r, result, opts, look, &caption)
     })?);
-    files.extend(render(dir, "fig9c", look.size, &|r| figure9c(r, result, opts, look), &|r| {
-        figure9c(r, result, opts, look)
+    let caption = figure9c_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9c", look.size, &|r| figure9c(r, result, opts, look, &caption), &|r| {
+        figure9c(r, result, opts, look, &caption)
     })?);
     let pts = figure8_points(result, opts.fig8_frequency_hz);
     let rows = pts.len().div_ceil(2).max(1) as u32;
-    let look8 = opts.size.look((1100, 110 + 380 * rows));
-    files.extend(render(dir, "fig8", look8.size, &|r| figure8(r, &pts, opts, look8), &|r| {
-        figure8(r, &pts, opts, look8)
+    let caption = figure8_caption(&pts, opts);
+    let look8 = with_caption(opts.size, (1100, 30 + 380 * rows), &caption);
+    files.extend(render(dir, "fig8", look8.size, &|r| figure8(r, &pts, opts, look8, &caption), &|r| {
+        figure8(r, &pts, opts, look8, &caption)
     })?);
     Ok(files)
 }
