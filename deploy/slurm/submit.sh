@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Submits the shard array, then the merge with --dependency=afterok on it.
 #
-#   NSHARDS=8 OUTDIR=/shared/stickslip/run1 FREQUENCIES=5:15:41 deploy/slurm/submit.sh [SBATCH OPTIONS...]
+#   NSHARDS=8 OUTDIR=/scratch/stickslip/run1 FREQUENCIES=5:15:41 deploy/slurm/submit.sh [SBATCH OPTIONS...]
 #
 # The environment (sweep arguments, NSHARDS, OUTDIR, STICKSLIP; see the top of
 # sweep-array.sbatch) is exported to every task, so all shards get the same

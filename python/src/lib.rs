@@ -24,7 +24,7 @@ use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;
 use stickslip::engine::{BackendChoice, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
 use stickslip::io::{self, OutputSet, owned};
-use stickslip::sweep::{self, Grid, RunIdentity, Shard, SweepResult, SweepSettings, write_output_set};
+use stickslip::sweep::{self, Grid, RefineSettings, RunIdentity, Shard, SweepResult, SweepSettings, write_output_set};
 
 /// A library error as a Python exception: bad input (a model key, a setting,
 /// a measurement file) is a `ValueError`, a file system failure an
@@ -54,26 +54,31 @@ fn backend_choice(name: &str) -> PyResult<BackendChoice> {
     }
 }
 
-/// Opened engines by (backend, steps per dispatch).
-type Engines = Mutex<HashMap<(String, u64), Arc<Engine>>>;
+/// Opened engines by (backend, whether a software GPU is allowed, steps per dispatch).
+type Engines = Mutex<HashMap<(String, bool, u64), Arc<Engine>>>;
 
-/// Engines by (backend, steps per dispatch): opening a GPU adapter and
-/// compiling the kernels takes a while, so a notebook opens each once.
-fn engine(choice: &str, steps_per_dispatch: u64) -> PyResult<Arc<Engine>> {
+/// Engines by (backend, allow_software_gpu, steps per dispatch): opening a
+/// GPU adapter and compiling the kernels takes a while, so a notebook opens
+/// each once. The choice follows the command line's policy
+/// ([`stickslip::cli::open_backend`]): `gpu` refuses a software adapter
+/// (lavapipe) unless `allow_software_gpu`, as `--allow-software-gpu`.
+fn engine(choice: &str, allow_software_gpu: bool, steps_per_dispatch: u64) -> PyResult<Arc<Engine>> {
     static ENGINES: OnceLock<Engines> = OnceLock::new();
     let kind = backend_choice(choice)?;
     if steps_per_dispatch == 0 {
         return Err(value_error("invalid steps_per_dispatch: must be at least 1".into()));
     }
     let mut engines = ENGINES.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
-    let key = (choice.to_string(), steps_per_dispatch);
+    let key = (choice.to_string(), allow_software_gpu, steps_per_dispatch);
     if let Some(e) = engines.get(&key) {
         return Ok(e.clone());
     }
     let opened = if kind == BackendChoice::Cpu {
         Engine::cpu("chosen with backend=\"cpu\"")
     } else {
-        Engine::open(kind, GpuOptions { steps_per_dispatch }).map_err(py_err)?
+        let (engine, _) = stickslip::cli::open_backend(kind, allow_software_gpu, GpuOptions { steps_per_dispatch })
+            .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+        engine
     };
     let opened = Arc::new(opened);
     engines.insert(key, opened.clone());
@@ -137,10 +142,17 @@ fn model(
 
 /// Opens a backend and returns `(kind, description)` without running anything.
 #[pyfunction]
-#[pyo3(signature = (backend="auto", steps_per_dispatch=stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH))]
-fn open_backend(py: Python<'_>, backend: &str, steps_per_dispatch: u64) -> PyResult<(String, String)> {
+#[pyo3(signature = (
+    backend="auto", allow_software_gpu=false, steps_per_dispatch=stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH
+))]
+fn open_backend(
+    py: Python<'_>,
+    backend: &str,
+    allow_software_gpu: bool,
+    steps_per_dispatch: u64,
+) -> PyResult<(String, String)> {
     let backend = backend.to_string();
-    let e = py.detach(move || engine(&backend, steps_per_dispatch))?;
+    let e = py.detach(move || engine(&backend, allow_software_gpu, steps_per_dispatch))?;
     Ok((e.kind().name().to_string(), e.description().to_string()))
 }
 
@@ -216,7 +228,8 @@ fn grid_values(name: &str, values: &[f64], check: fn(f64) -> Option<String>) -> 
 #[pyfunction]
 #[pyo3(signature = (
     model_toml, frequencies_hz, normal_forces_n, realisations=64, warmup_cycles=100, cycles=100, seed=1,
-    backend="auto", steps_per_dispatch=stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH, out=None,
+    backend="auto", allow_software_gpu=false, refine=true, refine_max=RefineSettings::default().max_added,
+    steps_per_dispatch=stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH, out=None,
     fig8_frequency_hz=Some(7.0), progress=false
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -230,6 +243,9 @@ fn run_sweep(
     cycles: u32,
     seed: u64,
     backend: &str,
+    allow_software_gpu: bool,
+    refine: bool,
+    refine_max: usize,
     steps_per_dispatch: u64,
     out: Option<PathBuf>,
     fig8_frequency_hz: Option<f64>,
@@ -254,10 +270,13 @@ fn run_sweep(
     }
     let settings = SweepSettings { realisations, plan: RunPlan { warmup_cycles, measured_cycles: cycles }, seed };
     settings.validate().map_err(py_err)?;
-    let conditions = grid.conditions();
-    for c in &conditions {
+    for c in &grid.conditions() {
         Oscillator::new(&model, *c).map_err(py_err)?;
     }
+    let refine = refine.then_some(RefineSettings { max_added: refine_max, ..Default::default() });
+    let (grid, refinement) =
+        py.detach(|| sweep::refined_grid(&model, grid, warmup_cycles, refine)).map_err(py_err)?;
+    let conditions = grid.conditions();
     let points = sweep::steady_points(&model, &conditions);
     sweep::sweep_job(&model, &points, &settings).validate().map_err(py_err)?;
     let prepared = match &out {
@@ -265,8 +284,9 @@ fn run_sweep(
         None => None,
     };
     let backend = backend.to_string();
+    let added_hz = refinement.as_ref().map_or_else(Vec::new, |r| r.added_hz.clone());
     let (result, description, kind, run_s) = py.detach(move || -> PyResult<_> {
-        let engine = engine(&backend, steps_per_dispatch)?;
+        let engine = engine(&backend, allow_software_gpu, steps_per_dispatch)?;
         let started = Instant::now();
         let mut last_percent = u64::MAX;
         let result = sweep::run_sweep(&model, &conditions, &settings, &engine, &mut |done, total| {
@@ -300,6 +320,7 @@ fn run_sweep(
                 &result,
                 engine.description(),
                 timings,
+                refinement.as_ref(),
                 fig8_frequency_hz,
             )
             .map_err(py_err)?;
@@ -316,6 +337,7 @@ fn run_sweep(
             "seed": seed,
             "warmup_cycles": warmup_cycles,
             "measured_cycles": cycles,
+            "refined_frequencies_hz": added_hz,
             "stickslip_version": version(),
         }),
     )
@@ -406,7 +428,9 @@ fn run_simulate(
         // Records come from the f64 reference on every backend (the kernel
         // does not sample records), as in the command line.
         let engine = Engine::cpu("simulate runs on the reference");
-        let records = engine.records(&Job { record: Record::Sums, ..job }, interval_s, duration_s).map_err(py_err)?;
+        let mut records =
+            engine.records(&Job { record: Record::Sums, ..job }, interval_s, duration_s).map_err(py_err)?;
+        stickslip::cli::exact_sample_times(&mut records, sample_rate_hz);
         if let Some(set) = prepared {
             let mut runs = Vec::new();
             for (r, samples) in records.iter().enumerate() {
@@ -444,13 +468,16 @@ fn run_simulate(
 /// `(report_json, baseline_toml, fitted_toml, backend_description)`. With
 /// `out`, also writes the report, the model files and the charts there.
 #[pyfunction]
-#[pyo3(signature = (dir, out=None, backend="auto", seed=20_251_122, replicates=8, realisations=64, progress=false))]
+#[pyo3(signature = (
+    dir, out=None, backend="auto", allow_software_gpu=false, seed=20_251_122, replicates=8, realisations=64, progress=true
+))]
 #[allow(clippy::too_many_arguments)]
 fn run_diagnose(
     py: Python<'_>,
     dir: PathBuf,
     out: Option<PathBuf>,
     backend: &str,
+    allow_software_gpu: bool,
     seed: u64,
     replicates: u32,
     realisations: u32,
@@ -476,7 +503,7 @@ fn run_diagnose(
     };
     let backend = backend.to_string();
     py.detach(move || -> PyResult<_> {
-        let engine = engine(&backend, stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH)?;
+        let engine = engine(&backend, allow_software_gpu, stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH)?;
         if progress {
             eprintln!("stickslip diagnose: backend: {}", engine.description());
         }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{BackendArg, Progress, open_engine};
+use super::{BackendArg, Progress, emit, emit_bytes, open_engine};
 use crate::diagnose::benchmark::{BenchmarkSettings, Generator, Origins, run_benchmark as run_benchmark_sets};
 use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{RunInfo, write_diagnosis_with};
@@ -160,7 +160,7 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     let run = RunInfo { seed: Some(args.seed), backend: Some(engine.description().to_string()) };
     let report = write_diagnosis_with(out.dir(), &diagnosis, &args.dir, elapsed, &run)?;
     out.commit()?;
-    println!(
+    emit(&format!(
         "verdict: {} (confidence {:.2}){}; gap {:.3} -> {:.3} (shrink {:.2}, held-out shrink {}) in {elapsed:.0} s; wrote {}",
         report.verdict.effect,
         report.verdict.confidence,
@@ -181,7 +181,7 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
         report.gap.shrink,
         report.gap.heldout_shrink.map_or("n/a".to_string(), |h| format!("{h:.2}")),
         args.out.display()
-    );
+    ))?;
     Ok(())
 }
 
@@ -282,6 +282,5 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         progress.position(done, sets as u64);
     })?;
     progress.finish();
-    print!("{text}");
-    Ok(())
+    emit_bytes(text.as_bytes())
 }

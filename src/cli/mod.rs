@@ -18,6 +18,8 @@ mod plot;
 mod simulate;
 mod sweep;
 
+pub use simulate::exact_sample_times;
+
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -78,13 +80,11 @@ enum Command {
     /// or only a software one (unless --allow-software-gpu).
     CheckGpu,
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
-    #[command(hide = true)]
     Completions {
         /// The shell.
         shell: clap_complete::Shell,
     },
     /// Print the man page (roff) to stdout: `stickslip man > stickslip.1`.
-    #[command(hide = true)]
     Man,
 }
 
@@ -102,7 +102,7 @@ pub(crate) fn quiet() -> bool {
 /// An informational line on stderr (dropped under `--quiet`).
 pub(crate) fn info(line: &str) {
     if !quiet() {
-        eprintln!("{line}");
+        note(line);
     }
 }
 
@@ -170,18 +170,60 @@ pub fn main() -> ExitCode {
         Command::BenchmarkDiagnosis(args) => diagnose::run_benchmark(args),
         Command::CheckGpu => check_gpu(),
         Command::Completions { shell } => {
-            clap_complete::generate(shell, &mut Cli::command(), "stickslip", &mut std::io::stdout());
-            Ok(())
+            // Into a buffer first: clap_complete panics when its writer fails.
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "stickslip", &mut script);
+            emit_bytes(&script)
         }
         Command::Man => man_page(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of stdout went away (`stickslip man | head`): the
+        // result is written or was only for it; end quietly, as on success.
+        Err(e) if e.downcast_ref::<StdoutClosed>().is_some() => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", message(&e));
+            note(&format!("error: {}", message(&e)));
             ExitCode::FAILURE
         }
     }
+}
+
+/// stdout's reader went away (a broken pipe): not a failure of the command.
+#[derive(Debug)]
+pub(crate) struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("stdout was closed by its reader")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// Writes the command's result to stdout. Every result goes through here
+/// (never `println!`, which panics on a broken pipe): a closed pipe becomes
+/// [`StdoutClosed`], which `main` ends on quietly.
+pub(crate) fn emit_bytes(bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(bytes).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(StdoutClosed.into()),
+        Err(e) => Err(anyhow::Error::new(e).context("cannot write to stdout")),
+    }
+}
+
+/// One line of the command's result on stdout (see [`emit_bytes`]).
+pub(crate) fn emit(line: &str) -> Result<()> {
+    emit_bytes(format!("{line}\n").as_bytes())
+}
+
+/// A line on stderr, whatever became of it: a closed stderr loses the line
+/// and nothing else (`eprintln!` would panic).
+pub(crate) fn note(line: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
 }
 
 /// The man page: the top-level page with every visible subcommand's flags
@@ -212,8 +254,7 @@ fn man_page() -> Result<()> {
         out.extend_from_slice(text.as_bytes());
     }
     man.render_version_section(&mut out)?;
-    std::io::Write::write_all(&mut std::io::stdout(), &out)?;
-    Ok(())
+    emit_bytes(&out)
 }
 
 /// Whether a software adapter may run `--backend gpu`.
@@ -225,28 +266,35 @@ pub(crate) fn allow_software_gpu() -> bool {
 fn software_refusal(ctx: &GpuContext) -> anyhow::Error {
     anyhow::anyhow!(
         "--backend gpu: the only GPU adapter is the software {}, which runs the kernel on the CPU cores; \
-         pass --allow-software-gpu to use it anyway, or --backend cpu for the f64 reference (faster on the \
-         same cores); on a GPU node, the GPU's Vulkan driver (ICD) is missing",
+         pass --allow-software-gpu (allow_software_gpu=True in Python) to use it anyway, or --backend cpu for \
+         the f64 reference (faster on the same cores); on a GPU node, the GPU's Vulkan driver (ICD) is missing",
         ctx.describe()
     )
 }
 
-/// Opens the `--backend` choice and states it on stderr: the backend line and
-/// the adapter kind (hardware GPU, software GPU, or none). `--backend gpu`
-/// refuses a software adapter unless `--allow-software-gpu` is given.
-pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<Engine> {
-    let (engine, kind) = match backend {
-        BackendArg::Gpu => {
+/// Opens a backend under the command line's policy; the Python package calls
+/// it too, so both front ends take the same adapters. `Gpu` insists on a GPU
+/// and refuses a software adapter (lavapipe) unless `allow_software_gpu`;
+/// `Auto` takes a hardware GPU, else the f64 CPU reference; `Cpu` the
+/// reference. Returns the engine and its adapter kind in words (`hardware
+/// GPU`, `software GPU (allowed ...)`, `none (CPU reference)`).
+pub fn open_backend(
+    choice: BackendChoice,
+    allow_software_gpu: bool,
+    options: GpuOptions,
+) -> Result<(Engine, &'static str)> {
+    Ok(match choice {
+        BackendChoice::Gpu => {
             let ctx = GpuContext::new(true)?;
             let kind = match ctx.adapter_class() {
                 AdapterClass::Hardware => "hardware GPU",
-                AdapterClass::Software if allow_software_gpu() => "software GPU (allowed by --allow-software-gpu)",
+                AdapterClass::Software if allow_software_gpu => "software GPU (allowed by --allow-software-gpu)",
                 AdapterClass::Software => return Err(software_refusal(&ctx)),
             };
             (Engine::gpu(ctx, options), kind)
         }
         other => {
-            let engine = Engine::open(other.into(), options)?;
+            let engine = Engine::open(other, options)?;
             // Auto takes a GPU only when it is hardware (a software adapter
             // falls back to the CPU reference, and says so).
             let kind = match engine.kind() {
@@ -255,7 +303,13 @@ pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<En
             };
             (engine, kind)
         }
-    };
+    })
+}
+
+/// Opens the `--backend` choice ([`open_backend`]) and states it on stderr:
+/// the backend line and the adapter kind (hardware GPU, software GPU, or none).
+pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<Engine> {
+    let (engine, kind) = open_backend(backend.into(), allow_software_gpu(), options)?;
     info(&format!("backend: {}", engine.description()));
     info(&format!("adapter: {kind}"));
     Ok(engine)
@@ -264,11 +318,10 @@ pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<En
 fn check_gpu() -> Result<()> {
     let ctx = GpuContext::new(true)?;
     match ctx.adapter_class() {
-        AdapterClass::Hardware => println!("hardware GPU: {}", ctx.describe()),
-        AdapterClass::Software if allow_software_gpu() => println!("software GPU: {}", ctx.describe()),
-        AdapterClass::Software => return Err(software_refusal(&ctx)),
+        AdapterClass::Hardware => emit(&format!("hardware GPU: {}", ctx.describe())),
+        AdapterClass::Software if allow_software_gpu() => emit(&format!("software GPU: {}", ctx.describe())),
+        AdapterClass::Software => Err(software_refusal(&ctx)),
     }
-    Ok(())
 }
 
 /// An error and its causes on one line, each cause only when its text is
@@ -372,7 +425,7 @@ impl Progress {
                 while let Err(RecvTimeoutError::Timeout) = stopped.recv_timeout(Duration::from_millis(250)) {
                     let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
                     if s.last_print.elapsed() >= HEARTBEAT {
-                        eprintln!("{}", s.line(&what));
+                        note(&s.line(&what));
                         s.last_print = Instant::now();
                     }
                 }
@@ -401,7 +454,7 @@ impl Progress {
         if let Some(state) = &self.plain {
             let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
             s.step = step.to_string();
-            eprintln!("{}", s.line(&self.what));
+            note(&s.line(&self.what));
             s.last_print = Instant::now();
         }
     }
@@ -411,7 +464,7 @@ impl Progress {
         if let Some(bar) = &self.bar {
             bar.println(line);
         } else if self.plain.is_some() {
-            eprintln!("{line}");
+            note(line);
             if let Some(state) = &self.plain {
                 state.lock().unwrap_or_else(|e| e.into_inner()).last_print = Instant::now();
             }
@@ -427,7 +480,7 @@ impl Progress {
         if let Some(state) = &self.plain {
             let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
             s.step = "done".into();
-            eprintln!("{}", s.line(&self.what));
+            note(&s.line(&self.what));
         }
     }
 

@@ -6,9 +6,13 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
+use super::emit;
 use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{ChartData, write_charts};
-use crate::sweep::plot::{PlotOptions, SizePreset, measured_points, write_sweep_plots_with};
+use crate::engine::model::fmt_value;
+use crate::sweep::plot::{
+    AmplitudeAxis, PlotOptions, SizePreset, loads, measured_points, pair, write_sweep_plots_with,
+};
 use crate::sweep::read_accumulators;
 
 #[derive(Args, Debug)]
@@ -32,6 +36,30 @@ pub(crate) struct PlotArgs {
     /// Frequency (Hz) whose points Figure 8 shows (the nearest grid frequency).
     #[arg(long, default_value_t = 7.0, allow_negative_numbers = true)]
     pub(crate) fig8_frequency: f64,
+    /// Figure 9(a)'s amplitude axis: log when the values span more than 30×, else linear (auto); always log;
+    /// or linear from zero, the paper's view.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub(crate) amplitude_axis: AxisArg,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum AxisArg {
+    /// Log when the values span more than a factor of 30, else linear from zero.
+    Auto,
+    /// Logarithmic.
+    Log,
+    /// Linear from zero, as the paper draws Figure 9(a).
+    Linear,
+}
+
+impl From<AxisArg> for AmplitudeAxis {
+    fn from(a: AxisArg) -> Self {
+        match a {
+            AxisArg::Auto => AmplitudeAxis::Auto,
+            AxisArg::Log => AmplitudeAxis::Log,
+            AxisArg::Linear => AmplitudeAxis::Linear,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -70,16 +98,21 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
                 if points.is_empty() {
                     anyhow::bail!("invalid --measured {}: the set has no peak statistics to draw", dir.display());
                 }
+                let forces = loads(&result);
                 for p in &points {
-                    let on_grid = result.conditions.iter().any(|c| {
-                        (c.excitation_frequency_hz - p.excitation_frequency_hz).abs()
-                            <= 1e-6 * p.excitation_frequency_hz
-                            && (c.normal_force_n - p.normal_force_n).abs() <= 0.01 * p.normal_force_n.abs().max(1e-9)
-                    });
+                    let on_grid = result.conditions.iter().any(|c| p.matches(c));
                     if !on_grid {
+                        let against = match pair(&forces, p) {
+                            Some(q) if !q.same_load => {
+                                format!("against the nearest simulated load {} N", fmt_value(q.force_n))
+                            }
+                            _ => "against its load's curve".to_string(),
+                        };
                         super::info(&format!(
-                            "note: the measured condition {} Hz, {} N is not a grid point: drawn in Figure 9, not in Figure 8",
-                            p.excitation_frequency_hz, p.normal_force_n
+                            "note: the measured condition {} Hz, {} N is not a grid point: drawn in Figure 9 {against}, \
+                             not in Figure 8",
+                            fmt_value(p.excitation_frequency_hz),
+                            fmt_value(p.normal_force_n)
                         ));
                     }
                 }
@@ -93,6 +126,7 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
             size: args.size.into(),
             measured: &measured,
             measured_label: &args.measured_label,
+            amplitude_axis: args.amplitude_axis.into(),
         };
         write_sweep_plots_with(&out, &result, &opts)?
     } else if args.dir.join("report.json").is_file() {
@@ -110,6 +144,6 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
     };
     let names: Vec<String> =
         files.iter().filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned())).collect();
-    println!("wrote {} to {}", names.join(", "), out.display());
+    emit(&format!("wrote {} to {}", names.join(", "), out.display()))?;
     Ok(())
 }

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use super::ModelArgs;
+use super::{ModelArgs, emit};
 use crate::diagnose::measure::{MIN_PERIODS, RunEntry, write_manifest, write_run_file};
 use crate::engine::model::{fmt_bound, fmt_value, limits};
-use crate::engine::{Condition, Engine, Job, Oscillator, Point, Record, RunPlan};
+use crate::engine::{Condition, Engine, Job, Oscillator, Point, Record, RunPlan, Sample};
 use crate::io::{self, OutputSet, owned};
 
 #[derive(Args, Debug)]
@@ -125,7 +125,8 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     let engine = Engine::cpu("simulate runs on the reference");
     super::info(&format!("backend: {}", engine.description()));
     super::info("adapter: none (CPU reference)");
-    let records = engine.records(&Job { record: Record::Sums, ..job }, 1.0 / args.sample_rate, args.duration)?;
+    let mut records = engine.records(&Job { record: Record::Sums, ..job }, 1.0 / args.sample_rate, args.duration)?;
+    exact_sample_times(&mut records, args.sample_rate);
     let mut runs = Vec::new();
     for (r, samples) in records.iter().enumerate() {
         let file = format!("run-{:.3}hz-{:.3}n-r{r:03}.csv", args.frequency, args.normal_force);
@@ -143,6 +144,24 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     io::write_atomically(&out.dir().join("model.toml"), |w| w.write_all(model.to_toml_string().as_bytes()))?;
     out.commit()?;
     let samples_per_run = records.first().map_or(0, Vec::len);
-    println!("wrote {} run files of {samples_per_run} samples to {}", runs.len(), args.out.display());
+    emit(&format!("wrote {} run files of {samples_per_run} samples to {}", runs.len(), args.out.display()))?;
     Ok(())
+}
+
+/// Sets each record's sample times to `i / rate_hz`, the sampling grid the
+/// engine steps to, computed from the sample's index: the engine's times are
+/// differences of absolute times, which leave float noise in the last bits
+/// (`0.0016666666666669272` for the second sample at 600 Hz), and a run file
+/// writes the shortest decimal that reads back as the same `f64`
+/// (`0.0016666666666666668`). The first sample is at `t = 0`, a whole number of
+/// periods after the start, so `t` stays in the frame of the base motion
+/// `u = U0 cos(2π f t)`.
+pub fn exact_sample_times(records: &mut [Vec<Sample>], rate_hz: f64) {
+    for record in records {
+        for (i, s) in record.iter_mut().enumerate() {
+            let t = i as f64 / rate_hz;
+            debug_assert!((s.t_s - t).abs() <= 1e-9 * t.max(1.0), "sample {i} at {} s, not {t} s", s.t_s);
+            s.t_s = t;
+        }
+    }
 }

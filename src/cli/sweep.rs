@@ -6,11 +6,11 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 
-use super::{BackendArg, ModelArgs, Progress, info, open_engine};
+use super::{BackendArg, ModelArgs, Progress, emit, info, open_engine};
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
 use crate::engine::{GpuOptions, Job, Model, Oscillator, RunPlan};
 use crate::io::{OutputSet, excerpt, owned};
-use crate::sweep::{self, Grid, RunIdentity, Shard, SweepSettings, write_output_set};
+use crate::sweep::{self, Grid, RefineSettings, RunIdentity, Shard, SweepSettings, write_output_set};
 
 #[derive(Args, Debug)]
 pub(crate) struct SweepArgs {
@@ -52,6 +52,12 @@ pub(crate) struct SweepArgs {
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub(crate) no_plots: bool,
+    /// Keep the frequencies as given: add none where the response changes fast (resonance, stick onset).
+    #[arg(long)]
+    pub(crate) no_refine: bool,
+    /// Frequencies the refinement may add at most (never more than --frequencies has).
+    #[arg(long, default_value_t = RefineSettings::default().max_added, value_name = "N")]
+    pub(crate) refine_max: usize,
 }
 
 #[derive(Args, Debug)]
@@ -150,16 +156,38 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     if !args.fig8_frequency.is_finite() {
         anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
     }
-    let all_conditions = grid.conditions();
-    for c in &all_conditions {
+    for c in &grid.conditions() {
         Oscillator::new(&model, *c)?;
     }
+    let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
+    // The refined grid, the same in every shard (it depends on neither the
+    // seed nor the backend), before the shard takes its part.
+    let refine = (!args.no_refine).then_some(RefineSettings { max_added: args.refine_max, ..Default::default() });
+    if refine.is_some()
+        && args.refine_max > 0
+        && let Some(why) = sweep::not_refinable(&grid.frequencies_hz)
+        && grid.frequencies_hz.len() > 1
+    {
+        info(&format!("refine: the grid is kept as given ({why})"));
+    }
+    let started = Instant::now();
+    let (grid, refinement) = sweep::refined_grid(&model, grid, args.warmup_cycles, refine)?;
+    let refine_s = started.elapsed().as_secs_f64();
+    if let Some(r) = &refinement {
+        let added: Vec<String> = r.added_hz.iter().map(|f| fmt_value(*f)).collect();
+        info(&format!(
+            "refine: added {} frequencies where the response changes fast{}{} ({refine_s:.1} s; --no-refine keeps the grid as given)",
+            added.len(),
+            if added.is_empty() { "" } else { ": " },
+            added.join(", ")
+        ));
+    }
+    let all_conditions = grid.conditions();
     let conditions = &all_conditions[shard.points(all_conditions.len())];
     if !conditions.is_empty() {
         let points = sweep::steady_points(&model, conditions);
         sweep::sweep_job(&model, &points, &settings).validate()?;
     }
-    let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
     let engine = open_engine(args.backend, GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;
     let description = engine.description().to_string();
     if shard != Shard::WHOLE {
@@ -187,17 +215,22 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
         seed: settings.seed,
         backend: engine.kind(),
     };
-    let timings = serde_json::json!({ "run_s": run_s });
+    let timings = serde_json::json!({ "run_s": run_s, "refine_s": refine_s });
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
-    write_output_set(out.dir(), &model, &identity, shard, &result, &description, timings, plots)?;
+    write_output_set(out.dir(), &model, &identity, shard, &result, &description, timings, refinement.as_ref(), plots)?;
     out.commit()?;
-    println!(
-        "{} grid points × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
+    let added = refinement.as_ref().map_or(0, |r| r.added_hz.len());
+    emit(&format!(
+        "{} grid points ({} frequencies{}; {} normal forces{}) × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
         conditions.len(),
+        grid.frequencies_hz.len(),
+        if added > 0 { format!(", {added} added by refinement") } else { String::new() },
+        grid.normal_forces_n.len(),
+        if shard == Shard::WHOLE { String::new() } else { format!("; shard {}/{}", shard.index, shard.count) },
         settings.realisations,
         settings.plan.measured_cycles,
         args.out.join("sweep.csv").display()
-    );
+    ))?;
     Ok(())
 }
 
@@ -213,13 +246,13 @@ pub(crate) fn merge(args: MergeArgs) -> Result<()> {
     let description = format!("merged from {} shards", args.shards.len());
     let timings = serde_json::json!({ "merged_shards": args.shards.len() });
     let plots = Some(args.fig8_frequency);
-    write_output_set(out.dir(), &model, &identity, Shard::WHOLE, &result, &description, timings, plots)?;
+    write_output_set(out.dir(), &model, &identity, Shard::WHOLE, &result, &description, timings, None, plots)?;
     out.commit()?;
-    println!(
+    emit(&format!(
         "merged {} shards ({} grid points) into {}",
         args.shards.len(),
         result.conditions.len(),
         args.out.display()
-    );
+    ))?;
     Ok(())
 }

@@ -1,4 +1,4 @@
-//! The physical model (`shared/spec/model.md`): its parameters, the TOML model
+//! The physical model (`docs/model.md`): its parameters, the TOML model
 //! files that hold them, and their validation. The constants the integrators
 //! derive from it are in [`crate::engine::oscillator`].
 //!

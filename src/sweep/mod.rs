@@ -1,16 +1,18 @@
-//! Frequency × normal-force sweeps: grids, running them on the engine,
-//! shards and their merge ([`shard`]), the output set (`sweep.csv`,
-//! `histograms.csv`, `accumulators.json`, `sweep.json`: [`output`]) and the
-//! figures ([`plot`]).
+//! Frequency × normal-force sweeps: grids, their adaptive refinement
+//! ([`refine`]), running them on the engine, shards and their merge
+//! ([`shard`]), the output set (`sweep.csv`, `histograms.csv`,
+//! `accumulators.json`, `sweep.json`: [`output`]) and the figures ([`plot`]).
 
 pub mod output;
 pub mod plot;
+pub mod refine;
 pub mod shard;
 
 use crate::engine::{Condition, Engine, Job, Model, Point, PointAccumulator, PointStats, Record, RunPlan};
 use crate::error::{Error, Result};
 
 pub use output::{SWEEP_COLUMNS, write_accumulators, write_histograms_csv, write_output_set, write_sweep_csv};
+pub use refine::{RefineSettings, Refinement, not_refinable, refine_frequencies};
 pub use shard::{ACCUMULATOR_FORMAT, AccumulatorFile, RunIdentity, Shard, merge_shards, read_accumulators};
 
 /// Parses a grid flag: a comma list (`6,7,8`) or `START:STOP:COUNT`.
@@ -61,6 +63,37 @@ impl Grid {
                 self.normal_forces_n.iter().map(move |&n| Condition { excitation_frequency_hz: f, normal_force_n: n })
             })
             .collect()
+    }
+}
+
+/// The grid a sweep runs: `grid` itself, or, with `refine`, its frequencies
+/// refined where the response changes fast ([`refine_frequencies`]). The
+/// refinement is returned when it was applied (`None` without `refine`, and
+/// for a grid it cannot refine: see [`not_refinable`]). Every condition of
+/// `grid` must already be valid for `model`; a refined grid of more than
+/// [`Job::MAX_POINTS`] points is refused.
+pub fn refined_grid(
+    model: &Model,
+    grid: Grid,
+    warmup_cycles: u32,
+    refine: Option<RefineSettings>,
+) -> Result<(Grid, Option<Refinement>)> {
+    match refine {
+        Some(settings) if not_refinable(&grid.frequencies_hz).is_none() => {
+            let r = refine_frequencies(model, &grid.frequencies_hz, &grid.normal_forces_n, warmup_cycles, settings)?;
+            let points = r.frequencies_hz.len() * grid.normal_forces_n.len();
+            if points > Job::MAX_POINTS {
+                return Err(Error::setting(
+                    "--refine-max",
+                    format!(
+                        "the refined grid has {points} points, over the limit of {} per run; lower it or split the grid",
+                        Job::MAX_POINTS
+                    ),
+                ));
+            }
+            Ok((Grid { frequencies_hz: r.frequencies_hz.clone(), normal_forces_n: grid.normal_forces_n }, Some(r)))
+        }
+        _ => Ok((grid, None)),
     }
 }
 

@@ -1,4 +1,4 @@
-//! A sweep's output set: `sweep.csv` (the columns of `interfaces.md`),
+//! A sweep's output set: `sweep.csv` (the columns of `docs/formats.md`),
 //! `histograms.csv`, `accumulators.json` (what `merge` combines), the
 //! figures and the `sweep.json` sidecar. The set is built in a temporary
 //! sibling directory and swapped in whole ([`OutputSet`]): the output
@@ -11,11 +11,11 @@ use crate::engine::{Model, PointStats};
 use crate::error::Error;
 use crate::error::Result;
 use crate::io::{OutputSet, owned, write_atomically};
-use crate::sweep::SweepResult;
 use crate::sweep::plot;
 use crate::sweep::shard::{AccumulatorFile, RunIdentity, Shard};
+use crate::sweep::{Refinement, SweepResult};
 
-/// The columns of `sweep.csv` (`interfaces.md`).
+/// The columns of `sweep.csv` (`docs/formats.md`).
 pub const SWEEP_COLUMNS: [&str; 12] = [
     "excitation_frequency_hz",
     "normal_force_n",
@@ -101,7 +101,9 @@ pub fn write_accumulators(path: &Path, file: &AccumulatorFile) -> Result<()> {
 /// Writes everything a sweep (or a merge) produces into `out`: sweep.csv,
 /// histograms.csv, accumulators.json, sweep.json and, with `plots_at_hz`
 /// (Figure 8's frequency, Hz), the figures. `description` names the backend
-/// and adapter; `timings` goes into sweep.json as it is. The set replaces
+/// and adapter; `timings` goes into sweep.json as it is, and so does
+/// `refinement`, the frequencies the grid's refinement added (`null` when
+/// the grid was not refined). The set replaces
 /// the previous one in `out` whole (see [`OutputSet`]); when `out` is a set
 /// the caller prepared, the files go straight into it.
 #[allow(clippy::too_many_arguments)]
@@ -113,10 +115,11 @@ pub fn write_output_set(
     result: &SweepResult,
     description: &str,
     timings: serde_json::Value,
+    refinement: Option<&Refinement>,
     plots_at_hz: Option<f64>,
 ) -> Result<()> {
     let set = OutputSet::prepare(out, "output directory", owned::SWEEP, &[])?;
-    write_output_files(set.dir(), model, identity, shard, result, description, timings, plots_at_hz)?;
+    write_output_files(set.dir(), model, identity, shard, result, description, timings, refinement, plots_at_hz)?;
     set.commit()
 }
 
@@ -154,6 +157,7 @@ pub fn write_output_files(
     result: &SweepResult,
     description: &str,
     timings: serde_json::Value,
+    refinement: Option<&Refinement>,
     plots_at_hz: Option<f64>,
 ) -> Result<()> {
     check_finite(result)?;
@@ -180,6 +184,7 @@ pub fn write_output_files(
         "backend": identity.backend,
         "adapter": description,
         "shard": shard,
+        "refinement": refinement.map(|r| serde_json::json!({ "added_frequencies_hz": r.added_hz })),
         "files": files,
         "timings": timings,
     });

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::diagnose::measure::MeasurementSet;
 use crate::engine::reduce::HISTOGRAM_BINS;
@@ -161,17 +162,11 @@ impl MeasuredPoint {
         }
     }
 
-    /// The standard error of the peak variance, m² (normal approximation; 0 when unknown).
-    pub fn var_standard_error_m2(&self) -> f64 {
-        match (self.peak_var_m2, self.n_peaks) {
-            (Some(v), Some(n)) if n > 1 => v.max(0.0) * (2.0 / (n - 1) as f64).sqrt(),
-            _ => 0.0,
-        }
-    }
-
-    fn matches(&self, c: &Condition) -> bool {
+    /// Whether this is the grid point `c`: its frequency (within 1e-6) and
+    /// its normal force (within 1%).
+    pub fn matches(&self, c: &Condition) -> bool {
         (self.excitation_frequency_hz - c.excitation_frequency_hz).abs() <= 1e-6 * c.excitation_frequency_hz.abs()
-            && (self.normal_force_n - c.normal_force_n).abs() <= 0.01 * c.normal_force_n.abs().max(1e-9)
+            && same_load(self.normal_force_n, c.normal_force_n)
     }
 }
 
@@ -244,6 +239,19 @@ pub fn measured_points(set: &MeasurementSet) -> Vec<MeasuredPoint> {
     points
 }
 
+/// How Figure 9(a)'s amplitude axis is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AmplitudeAxis {
+    /// Logarithmic when the values span more than a factor of 30 (a
+    /// resonance beside a stuck block), else linear from zero.
+    #[default]
+    Auto,
+    /// Logarithmic, every decade labelled.
+    Log,
+    /// Linear from zero, as the paper draws its Figure 9(a).
+    Linear,
+}
+
 /// What [`write_sweep_plots_with`] draws.
 #[derive(Clone, Copy, Debug)]
 pub struct PlotOptions<'a> {
@@ -254,6 +262,8 @@ pub struct PlotOptions<'a> {
     pub measured: &'a [MeasuredPoint],
     /// Where the measured statistics come from, for the legends.
     pub measured_label: &'a str,
+    /// Figure 9(a)'s amplitude axis.
+    pub amplitude_axis: AmplitudeAxis,
 }
 
 /// Normal forces of the grid in order, and per force its points sorted by frequency.
@@ -277,12 +287,113 @@ fn curves(result: &SweepResult) -> Vec<(f64, Vec<(Condition, &PointAccumulator)>
         .collect()
 }
 
-fn finite(p: (f64, f64)) -> bool {
-    p.0.is_finite() && p.1.is_finite()
+/// The normal forces of the grid, increasing: one curve each.
+pub fn loads(result: &SweepResult) -> Vec<f64> {
+    curves(result).iter().map(|(n, _)| *n).collect()
 }
 
-/// The frequency axis: the grid's span, widened to take in the measured points.
+/// Whether two normal forces are the same load (within 1%).
+fn same_load(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 0.01 * a.abs().max(b.abs()).max(1e-9)
+}
+
+/// A measured point's simulated counterpart: the curve of its normal force
+/// (within 1%), else the curve of the nearest simulated normal force.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pairing {
+    /// Index of the curve (normal forces in increasing order).
+    pub curve: usize,
+    /// The curve's normal force, N.
+    pub force_n: f64,
+    /// Whether the curve is at the measured load (else the nearest one).
+    pub same_load: bool,
+}
+
+/// Pairs a measured point with a curve of `forces` (increasing).
+pub fn pair(forces: &[f64], m: &MeasuredPoint) -> Option<Pairing> {
+    let (curve, &force_n) = forces
+        .iter()
+        .enumerate()
+        .min_by(|(_, a), (_, b)| (*a - m.normal_force_n).abs().total_cmp(&(*b - m.normal_force_n).abs()))?;
+    Some(Pairing { curve, force_n, same_load: same_load(force_n, m.normal_force_n) })
+}
+
+/// The simulated mean peak (m) of a curve at `frequency_hz`: the grid point's
+/// when the grid has that frequency, else interpolated linearly between the
+/// neighbouring grid frequencies; `None` outside the grid.
+fn mean_at(points: &[(Condition, &PointAccumulator)], frequency_hz: f64) -> Option<f64> {
+    let at = |k: usize| (points[k].0.excitation_frequency_hz, points[k].1.moments().0);
+    let tol = 1e-6 * frequency_hz.abs();
+    if let Some(k) = points.iter().position(|(c, _)| (c.excitation_frequency_hz - frequency_hz).abs() <= tol) {
+        return Some(at(k).1);
+    }
+    let k = points.iter().position(|(c, _)| c.excitation_frequency_hz > frequency_hz)?;
+    if k == 0 {
+        return None;
+    }
+    let ((f0, m0), (f1, m1)) = (at(k - 1), at(k));
+    Some(m0 + (m1 - m0) * (frequency_hz - f0) / (f1 - f0))
+}
+
+/// Where things sit along a panel's frequency axis. A grid of one frequency
+/// sets its normal forces side by side ("dodged") about that frequency, the
+/// simulation left of each slot's centre and the measurement right of it,
+/// so that neither hides the other; otherwise everything sits at its
+/// frequency.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    /// The grid's one frequency, Hz, when it has only one.
+    single: Option<f64>,
+    curves: usize,
+}
+
+impl Layout {
+    fn new(result: &SweepResult) -> Layout {
+        let mut freqs: Vec<f64> = result.conditions.iter().map(|c| c.excitation_frequency_hz).collect();
+        freqs.sort_by(f64::total_cmp);
+        freqs.dedup();
+        let single = if freqs.len() == 1 { Some(freqs[0]) } else { None };
+        Layout { single, curves: curves(result).len().max(1) }
+    }
+
+    /// Half the width of the frequency axis of a one-frequency grid, Hz.
+    const HALF_SPAN: f64 = 0.5;
+
+    /// The centre and width of curve `curve`'s slot: the slots fill the axis
+    /// from 0.9 of its half-span left of the frequency to 0.6 right of it,
+    /// leaving room for the last slot's label.
+    fn slot(&self, curve: usize) -> Option<(f64, f64)> {
+        self.single.map(|f| {
+            let width = 1.5 * Self::HALF_SPAN / self.curves as f64;
+            (f - 0.9 * Self::HALF_SPAN + (curve as f64 + 0.5) * width, width)
+        })
+    }
+
+    /// The x of curve `curve`'s point at `f`.
+    fn simulated(&self, curve: usize, f: f64) -> f64 {
+        self.slot(curve).map_or(f, |(centre, width)| centre - 0.18 * width)
+    }
+
+    /// The x of a measured point at `f` paired with `curve`.
+    fn measured(&self, curve: Option<usize>, f: f64) -> f64 {
+        match (self.slot(curve.unwrap_or(0)), curve) {
+            (Some((centre, width)), Some(_)) => centre + 0.18 * width,
+            _ => f,
+        }
+    }
+
+    /// Half the width of a one-frequency point's spread box, Hz.
+    fn box_half_width(&self) -> f64 {
+        self.slot(0).map_or(0.0, |(_, width)| 0.1 * width)
+    }
+}
+
+/// The frequency axis: the grid's span, widened to take in the measured
+/// points; a one-frequency grid's slots about its frequency.
 fn frequency_span(result: &SweepResult, measured: &[MeasuredPoint]) -> (f64, f64) {
+    if let Some(f) = Layout::new(result).single {
+        return (f - Layout::HALF_SPAN, f + Layout::HALF_SPAN);
+    }
     let (lo, hi) = result
         .conditions
         .iter()
@@ -300,20 +411,24 @@ fn frequency_span(result: &SweepResult, measured: &[MeasuredPoint]) -> (f64, f64
     }
 }
 
-/// The colour of a measured point: its normal force's curve when the grid
-/// has that force (within 1%), else black.
-fn measured_colour(result: &SweepResult, m: &MeasuredPoint) -> RGBColor {
-    curves(result)
-        .iter()
-        .position(|(n, _)| (n - m.normal_force_n).abs() <= 0.01 * n.abs().max(1e-9))
-        .map_or(BLACK, colour)
+/// The frequency axis's description and tick labels: a one-frequency grid
+/// names its frequency in the description and labels no ticks (its slots
+/// are normal forces, not frequencies).
+fn frequency_axis(layout: Layout) -> (String, fn(&f64) -> String) {
+    match layout.single {
+        Some(f) => (format!("normal forces side by side at {} Hz", tick(f)), |_| String::new()),
+        None => ("excitation frequency (Hz)".to_string(), |v| tick(*v)),
+    }
 }
 
-/// Measured points (x, y, y_lo, y_hi, colour, label) with error bars, one
-/// legend entry for all.
+/// A measured point as drawn: (x, y, y_lo, y_hi, colour, label), in the
+/// panel's coordinates.
+type MeasuredMark = (f64, f64, f64, f64, RGBColor, String);
+
+/// Measured points with error bars (open circles), one legend entry for all.
 fn draw_measured<'a, DB: DrawingBackend + 'a>(
     chart: &mut Panel<'a, DB>,
-    points: &[(f64, f64, f64, f64, RGBColor, String)],
+    points: &[MeasuredMark],
     legend: &str,
     look: Look,
     what: &'static str,
@@ -325,27 +440,84 @@ where
         return Ok(());
     }
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error(what, e);
-    let r = look.px(5);
+    let r = look.px(6);
     let w = look.px(2);
     chart
         .draw_series(points.iter().map(|(x, _, lo, hi, c, _)| {
             ErrorBar::new_vertical(*x, *lo, (lo + hi) / 2.0, *hi, c.stroke_width(w), look.px(10))
         }))
         .map_err(e)?;
+    chart.draw_series(points.iter().map(|(x, y, ..)| Circle::new((*x, *y), r, WHITE.filled()))).map_err(e)?;
     chart
         .draw_series(points.iter().map(|(x, y, _, _, c, _)| Circle::new((*x, *y), r, c.stroke_width(w))))
         .map_err(e)?
         .label(legend.to_string())
         .legend(move |(x, y)| Circle::new((x + LEGEND_ICON / 2, y), r.min(8), BLACK.stroke_width(w)));
     let font = (FONT, look.px(12)).into_font();
-    // Labels alternate above and below their points, so close ones stay apart.
+    // Labels sit beside their points, right where they fit in the panel, else
+    // left, and are stacked so that close ones stay apart.
     let mut order: Vec<usize> = (0..points.len()).filter(|&i| !points[i].5.is_empty()).collect();
     order.sort_by(|&a, &b| points[a].1.total_cmp(&points[b].1));
+    let (left, right) = {
+        let range = chart.plotting_area().get_pixel_range().0;
+        (range.start, range.end)
+    };
+    let gap = look.signed(10);
+    let line_height = look.signed(14);
+    let style = TextStyle::from(font.clone());
+    // Each label: its point, side, lines, and pixel position (x, y of the point).
+    let mut marks: Vec<(usize, i32, HPos, Vec<String>, i32)> = order
+        .iter()
+        .map(|&i| {
+            let (x, y, _, _, _, label) = &points[i];
+            // A long label breaks before its parenthesis: "7.519 N" over "(nearest ...)".
+            let lines: Vec<String> = match label.find(" (") {
+                Some(at) => vec![label[..at].to_string(), label[at + 1..].to_string()],
+                None => vec![label.clone()],
+            };
+            let (px, py) = chart.backend_coord(&(*x, *y));
+            let width = lines
+                .iter()
+                .map(|l| chart.plotting_area().estimate_text_size(l, &style).map_or(0, |(w, _)| w as i32))
+                .max()
+                .unwrap_or(0);
+            let (room_right, room_left) = (right - px - gap, px - gap - left);
+            // Right of the point where the label fits, else left where it fits there,
+            // else on the side with more room.
+            let (dx, h) =
+                if width <= room_right || room_right >= room_left { (gap, HPos::Left) } else { (-gap, HPos::Right) };
+            (i, dx, h, lines, py)
+        })
+        .collect();
+    // Labels centred on their points, pushed down where they would overlap the
+    // label above them on the same side.
+    marks.sort_by_key(|m| m.4);
+    let mut bottom: [Option<i32>; 2] = [None, None];
+    let tops: Vec<i32> = marks
+        .iter()
+        .map(|(_, _, h, lines, py)| {
+            let side = usize::from(matches!(h, HPos::Right));
+            let height = lines.len() as i32 * line_height;
+            let mut top = py - height / 2;
+            if let Some(b) = bottom[side] {
+                top = top.max(b + look.signed(2));
+            }
+            bottom[side] = Some(top + height);
+            top - py
+        })
+        .collect();
     chart
-        .draw_series(order.iter().enumerate().map(|(k, &i)| {
-            let (x, y, _, _, c, label) = &points[i];
-            let dy = if k % 2 == 0 { look.signed(-16) } else { look.signed(4) };
-            EmptyElement::at((*x, *y)) + Text::new(label.clone(), (look.signed(8), dy), font.clone().color(c))
+        .draw_series(marks.iter().zip(tops).flat_map(|((i, dx, h, lines, _), top)| {
+            let (x, y, _, _, c, _) = &points[*i];
+            let style = font.clone().color(c).pos(Pos::new(*h, VPos::Top));
+            lines
+                .iter()
+                .enumerate()
+                .map(move |(j, line)| {
+                    EmptyElement::at((*x, *y))
+                        + Text::new(line.clone(), (*dx, top + j as i32 * line_height), style.clone())
+                })
+                .collect::<Vec<_>>()
         }))
         .map_err(e)?;
     Ok(())
@@ -427,66 +599,323 @@ where
     Ok(())
 }
 
-/// The mean peak curves with their 5–95% bands and the measured points.
-fn figure9a_series<'a, DB: DrawingBackend + 'a>(
+/// One simulated point as drawn: at `x` (dodged on a one-frequency grid),
+/// the value `y` and its spread `lo..hi`, in the panel's coordinates.
+#[derive(Clone, Copy, Debug)]
+struct SimPoint {
+    x: f64,
+    y: f64,
+    lo: f64,
+    hi: f64,
+}
+
+/// One curve of simulated points.
+struct SimSeries {
+    force_n: f64,
+    colour: RGBColor,
+    points: Vec<SimPoint>,
+}
+
+/// How a curve's spread is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Spread {
+    /// A shaded band between `lo` and `hi` with its edges drawn (a box on a
+    /// one-frequency grid): a range of the data, such as 5–95%.
+    Band,
+    /// Error bars: an uncertainty of the value itself.
+    Bars,
+}
+
+/// Draws simulated curves: every spread first, so that no line hides a band,
+/// then the lines and a marker at every grid point (a one-frequency grid
+/// gets markers and boxes only).
+fn draw_simulated<'a, DB: DrawingBackend + 'a>(
     chart: &mut Panel<'a, DB>,
-    result: &SweepResult,
-    opts: &PlotOptions,
+    series: &[SimSeries],
+    spread: Spread,
+    layout: Layout,
     look: Look,
-    axis: Axis,
-    labels: bool,
+    what: &'static str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9a", e);
-    let y = |v_m: f64| axis.map(v_m * 1e3);
-    for (i, (n, pts)) in curves(result).iter().enumerate() {
-        let c = colour(i);
-        let band: Vec<(f64, f64)> = pts
-            .iter()
-            .map(|(cond, a)| (cond.excitation_frequency_hz, y(a.quantile(0.95))))
-            .chain(pts.iter().rev().map(|(cond, a)| (cond.excitation_frequency_hz, y(a.quantile(0.05)))))
-            .filter(|p| finite(*p))
-            .collect();
-        chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.28).filled()))).map_err(e)?;
-        for p in [0.05, 0.95] {
-            chart
-                .draw_series(LineSeries::new(
-                    pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, y(a.quantile(p)))).filter(|p| finite(*p)),
-                    c.mix(0.7).stroke_width(look.px(1)),
-                ))
-                .map_err(e)?;
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error(what, e);
+    let ok = |p: &&SimPoint| p.x.is_finite() && p.y.is_finite() && p.lo.is_finite() && p.hi.is_finite();
+    // Lines and bands run to the panel's edges (plotters clips them); marks
+    // are drawn only for points inside it.
+    let x_range = chart.x_range();
+    let (x_lo, x_hi) = (x_range.start, x_range.end);
+    let inside = move |p: &&SimPoint| ok(p) && (x_lo..=x_hi).contains(&p.x);
+    for s in series {
+        let c = s.colour;
+        match (spread, layout.single) {
+            (Spread::Band, None) => {
+                let band: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .filter(ok)
+                    .map(|p| (p.x, p.hi))
+                    .chain(s.points.iter().rev().filter(ok).map(|p| (p.x, p.lo)))
+                    .collect();
+                chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.22).filled()))).map_err(e)?;
+                for edge in [|p: &SimPoint| p.lo, |p: &SimPoint| p.hi] {
+                    chart
+                        .draw_series(LineSeries::new(
+                            s.points.iter().filter(ok).map(|p| (p.x, edge(p))),
+                            c.mix(0.85).stroke_width(look.px(1)),
+                        ))
+                        .map_err(e)?;
+                }
+            }
+            (Spread::Band, Some(_)) => {
+                let w = layout.box_half_width();
+                chart
+                    .draw_series(s.points.iter().filter(inside).flat_map(|p| {
+                        [
+                            Rectangle::new([(p.x - w, p.lo), (p.x + w, p.hi)], c.mix(0.3).filled()),
+                            Rectangle::new([(p.x - w, p.lo), (p.x + w, p.hi)], c.stroke_width(look.px(1))),
+                        ]
+                    }))
+                    .map_err(e)?;
+            }
+            (Spread::Bars, single) => {
+                let (stroke, cap) = if single.is_some() { (look.px(2), look.px(10)) } else { (look.px(1), look.px(5)) };
+                chart
+                    .draw_series(
+                        s.points
+                            .iter()
+                            .filter(inside)
+                            .map(|p| ErrorBar::new_vertical(p.x, p.lo, p.y, p.hi, c.stroke_width(stroke), cap)),
+                    )
+                    .map_err(e)?;
+            }
         }
-        chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, y(a.moments().0))).filter(|p| finite(*p)),
-                c.stroke_width(look.px(2)),
-            ))
-            .map_err(e)?
-            .label(format!("N0 = {} N", tick(*n)))
-            .legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + Rectangle::new([(0, -look.signed(6)), (LEGEND_ICON, look.signed(6))], c.mix(0.28).filled())
-                    + PathElement::new(vec![(0, 0), (LEGEND_ICON, 0)], c.stroke_width(look.px(3)))
-            });
     }
-    let measured: Vec<_> = opts
-        .measured
+    for s in series {
+        let c = s.colour;
+        let fill = if spread == Spread::Band { c.mix(0.22) } else { c.mix(0.0) };
+        let line = LineSeries::new(s.points.iter().filter(ok).map(|p| (p.x, p.y)), c.stroke_width(look.px(2)));
+        let anno = if layout.single.is_some() {
+            chart.draw_series(std::iter::empty::<Circle<(f64, f64), u32>>()).map_err(e)?
+        } else {
+            chart.draw_series(line).map_err(e)?
+        };
+        let (icon_half, band_icon) = (look.signed(6), spread == Spread::Band);
+        anno.label(format!("N0 = {} N", tick(s.force_n))).legend(move |(x, y)| {
+            let band = if band_icon {
+                Rectangle::new([(0, -icon_half), (LEGEND_ICON, icon_half)], fill.filled())
+            } else {
+                Rectangle::new([(0, 0), (0, 0)], fill.filled())
+            };
+            EmptyElement::at((x, y))
+                + band
+                + PathElement::new(vec![(0, 0), (LEGEND_ICON, 0)], c.stroke_width(look.px(2)))
+                + Circle::new((LEGEND_ICON / 2, 0), look.px(3), c.filled())
+        });
+        // Error bars are the point's own uncertainty, often smaller than a dot: a
+        // smaller dot leaves their caps in view.
+        let r = match (spread, layout.single.is_some()) {
+            (Spread::Band, true) => look.px(5),
+            (Spread::Band, false) => look.px(3),
+            (Spread::Bars, true) => look.px(3),
+            (Spread::Bars, false) => look.px(2),
+        };
+        chart.draw_series(s.points.iter().filter(inside).map(|p| Circle::new((p.x, p.y), r, c.filled()))).map_err(e)?;
+    }
+    Ok(())
+}
+
+/// Wraps `text` into lines no wider than `width` px in `style`.
+fn wrap<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, style: &TextStyle, width: u32) -> Vec<String> {
+    let fits = |s: &str| area.estimate_text_size(s, style).map_or(s.chars().count() < 60, |(w, _)| w <= width);
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let candidate = if line.is_empty() { word.to_string() } else { format!("{line} {word}") };
+        if fits(&candidate) || line.is_empty() {
+            line = candidate;
+        } else {
+            lines.push(std::mem::replace(&mut line, word.to_string()));
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// A caption's font size, line height and margin, px on the screen layout.
+const CAPTION_FONT: u32 = 14;
+const CAPTION_LINE: u32 = 19;
+const CAPTION_PAD: u32 = 12;
+
+/// The look of a figure designed at `design` px on the screen with `caption`
+/// set below it: the canvas grows by the caption's height, so a long caption
+/// never squeezes the plot (a slide keeps its 16:9 and gives the plot less).
+/// The height is estimated generously (0.62 em a character); what the
+/// wrapped caption does not use goes to the plot.
+fn with_caption(size: SizePreset, design: (u32, u32), caption: &str) -> Look {
+    let look = size.look(design);
+    if size == SizePreset::Slide {
+        return look;
+    }
+    let width = f64::from(look.size.0.saturating_sub(2 * look.px(CAPTION_PAD)));
+    let per_line = (width / (0.62 * f64::from(look.px(CAPTION_FONT)))).floor().max(10.0) as usize;
+    let mut lines = 1;
+    let mut used = 0;
+    for word in caption.split_whitespace() {
+        let n = word.chars().count();
+        if used > 0 && used + 1 + n > per_line {
+            lines += 1;
+            used = n;
+        } else {
+            used += n + usize::from(used > 0);
+        }
+    }
+    let strip = 2 * look.px(CAPTION_PAD) + look.px(CAPTION_LINE) * lines;
+    Look { size: (look.size.0, look.size.1 + strip), scale: look.scale }
+}
+
+/// Writes `caption` below the figure, as a journal sets it, and returns the
+/// area above it for the plot: the figure's number in bold-face words, then
+/// what is drawn. The caption is outside every plot area.
+fn caption_below<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    caption: &str,
+    look: Look,
+    what: &'static str,
+) -> Result<DrawingArea<DB, Shift>>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error(what, e);
+    let (w, h) = root.dim_in_pixel();
+    let ink = RGBColor(40, 40, 40);
+    let style = TextStyle::from((FONT, look.px(CAPTION_FONT)).into_font()).color(&ink);
+    let pad = look.px(CAPTION_PAD);
+    let lines = wrap(root, caption, &style, w.saturating_sub(2 * pad));
+    let line_h = look.px(CAPTION_LINE);
+    let strip = (2 * pad + line_h * lines.len() as u32).min(h / 2);
+    let (plot, below) = root.split_vertically(h - strip);
+    for (i, line) in lines.iter().enumerate() {
+        below
+            .draw(&Text::new(line.clone(), (pad as i32, (pad / 2 + line_h * i as u32) as i32), style.clone()))
+            .map_err(e)?;
+    }
+    Ok(plot)
+}
+
+/// The sentences that say how measured points meet the curves, for a
+/// caption: each measured load without a simulated curve of its own is
+/// named with the nearest simulated load it is set against.
+fn pairing_note(result: &SweepResult, measured: &[MeasuredPoint], label: &str) -> String {
+    if measured.is_empty() {
+        return String::new();
+    }
+    let forces = loads(result);
+    let mut nearest: Vec<String> = measured
+        .iter()
+        .filter_map(|m| pair(&forces, m).filter(|p| !p.same_load).map(|p| (m.normal_force_n, p.force_n)))
+        .map(|(m, p)| format!("{} N against {} N", tick(m), tick(p)))
+        .collect();
+    nearest.dedup();
+    let mut note =
+        format!(" Open circles: {label}, each in the colour of the simulated normal force it is set against.");
+    if !nearest.is_empty() {
+        note.push_str(&format!(
+            " Measured at a normal force the sweep did not simulate, so set against the nearest simulated load: {}; \
+             run the sweep at the measured loads to compare like with like.",
+            nearest.join(", ")
+        ));
+    }
+    note
+}
+
+/// Whether measured points may carry labels in a panel: a one-frequency
+/// grid (each has its own slot), or no two of them at the same frequency.
+fn labels_fit(layout: Layout, measured: &[MeasuredPoint]) -> bool {
+    layout.single.is_some()
+        || measured.iter().enumerate().all(|(i, a)| {
+            measured[..i].iter().all(|b| (a.excitation_frequency_hz - b.excitation_frequency_hz).abs() > 1e-9)
+        })
+}
+
+/// The measured points of Figure 9(a) in the panel's coordinates, labelled
+/// with their load and how far the simulation misses them (same load), or
+/// with the nearest simulated load they are set against.
+fn figure9a_measured(
+    result: &SweepResult,
+    opts: &PlotOptions,
+    layout: Layout,
+    y: &dyn Fn(f64) -> f64,
+    labels: bool,
+) -> Vec<MeasuredMark> {
+    let curves = curves(result);
+    let forces: Vec<f64> = curves.iter().map(|(n, _)| *n).collect();
+    opts.measured
         .iter()
         .map(|m| {
             let se = m.mean_standard_error_m();
+            let paired = pair(&forces, m);
+            let colour = paired.map_or(BLACK, |p| colour(p.curve));
+            let label = match paired {
+                _ if !labels => String::new(),
+                Some(p) if p.same_load => match mean_at(&curves[p.curve].1, m.excitation_frequency_hz) {
+                    Some(sim) => format!(
+                        "{} N: simulated {}",
+                        tick(m.normal_force_n),
+                        percent(100.0 * (sim / m.peak_mean_m - 1.0))
+                    ),
+                    None => format!("{} N", tick(m.normal_force_n)),
+                },
+                Some(p) => format!("{} N (nearest simulated load {} N)", tick(m.normal_force_n), tick(p.force_n)),
+                None => format!("{} N", tick(m.normal_force_n)),
+            };
             (
-                m.excitation_frequency_hz,
+                layout.measured(paired.map(|p| p.curve), m.excitation_frequency_hz),
                 y(m.peak_mean_m),
                 y(m.peak_mean_m - se),
                 y(m.peak_mean_m + se),
-                measured_colour(result, m),
-                if labels { format!("{} N", tick(m.normal_force_n)) } else { String::new() },
+                colour,
+                label,
             )
         })
-        .collect();
-    draw_measured(chart, &measured, &format!("{}: mean ± s.e.", opts.measured_label), look, "fig9a")
+        .collect()
+}
+
+/// A signed percentage with one decimal, two below 0.1% (`−2.9%`, `+0.04%`).
+fn percent(p: f64) -> String {
+    let text = if p.abs() < 0.1 { format!("{:.2}", p.abs()) } else { format!("{:.1}", p.abs()) };
+    format!("{}{text}%", if p < 0.0 { "−" } else { "+" })
+}
+
+/// The curves of Figure 9(a): mean peak (mm) with its 5–95% range, only those
+/// `keep` lets through.
+fn figure9a_series(
+    result: &SweepResult,
+    layout: Layout,
+    y: &dyn Fn(f64) -> f64,
+    keep: &dyn Fn(usize) -> bool,
+) -> Vec<SimSeries> {
+    curves(result)
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| keep(*i))
+        .map(|(i, (n, pts))| SimSeries {
+            force_n: *n,
+            colour: colour(i),
+            points: pts
+                .iter()
+                .map(|(c, a)| SimPoint {
+                    x: layout.simulated(i, c.excitation_frequency_hz),
+                    y: y(a.moments().0),
+                    lo: y(a.quantile(0.05)),
+                    hi: y(a.quantile(0.95)),
+                })
+                .collect(),
+        })
+        .collect()
 }
 
 /// The ranges one panel of Figure 9(a) shows.
@@ -498,23 +927,31 @@ struct PanelRange {
     y: (f64, f64),
 }
 
-/// One panel of Figure 9(a) over `range`: a log amplitude axis when it spans
-/// more than a factor of 30.
+/// One panel of Figure 9(a) over `range`. `zoom` draws only the curves the
+/// measured points are set against, on a linear axis fitted to them.
+#[allow(clippy::too_many_arguments)]
 fn figure9a_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     result: &SweepResult,
     opts: &PlotOptions,
     look: Look,
-    caption: &str,
+    heading: &str,
     range: PanelRange,
     zoom: bool,
-) -> Result<()>
+    legend: bool,
+) -> Result<Axis>
 where
     DB::ErrorType: 'static,
 {
     let PanelRange { x, y } = range;
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9a", e);
-    let (y_lo, y_hi, axis) = if y.0 > 0.0 && y.1 / y.0 > 30.0 {
+    let log = match opts.amplitude_axis {
+        _ if zoom => false,
+        AmplitudeAxis::Auto => y.0 > 0.0 && y.1 / y.0 > 30.0,
+        AmplitudeAxis::Log => y.0 > 0.0,
+        AmplitudeAxis::Linear => false,
+    };
+    let (y_lo, y_hi, axis) = if log {
         let (lo, hi) = decade_range(y.0, y.1);
         let (lo, hi) = (lo.log10().round(), hi.log10().round());
         (lo, hi, Axis::Log { lo, hi, powers: false })
@@ -524,83 +961,170 @@ where
     } else {
         (0.0, if y.1 > 0.0 { y.1 * 1.1 } else { 1.0 }, Axis::Linear)
     };
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, caption_px(look, caption, if zoom { 16 } else { 18 }, area.dim_in_pixel().0)))
+    let layout = Layout::new(result);
+    let mut builder = ChartBuilder::on(area);
+    if !heading.is_empty() {
+        builder.caption(heading, (FONT, caption_px(look, heading, 16, area.dim_in_pixel().0)));
+    }
+    let mut chart = builder
         .margin(look.px(12))
         .x_label_area_size(look.px(52))
         .y_label_area_size(look.px(64))
         .build_cartesian_2d(x.0..x.1, y_lo..y_hi)
         .map_err(e)?;
-    let x_fmt = |v: &f64| tick(*v);
+    let (x_desc, x_fmt) = frequency_axis(layout);
     let y_fmt = |v: &f64| axis.label(*v);
     let mut mesh = chart.configure_mesh();
-    mesh.x_desc("excitation frequency (Hz)")
+    mesh.x_desc(x_desc)
         .y_desc("peak amplitude (mm)")
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
         .label_style((FONT, look.px(15)))
         .axis_desc_style((FONT, look.px(16)))
         .x_labels(if zoom { 5 } else { 11 });
+    if layout.single.is_some() {
+        mesh.disable_x_mesh().x_labels(0);
+    }
     if let Axis::Log { lo, hi, .. } = axis {
         mesh.y_labels((hi - lo) as usize + 1).light_line_style(TRANSPARENT);
     }
     mesh.draw().map_err(e)?;
     draw_minor(&mut chart, axis, x, look, "fig9a")?;
-    figure9a_series(&mut chart, result, opts, look, axis, zoom || opts.measured.len() <= 1)?;
-    if zoom {
-        return Ok(()); // the full panel's legend serves both
+    let ymap = |v_m: f64| axis.map(v_m * 1e3);
+    let forces = loads(result);
+    let paired: Vec<usize> = opts.measured.iter().filter_map(|m| pair(&forces, m)).map(|p| p.curve).collect();
+    let keep = |i: usize| !zoom || paired.contains(&i);
+    let series = figure9a_series(result, layout, &ymap, &keep);
+    draw_simulated(&mut chart, &series, Spread::Band, layout, look, "fig9a")?;
+    let labels = zoom || labels_fit(layout, opts.measured);
+    let measured = figure9a_measured(result, opts, layout, &ymap, labels);
+    draw_measured(&mut chart, &measured, &format!("{}: mean ± s.e.", opts.measured_label), look, "fig9a")?;
+    if legend {
+        legend_box(&mut chart, look.px(14), SeriesLabelPosition::UpperRight, "fig9a")?;
     }
-    legend_box(&mut chart, look.px(14), SeriesLabelPosition::UpperRight, "fig9a")
+    Ok(axis)
 }
 
-/// Figure 9(a): the mean peak against frequency with the 5–95% band of the
-/// peaks. A log amplitude axis when the values span more than a factor of
-/// 30 (a resonance beside a stuck block), else linear from zero; the band is
-/// outlined, so a narrow one still shows. With measured data, a second
-/// panel zooms on the measured conditions (linear, mm).
-fn figure9a<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    result: &SweepResult,
-    opts: &PlotOptions,
-    look: Look,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9a", e);
+/// Figure 9(a): the mean peak against frequency, one curve per normal force,
+/// a marker at every grid point, with the 5–95% range of the peaks (a band;
+/// a box on a one-frequency grid). With measured data over a grid of several
+/// frequencies, a second panel zooms on the measured conditions and the
+/// curves they are set against. The caption is set below the plot.
+/// The amplitudes (mm) Figure 9(a)'s full panel spans: every simulated 5–95%
+/// range and mean, and the measured means with their error bars, down to a
+/// decade below the lowest mean (a block that sticks can have a 5% quantile
+/// far below it).
+fn figure9a_extent(result: &SweepResult, opts: &PlotOptions) -> (f64, f64) {
     let means: Vec<f64> =
         result.accumulators.iter().map(|a| a.moments().0 * 1e3).filter(|v| v.is_finite() && *v > 0.0).collect();
     let values: Vec<f64> = result
         .accumulators
         .iter()
         .flat_map(|a| [a.quantile(0.05), a.quantile(0.95)])
-        .chain(opts.measured.iter().map(|m| m.peak_mean_m))
+        .chain(opts.measured.iter().flat_map(|m| {
+            let se = m.mean_standard_error_m();
+            [m.peak_mean_m - se, m.peak_mean_m + se]
+        }))
         .map(|v| v * 1e3)
         .filter(|v| v.is_finite() && *v > 0.0)
         .chain(means.iter().copied())
         .collect();
     let mean_lo = means.iter().copied().fold(f64::INFINITY, f64::min);
-    // The band may reach far below the lowest mean (a block that sticks);
-    // the axis stops a decade below it.
     let lo = values.iter().copied().fold(f64::INFINITY, f64::min).max(mean_lo / 10.0);
     let hi = values.iter().copied().fold(0.0, f64::max);
-    let x = frequency_span(result, opts.measured);
-    let title = "Figure 9(a): mean peak amplitude; band: 5–95% of the peaks";
-    let root = root.titled(title, (FONT, caption_px(look, title, 21, look.size.0))).map_err(e)?;
-    if opts.measured.is_empty() {
-        return figure9a_panel(&root, result, opts, look, "", PanelRange { x, y: (lo, hi) }, false);
+    (lo, hi)
+}
+
+/// Figure 9(a)'s caption: what is drawn, on which axis, and how the measured
+/// points meet the curves.
+fn figure9a_caption(result: &SweepResult, opts: &PlotOptions) -> String {
+    let (lo, hi) = figure9a_extent(result, opts);
+    let layout = Layout::new(result);
+    let zoom = !opts.measured.is_empty() && layout.single.is_none();
+    let single_zoomed = !opts.measured.is_empty() && layout.single.is_some();
+    // The axis by the full panel's own rule, on the same range.
+    let log = match opts.amplitude_axis {
+        _ if single_zoomed => false,
+        AmplitudeAxis::Auto => lo > 0.0 && hi / lo > 30.0,
+        AmplitudeAxis::Log => lo > 0.0,
+        AmplitudeAxis::Linear => false,
+    };
+    let mut caption = match layout.single {
+        Some(f) => format!(
+            "Figure 9(a) at one frequency. Mean peak amplitude at {} Hz, one colour per normal force N0, the normal \
+             forces side by side: a dot marks the simulated mean, the box the 5–95% range of the simulated peaks.",
+            tick(f)
+        ),
+        None => "Figure 9(a). Mean peak amplitude against excitation frequency, one colour per normal force N0: a \
+                 dot marks every simulated grid point, the shaded band (edges drawn) the 5–95% range of the \
+                 simulated peaks."
+            .to_string(),
+    };
+    caption.push_str(if log {
+        " Logarithmic amplitude axis (`stickslip plot --amplitude-axis linear` draws the paper's linear view)."
+    } else {
+        " Linear amplitude axis."
+    });
+    caption.push_str(&pairing_note(result, opts.measured, &format!("{}: mean ± standard error", opts.measured_label)));
+    if zoom {
+        caption.push_str(" Right: zoom on the measured conditions, with only the curves they are set against.");
     }
-    let (left, right) = root.split_horizontally(look.size.0 * 57 / 100);
-    figure9a_panel(&left, result, opts, look, "all conditions", PanelRange { x, y: (lo, hi) }, false)?;
+    caption
+}
+
+fn figure9a<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    result: &SweepResult,
+    opts: &PlotOptions,
+    look: Look,
+    caption: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (lo, hi) = figure9a_extent(result, opts);
+    let x = frequency_span(result, opts.measured);
+    let layout = Layout::new(result);
+    let zoom = !opts.measured.is_empty() && layout.single.is_none();
+    let single_zoomed = !opts.measured.is_empty() && layout.single.is_some();
+    let plot = caption_below(&root, caption, look, "fig9a")?;
+    if single_zoomed {
+        // Zoom on the values: the measured points and the boxes they meet.
+        return figure9a_panel(
+            &plot,
+            result,
+            opts,
+            look,
+            "",
+            PanelRange { x, y: zoom_range(result, opts, x) },
+            true,
+            true,
+        )
+        .map(|_| ());
+    }
+    if !zoom {
+        return figure9a_panel(&plot, result, opts, look, "", PanelRange { x, y: (lo, hi) }, false, true).map(|_| ());
+    }
+    let (left, right) = plot.split_horizontally(look.size.0 * 57 / 100);
+    figure9a_panel(&left, result, opts, look, "all conditions", PanelRange { x, y: (lo, hi) }, false, true)?;
     // The zoom: the measured frequencies ± 0.6 Hz, every value there.
     let (m_lo, m_hi) = opts.measured.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| {
         (l.min(m.excitation_frequency_hz), h.max(m.excitation_frequency_hz))
     });
     let zx = ((m_lo - 0.6).max(x.0), (m_hi + 0.6).min(x.1));
     let zx = if zx.1 > zx.0 { zx } else { (m_lo - 0.6, m_hi + 0.6) };
+    let range = PanelRange { x: zx, y: zoom_range(result, opts, zx) };
+    figure9a_panel(&right, result, opts, look, "zoom on the measured conditions", range, true, false).map(|_| ())
+}
+
+/// The amplitude range (mm) of a zoom over frequencies `x`: the measured
+/// points with their error bars and the curves they are set against.
+fn zoom_range(result: &SweepResult, opts: &PlotOptions, x: (f64, f64)) -> (f64, f64) {
+    let forces = loads(result);
+    let paired: Vec<f64> = opts.measured.iter().filter_map(|m| pair(&forces, m)).map(|p| p.force_n).collect();
     let mut zy = (f64::INFINITY, f64::NEG_INFINITY);
     for (c, a) in result.conditions.iter().zip(&result.accumulators) {
-        if (zx.0..=zx.1).contains(&c.excitation_frequency_hz) {
+        if (x.0..=x.1).contains(&c.excitation_frequency_hz) && paired.contains(&c.normal_force_n) {
             for v in [a.moments().0, a.quantile(0.05), a.quantile(0.95)] {
                 if v.is_finite() {
                     zy = (zy.0.min(v * 1e3), zy.1.max(v * 1e3));
@@ -612,26 +1136,99 @@ where
         let se = m.mean_standard_error_m();
         zy = (zy.0.min((m.peak_mean_m - se) * 1e3), zy.1.max((m.peak_mean_m + se) * 1e3));
     }
-    figure9a_panel(&right, result, opts, look, "zoom on the measured conditions", PanelRange { x: zx, y: zy }, true)
+    if zy.0.is_finite() { zy } else { (0.0, 1.0) }
+}
+
+/// The 95% interval of a variance `s2` estimated from `n` values with excess
+/// kurtosis `kurtosis`: a chi-square interval with the effective degrees of
+/// freedom ν = 2 / (2/(n−1) + κ/n) (exactly n − 1 for normal values; fewer
+/// for heavy tails), never more than n − 1. It assumes independent values.
+pub fn variance_interval(s2: f64, n: u64, kurtosis: f64) -> Option<(f64, f64)> {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    if n < 2 || !(s2.is_finite() && s2 >= 0.0) {
+        return None;
+    }
+    let n = n as f64;
+    let spread = 2.0 / (n - 1.0) + if kurtosis.is_finite() { kurtosis / n } else { 0.0 };
+    let nu = (2.0 / spread.max(2.0 / (n - 1.0) * 1e-3)).min(n - 1.0).max(1.0);
+    let chi = ChiSquared::new(nu).ok()?;
+    let (lo_q, hi_q) = (chi.inverse_cdf(0.025), chi.inverse_cdf(0.975));
+    Some((s2 * nu / hi_q, s2 * nu / lo_q))
+}
+
+/// The excess kurtosis of a point's peaks, from its histogram's inner bins
+/// (the under- and overflow bins are left out).
+fn histogram_kurtosis(a: &PointAccumulator) -> f64 {
+    let last = a.histogram.len().saturating_sub(1);
+    let centres: Vec<(f64, f64)> = (1..last)
+        .filter(|&b| a.histogram[b] > 0)
+        .map(|b| {
+            let (lo, hi) = a.range.bin_edges(b as u32);
+            (0.5 * (lo + hi), a.histogram[b] as f64)
+        })
+        .collect();
+    let n: f64 = centres.iter().map(|c| c.1).sum();
+    if n < 4.0 {
+        return 0.0;
+    }
+    let mean = centres.iter().map(|(x, c)| x * c).sum::<f64>() / n;
+    let m2 = centres.iter().map(|(x, c)| (x - mean).powi(2) * c).sum::<f64>() / n;
+    let m4 = centres.iter().map(|(x, c)| (x - mean).powi(4) * c).sum::<f64>() / n;
+    if m2 > 0.0 { m4 / (m2 * m2) - 3.0 } else { 0.0 }
+}
+
+/// Figure 9(b)'s caption.
+fn figure9b_caption(result: &SweepResult, opts: &PlotOptions) -> String {
+    let layout = Layout::new(result);
+    let what = match layout.single {
+        Some(f) => format!("at {} Hz, one colour per normal force N0, the normal forces side by side", tick(f)),
+        None => "against excitation frequency, one colour per normal force N0".to_string(),
+    };
+    format!(
+        "Figure 9(b). Variance of the peak amplitude {what}, on a logarithmic axis. Error bars on the simulated \
+         points: 95% chi-square intervals from the point's peaks, with degrees of freedom reduced for heavy tails \
+         (from the kurtosis of its histogram); they assume \
+         independent peaks, and successive peaks of one realisation are correlated, most near resonance, so they \
+         understate the uncertainty there.{}",
+        pairing_note(
+            result,
+            opts.measured,
+            &format!("{}: variance with its 95% chi-square interval", opts.measured_label)
+        )
+    )
 }
 
 /// Figure 9(b): the peak variance on a log axis from decade to decade, each
-/// decade labelled 10ⁿ.
+/// decade labelled 10ⁿ, with 95% intervals on the simulated and the measured
+/// variances. The caption is set below the plot.
 fn figure9b<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     result: &SweepResult,
     opts: &PlotOptions,
     look: Look,
+    caption: &str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9b", e);
+    let layout = Layout::new(result);
+    let interval = |a: &PointAccumulator| {
+        let (_, v) = a.moments();
+        variance_interval(v, a.peaks, histogram_kurtosis(a)).unwrap_or((v, v))
+    };
+    let measured_interval =
+        |m: &MeasuredPoint| m.peak_var_m2.and_then(|v| m.n_peaks.and_then(|n| variance_interval(v, n, 0.0)));
     let vars: Vec<f64> = result
         .accumulators
         .iter()
-        .map(|a| a.moments().1 * 1e6)
-        .chain(opts.measured.iter().filter_map(|m| m.peak_var_m2).map(|v| v * 1e6))
+        .flat_map(|a| {
+            let (lo, hi) = interval(a);
+            [a.moments().1, lo, hi]
+        })
+        .chain(opts.measured.iter().filter_map(|m| m.peak_var_m2))
+        .chain(opts.measured.iter().filter_map(measured_interval).flat_map(|(lo, hi)| [lo, hi]))
+        .map(|v| v * 1e6)
         .filter(|v| v.is_finite() && *v > 0.0)
         .collect();
     let v_max = vars.iter().copied().fold(1e-12, f64::max);
@@ -640,124 +1237,161 @@ where
     let axis = Axis::Log { lo: v_lo.log10().round(), hi: v_hi.log10().round(), powers: true };
     let Axis::Log { lo: y_lo, hi: y_hi, .. } = axis else { unreachable!() };
     let x = frequency_span(result, opts.measured);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Figure 9(b): peak-amplitude variance",
-            (FONT, caption_px(look, "Figure 9(b): peak-amplitude variance", 21, look.size.0)),
-        )
+    let plot = caption_below(&root, caption, look, "fig9b")?;
+    let mut chart = ChartBuilder::on(&plot)
         .margin(look.px(14))
         .x_label_area_size(look.px(52))
         .y_label_area_size(look.px(72))
         .build_cartesian_2d(x.0..x.1, y_lo..y_hi)
         .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc("excitation frequency (Hz)")
+    let (x_desc, x_fmt) = frequency_axis(layout);
+    let y_fmt = |v: &f64| axis.label(*v);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
         .y_desc("peak variance (mm²)")
-        .x_label_formatter(&|v| tick(*v))
-        .y_label_formatter(&|v| axis.label(*v))
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
         .y_labels((y_hi - y_lo) as usize + 1)
         .x_labels(11)
         .light_line_style(TRANSPARENT)
         .label_style((FONT, look.px(15)))
-        .axis_desc_style((FONT, look.px(17)))
-        .draw()
-        .map_err(e)?;
-    draw_minor(&mut chart, axis, x, look, "fig9b")?;
-    for (i, (n, pts)) in curves(result).iter().enumerate() {
-        let c = colour(i);
-        let line: Vec<(f64, f64)> = pts
-            .iter()
-            .map(|(cond, a)| (cond.excitation_frequency_hz, a.moments().1 * 1e6))
-            .filter(|p| finite(*p) && p.1 > 0.0)
-            .map(|(f, v)| (f, axis.map(v)))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(line.clone(), c.stroke_width(look.px(2))))
-            .map_err(e)?
-            .label(format!("N0 = {} N", tick(*n)))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + LEGEND_ICON, y)], c.stroke_width(look.px(3))));
-        chart.draw_series(line.into_iter().map(|p| Circle::new(p, look.px(3), c.filled()))).map_err(e)?;
+        .axis_desc_style((FONT, look.px(17)));
+    if layout.single.is_some() {
+        mesh.disable_x_mesh().x_labels(0);
     }
-    let measured: Vec<_> = opts
+    mesh.draw().map_err(e)?;
+    draw_minor(&mut chart, axis, x, look, "fig9b")?;
+    let ymap = |v: f64| axis.map(v * 1e6);
+    let series: Vec<SimSeries> = curves(result)
+        .iter()
+        .enumerate()
+        .map(|(i, (n, pts))| SimSeries {
+            force_n: *n,
+            colour: colour(i),
+            points: pts
+                .iter()
+                .filter(|(_, a)| a.moments().1 > 0.0)
+                .map(|(c, a)| {
+                    let (lo, hi) = interval(a);
+                    SimPoint {
+                        x: layout.simulated(i, c.excitation_frequency_hz),
+                        y: ymap(a.moments().1),
+                        lo: ymap(lo),
+                        hi: ymap(hi),
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    draw_simulated(&mut chart, &series, Spread::Bars, layout, look, "fig9b")?;
+    let forces = loads(result);
+    let labels = labels_fit(layout, opts.measured);
+    let measured: Vec<MeasuredMark> = opts
         .measured
         .iter()
         .filter_map(|m| {
-            let v = m.peak_var_m2? * 1e6;
-            let se = m.var_standard_error_m2() * 1e6;
+            let v = m.peak_var_m2?;
+            let (lo, hi) = measured_interval(m).unwrap_or((v, v));
+            let paired = pair(&forces, m);
+            let label = match paired {
+                _ if !labels => String::new(),
+                Some(p) if !p.same_load => {
+                    format!("{} N (nearest simulated load {} N)", tick(m.normal_force_n), tick(p.force_n))
+                }
+                _ => format!("{} N", tick(m.normal_force_n)),
+            };
             Some((
-                m.excitation_frequency_hz,
-                axis.map(v),
-                axis.map(v - se),
-                axis.map(v + se),
-                measured_colour(result, m),
-                format!("{} N", tick(m.normal_force_n)),
+                layout.measured(paired.map(|p| p.curve), m.excitation_frequency_hz),
+                ymap(v),
+                ymap(lo),
+                ymap(hi),
+                paired.map_or(BLACK, |p| colour(p.curve)),
+                label,
             ))
         })
         .collect();
-    draw_measured(&mut chart, &measured, &format!("{}: variance ± s.e.", opts.measured_label), look, "fig9b")?;
+    draw_measured(&mut chart, &measured, &format!("{}: variance, 95% interval", opts.measured_label), look, "fig9b")?;
     legend_box(&mut chart, look.px(15), SeriesLabelPosition::UpperRight, "fig9b")
 }
 
-const FIG9C_TITLE: &str = "Figure 9(c): phase lag of the response's fundamental; band: ± 1 sd";
+/// Figure 9(c)'s caption.
+fn figure9c_caption(result: &SweepResult, opts: &PlotOptions) -> String {
+    let layout = Layout::new(result);
+    format!(
+        "Figure 9(c). Phase lag of the response's fundamental behind the base motion {}, one colour per normal \
+         force N0 (circular mean over every measured period of every realisation); the {} is ± one circular \
+         standard deviation of the per-period lag.{}",
+        match layout.single {
+            Some(f) => format!("at {} Hz, the normal forces side by side", tick(f)),
+            None => "against excitation frequency".to_string(),
+        },
+        if layout.single.is_some() { "box" } else { "band" },
+        pairing_note(result, opts.measured, &format!("{}: mean ± standard error", opts.measured_label))
+    )
+}
 
 /// Figure 9's phase panel: the circular mean phase lag of the response's
 /// fundamental (degrees) against frequency, one curve per normal force, with
-/// a band of ± one circular standard deviation.
+/// a band of ± one circular standard deviation. The caption is set below.
 fn figure9c<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     result: &SweepResult,
     opts: &PlotOptions,
     look: Look,
+    caption: &str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig9c", e);
+    let layout = Layout::new(result);
     let (f_lo, f_hi) = frequency_span(result, opts.measured);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(FIG9C_TITLE, (FONT, caption_px(look, FIG9C_TITLE, 21, look.size.0)))
+    let plot = caption_below(&root, caption, look, "fig9c")?;
+    let mut chart = ChartBuilder::on(&plot)
         .margin(look.px(14))
         .x_label_area_size(look.px(52))
         .y_label_area_size(look.px(72))
         .build_cartesian_2d(f_lo..f_hi, -10.0..190.0)
         .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc("excitation frequency (Hz)")
+    let (x_desc, x_fmt) = frequency_axis(layout);
+    let y_fmt = |v: &f64| tick(*v);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
         .y_desc("phase lag behind the base (°)")
-        .x_label_formatter(&|v| tick(*v))
-        .y_label_formatter(&|v| tick(*v))
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
         .y_labels(11)
         .x_labels(11)
         .label_style((FONT, look.px(15)))
-        .axis_desc_style((FONT, look.px(17)))
-        .draw()
-        .map_err(e)?;
+        .axis_desc_style((FONT, look.px(17)));
+    if layout.single.is_some() {
+        mesh.disable_x_mesh().x_labels(0);
+    }
+    mesh.draw().map_err(e)?;
     // Lags are drawn in [0°, 360°) so curves above resonance do not jump.
     let lag = |a: &PointAccumulator| {
         let (mean, var) = a.phase_moments();
         (mean.to_degrees().rem_euclid(360.0), var.max(0.0).sqrt().to_degrees())
     };
-    for (i, (n, pts)) in curves(result).iter().enumerate() {
-        let c = colour(i);
-        let band: Vec<(f64, f64)> = pts
-            .iter()
-            .map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 + lag(a).1))
-            .chain(pts.iter().rev().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0 - lag(a).1)))
-            .filter(|p| finite(*p))
-            .collect();
-        chart.draw_series(std::iter::once(Polygon::new(band, c.mix(0.25).filled()))).map_err(e)?;
-        chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|(cond, a)| (cond.excitation_frequency_hz, lag(a).0)).filter(|p| finite(*p)),
-                c.stroke_width(look.px(2)),
-            ))
-            .map_err(e)?
-            .label(format!("N0 = {} N", tick(*n)))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + LEGEND_ICON, y)], c.stroke_width(look.px(3))));
-    }
-    let measured: Vec<_> = opts
+    let series: Vec<SimSeries> = curves(result)
+        .iter()
+        .enumerate()
+        .map(|(i, (n, pts))| SimSeries {
+            force_n: *n,
+            colour: colour(i),
+            points: pts
+                .iter()
+                .map(|(c, a)| {
+                    let (m, sd) = lag(a);
+                    SimPoint { x: layout.simulated(i, c.excitation_frequency_hz), y: m, lo: m - sd, hi: m + sd }
+                })
+                .collect(),
+        })
+        .collect();
+    draw_simulated(&mut chart, &series, Spread::Band, layout, look, "fig9c")?;
+    let forces = loads(result);
+    let labels = labels_fit(layout, opts.measured);
+    let measured: Vec<MeasuredMark> = opts
         .measured
         .iter()
         .filter_map(|m| {
@@ -767,13 +1401,21 @@ where
                 (Some(v), Some(n)) if n > 0 => (v.max(0.0) / n as f64).sqrt(),
                 _ => 0.0,
             };
+            let paired = pair(&forces, m);
+            let label = match paired {
+                _ if !labels => String::new(),
+                Some(p) if !p.same_load => {
+                    format!("{} N (nearest simulated load {} N)", tick(m.normal_force_n), tick(p.force_n))
+                }
+                _ => format!("{} N", tick(m.normal_force_n)),
+            };
             Some((
-                m.excitation_frequency_hz,
+                layout.measured(paired.map(|p| p.curve), m.excitation_frequency_hz),
                 mean,
                 mean - se,
                 mean + se,
-                measured_colour(result, m),
-                format!("{} N", tick(m.normal_force_n)),
+                paired.map_or(BLACK, |p| colour(p.curve)),
+                label,
             ))
         })
         .collect();
@@ -847,18 +1489,38 @@ fn measured_density(peaks_m: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64,
     outline
 }
 
+/// Figure 8's caption.
+fn figure8_caption(points: &[(Condition, &PointAccumulator)], opts: &PlotOptions) -> String {
+    let frequency =
+        points.first().map_or(String::new(), |(c, _)| format!(" at {} Hz", tick(c.excitation_frequency_hz)));
+    let with_measured = points.iter().any(|(c, _)| opts.measured.iter().any(|m| m.matches(c)));
+    let mut caption = format!(
+        "Figure 8. Probability density of the peak amplitude{frequency}, one panel per normal force N0: bars, the \
+         histogram of the simulated peaks; black line, the Gaussian of their mean and variance."
+    );
+    if with_measured {
+        caption.push_str(&format!(
+            " Red, {}: dashed, the Gaussian of the measured mean and variance; dot, the measured mean ± standard \
+             error (a solid outline: the measured peaks, where the set has records). Measured conditions are drawn \
+             only in the panel of their own normal force.",
+            opts.measured_label
+        ));
+    }
+    caption
+}
+
 fn figure8<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     points: &[(Condition, &PointAccumulator)],
     opts: &PlotOptions,
     look: Look,
+    caption: &str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| plot_error("fig8", e);
-    let title = "Figure 8: probability density of the peak amplitude";
-    let root = root.titled(title, (FONT, caption_px(look, title, 21, look.size.0))).map_err(e)?;
+    let root = caption_below(&root, caption, look, "fig8")?;
     let cols = points.len().clamp(1, 2);
     let rows = points.len().div_ceil(cols).max(1);
     let panels = root.split_evenly((rows, cols));
@@ -1019,6 +1681,7 @@ pub fn write_sweep_plots(dir: &Path, result: &SweepResult, figure8_frequency_hz:
         size: SizePreset::Screen,
         measured: &[],
         measured_label: "measured",
+        amplitude_axis: AmplitudeAxis::Auto,
     };
     write_sweep_plots_with(dir, result, &opts)
 }
@@ -1027,21 +1690,27 @@ pub fn write_sweep_plots(dir: &Path, result: &SweepResult, figure8_frequency_hz:
 /// says; returns the files.
 pub fn write_sweep_plots_with(dir: &Path, result: &SweepResult, opts: &PlotOptions) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    let look = opts.size.look((1000, 650));
-    files.extend(render(dir, "fig9a", look.size, &|r| figure9a(r, result, opts, look), &|r| {
-        figure9a(r, result, opts, look)
+    let caption = figure9a_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9a", look.size, &|r| figure9a(r, result, opts, look, &caption), &|r| {
+        figure9a(r, result, opts, look, &caption)
     })?);
-    files.extend(render(dir, "fig9b", look.size, &|r| figure9b(r, result, opts, look), &|r| {
-        figure9b(r, result, opts, look)
+    let caption = figure9b_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9b", look.size, &|r| figure9b(r, result, opts, look, &caption), &|r| {
+        figure9b(r, result, opts, look, &caption)
     })?);
-    files.extend(render(dir, "fig9c", look.size, &|r| figure9c(r, result, opts, look), &|r| {
-        figure9c(r, result, opts, look)
+    let caption = figure9c_caption(result, opts);
+    let look = with_caption(opts.size, (1000, 650), &caption);
+    files.extend(render(dir, "fig9c", look.size, &|r| figure9c(r, result, opts, look, &caption), &|r| {
+        figure9c(r, result, opts, look, &caption)
     })?);
     let pts = figure8_points(result, opts.fig8_frequency_hz);
     let rows = pts.len().div_ceil(2).max(1) as u32;
-    let look8 = opts.size.look((1100, 60 + 380 * rows));
-    files.extend(render(dir, "fig8", look8.size, &|r| figure8(r, &pts, opts, look8), &|r| {
-        figure8(r, &pts, opts, look8)
+    let caption = figure8_caption(&pts, opts);
+    let look8 = with_caption(opts.size, (1100, 30 + 380 * rows), &caption);
+    files.extend(render(dir, "fig8", look8.size, &|r| figure8(r, &pts, opts, look8, &caption), &|r| {
+        figure8(r, &pts, opts, look8, &caption)
     })?);
     Ok(files)
 }
@@ -1069,6 +1738,42 @@ mod tests {
         let axis = Axis::Log { lo: -1.0, hi: 3.0, powers: false };
         assert_eq!((axis.label(-1.0), axis.label(2.0), axis.label(0.5)), ("0.1".into(), "100".into(), String::new()));
         assert_eq!(axis.map(0.0), -1.0);
+    }
+
+    #[test]
+    fn plot_variance_intervals_are_chi_square_and_widen_with_tails() {
+        // Normal values: n − 1 degrees of freedom; about ±3.5% at n = 6400.
+        let (lo, hi) = variance_interval(1.0, 6400, 0.0).unwrap();
+        assert!((0.96..0.97).contains(&lo) && (1.03..1.04).contains(&hi), "{lo} {hi}");
+        // n = 350 (the paper's records): about −14% / +16%.
+        let (lo, hi) = variance_interval(1.0, 350, 0.0).unwrap();
+        assert!((0.85..0.88).contains(&lo) && (1.15..1.18).contains(&hi), "{lo} {hi}");
+        // Heavy tails widen it; it never claims more than n − 1 degrees of freedom.
+        let (lo_t, hi_t) = variance_interval(1.0, 350, 3.0).unwrap();
+        assert!(lo_t < lo && hi_t > hi);
+        assert_eq!(variance_interval(1.0, 350, -1.9), variance_interval(1.0, 350, 0.0).map(|_| (lo, hi)));
+        assert!(variance_interval(1.0, 1, 0.0).is_none());
+    }
+
+    #[test]
+    fn plot_pairs_measured_loads_with_their_own_or_the_nearest_curve() {
+        let point = |n: f64| MeasuredPoint {
+            excitation_frequency_hz: 7.0,
+            normal_force_n: n,
+            peak_mean_m: 4e-3,
+            peak_var_m2: None,
+            n_peaks: None,
+            phase_deg: None,
+            peaks_m: Vec::new(),
+        };
+        let forces = [4.0, 8.0, 12.0, 16.39];
+        assert_eq!(pair(&forces, &point(16.39)), Some(Pairing { curve: 3, force_n: 16.39, same_load: true }));
+        assert_eq!(pair(&forces, &point(16.4)).map(|p| p.same_load), Some(true));
+        assert_eq!(pair(&forces, &point(7.519)), Some(Pairing { curve: 1, force_n: 8.0, same_load: false }));
+        assert_eq!(pair(&forces, &point(15.3)).map(|p| p.force_n), Some(16.39));
+        assert_eq!(pair(&[], &point(1.0)), None);
+        assert_eq!(percent(-2.94), "−2.9%");
+        assert_eq!(percent(0.044), "+0.04%");
     }
 
     #[test]

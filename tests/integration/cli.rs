@@ -109,6 +109,8 @@ fn sweep_writes_the_contract_columns() {
         "5",
         "--set",
         "friction.a=0.3",
+        // The grid as given: 2 × 2 rows (the refinement has its own test).
+        "--no-refine",
     ]);
     assert!(ok, "{stderr}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
@@ -268,6 +270,76 @@ fn shards_merge_into_the_unsharded_run() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The adaptive refinement adds frequencies across the resonance, the same
+/// ones in every shard, so shards merged still equal the unsharded run byte
+/// for byte; `--no-refine` keeps the grid as given.
+#[test]
+fn refined_shards_merge_into_the_unsharded_run() {
+    let dir = scratch("refine");
+    let args = |out: &Path, extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = [
+            "sweep",
+            "--backend",
+            "cpu",
+            "--no-plots",
+            "--frequencies",
+            "9.5:10.5:3",
+            "--normal-forces",
+            "4,16.39",
+            "--realisations",
+            "4",
+            "--cycles",
+            "5",
+            "--warmup-cycles",
+            "30",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |v: Vec<String>| {
+        let refs: Vec<&str> = v.iter().map(String::as_str).collect();
+        let (ok, stdout, err) = stickslip_out(&refs);
+        assert!(ok, "{err}");
+        (stdout, err)
+    };
+    let whole = dir.join("whole");
+    let (stdout, err) = run(args(&whole, &[]));
+    assert!(err.contains("refine: added"), "{err}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("sweep.json")).unwrap()).unwrap();
+    let added: Vec<f64> =
+        sidecar["refinement"]["added_frequencies_hz"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(!added.is_empty() && added.len() <= 3, "{added:?}");
+    assert!(added.iter().all(|f| *f > 9.5 && *f < 10.5), "{added:?}");
+    let frequencies = sidecar["frequencies_hz"].as_array().unwrap().len();
+    assert_eq!(frequencies, 3 + added.len());
+    assert!(stdout.contains(&format!("{} added by refinement", added.len())), "{stdout}");
+    let mut shards = Vec::new();
+    for k in 0..3 {
+        let d = dir.join(format!("shard-{k}"));
+        let shard = format!("{k}/3");
+        run(args(&d, &["--shard", &shard]));
+        shards.push(d);
+    }
+    let merged = dir.join("merged");
+    let mut merge = vec!["merge".to_string(), "--out".into(), merged.to_str().unwrap().into()];
+    merge.extend(shards.iter().map(|d| d.to_str().unwrap().to_string()));
+    run(merge);
+    for f in ["sweep.csv", "histograms.csv", "accumulators.json"] {
+        same_bytes(&whole, &merged, f);
+    }
+    let plain = dir.join("plain");
+    run(args(&plain, &["--no-refine"]));
+    let rows = std::fs::read_to_string(plain.join("sweep.csv")).unwrap().lines().count() - 1;
+    assert_eq!(rows, 3 * 2, "--no-refine kept the grid");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The CPU backend's output does not depend on the number of threads.
 #[test]
 fn cpu_sweep_is_identical_whatever_the_thread_count() {
@@ -389,13 +461,109 @@ fn cli_completions_and_man_page() {
     assert!(stdout.contains("Random seed"), "the man page lacks --seed's help");
 }
 
+/// A reader that goes away (`stickslip completions bash | head`) ends the
+/// command quietly: exit 0, nothing on stderr, no panic; and `--help` lists
+/// `completions` and `man`.
+#[test]
+fn cli_a_closed_stdout_ends_quietly() {
+    for args in [&["completions", "bash"][..], &["completions", "zsh"], &["completions", "fish"], &["man"]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("runs");
+        // Close the only read end before the child writes: every write fails with EPIPE.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().expect("ends");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && stderr.is_empty(), "{args:?}: {:?}, stderr: {stderr}", out.status);
+    }
+    let (ok, stdout, err) = stickslip_out(&["--help"]);
+    assert!(ok, "{err}");
+    for command in ["completions", "man"] {
+        assert!(stdout.lines().any(|l| l.trim_start().starts_with(command)), "--help lacks `{command}`:\n{stdout}");
+    }
+}
+
+/// `simulate` writes its sample times as `i / rate`, the shortest decimal
+/// that reads back as that `f64`: no float noise such as 0.0016666666666669272.
+#[test]
+fn simulate_writes_exact_sample_times() {
+    let dir = scratch("times");
+    let out = dir.join("out");
+    let (ok, _, err) = stickslip_out(&[
+        "simulate",
+        "--out",
+        out.to_str().unwrap(),
+        "--realisations",
+        "1",
+        "--duration",
+        "2",
+        "--warmup-cycles",
+        "3",
+    ]);
+    assert!(ok, "{err}");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    let text = std::fs::read_to_string(out.join(manifest["runs"][0]["file"].as_str().unwrap())).unwrap();
+    for (i, line) in text.lines().skip(1).enumerate() {
+        let t = line.split(',').next().unwrap();
+        assert_eq!(t, format!("{}", i as f64 / 600.0), "sample {i}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The paper's Figure 8 workflow: a one-frequency grid at the measured loads
+/// shows the simulated means beside the measured ones, with the miss in per
+/// cent; a grid at other loads sets each measured point against the nearest
+/// simulated load and says so; titles are captions.
+#[test]
+fn plot_sets_measured_points_against_their_loads() {
+    let dir = scratch("figure8-plot");
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
+    let sweep = |forces: &str, out: &Path| {
+        let (ok, _, err) = stickslip_out(&[
+            "sweep",
+            "--backend",
+            "cpu",
+            "--frequencies",
+            "7",
+            "--normal-forces",
+            forces,
+            "--realisations",
+            "4",
+            "--cycles",
+            "20",
+            "--warmup-cycles",
+            "20",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+        let (ok, _, err) = stickslip_out(&["plot", out.to_str().unwrap(), "--measured", figure8.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        (std::fs::read_to_string(out.join("fig9a.svg")).unwrap(), err)
+    };
+    let (same, _) = sweep("7.519,11.5,15.3,16.39", &dir.join("same"));
+    for load in ["7.519 N: simulated", "11.5 N: simulated", "15.3 N: simulated", "16.39 N: simulated"] {
+        assert!(same.contains(load), "fig9a lacks `{load}`");
+    }
+    assert!(same.contains("Figure 9(a) at one frequency") && !same.contains("nearest simulated load"));
+    let (nearest, err) = sweep("4,8,12,16.39", &dir.join("nearest"));
+    assert!(nearest.contains("nearest simulated load 8 N"), "7.519 N is not set against 8 N");
+    assert!(nearest.contains("nearest simulated load 16.39 N"), "15.3 N is not set against 16.39 N");
+    assert!(err.contains("against the nearest simulated load 8 N"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `plot` redraws a sweep without simulating, with the measured Figure 8
 /// statistics drawn over it, at a journal size; and a diagnosis's charts.
 #[test]
 fn plot_redraws_a_sweep_with_the_measured_overlay() {
     let dir = scratch("plot");
     let sweep = dir.join("sweep");
-    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/figure8");
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
     let (ok, _, err) = stickslip_out(&[
         "sweep",
         "--backend",

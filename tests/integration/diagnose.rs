@@ -20,7 +20,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn figure8() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/figure8")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8")
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! Reading measurement sets: the Figure 8 set, every bad-input rule of
-//! `shared/spec/measurement-format.md`, and a round trip through stickslip's
+//! `docs/formats.md`, and a round trip through stickslip's
 //! own writers.
 
 use std::path::{Path, PathBuf};
@@ -95,7 +95,7 @@ fn refused(dir: &Path, file: &str, line: Option<u64>, problem: &[&str]) {
 
 #[test]
 fn figure8_summary_set() {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/figure8"));
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/data/figure8"));
     let set = read_measurement_set(dir).expect("figure8 reads");
     assert!(set.runs.is_empty());
     assert_eq!(set.summary.len(), 4);

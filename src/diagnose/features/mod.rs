@@ -2,7 +2,7 @@
 //! measured runs ([`read_measurement_set`](crate::diagnose::measure::read_measurement_set))
 //! and from simulated records (the engine's samples → [`Run::from_samples`]).
 //!
-//! Each feature targets one of the effects named in `shared/spec/model.md`:
+//! Each feature targets one of the effects named in `docs/model.md`:
 //!
 //! | group | features | effect it looks at |
 //! | --- | --- | --- |

@@ -1,4 +1,4 @@
-//! Reading measurement sets (`shared/spec/measurement-format.md`).
+//! Reading measurement sets (`docs/formats.md`).
 //!
 //! A measurement set is a directory with `manifest.json`, the run files it
 //! names (time series, CSV) and an optional summary table (CSV). All values

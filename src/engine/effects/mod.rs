@@ -1,4 +1,4 @@
-//! The unmodelled effects of `shared/spec/model.md`, as optional extensions
+//! The unmodelled effects of `docs/model.md`, as optional extensions
 //! of the baseline. Each has its own table in the model file, a `form` (how
 //! it is shaped) and a strength; at zero strength the arithmetic reduces
 //! exactly to the baseline's, so paths are bit-identical (a test checks it).
