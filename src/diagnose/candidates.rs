@@ -6,7 +6,7 @@
 //!
 //! | effect | forms searched | started from | signature |
 //! | --- | --- | --- | --- |
-//! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin) | the measured N's harmonics | N's harmonics and residual variance |
+//! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin); a load that follows the block's position, N0 (1 + α x/U0 + β (x/U0)²) | the measured N's harmonics; the regression of N on x | N's harmonics and residual variance |
 //! | non-Gaussian friction | skew, heavy tails (Tukey h), each with a load exponent | the sign of the residual's skew | residual quantile skewness and tail weight |
 //! | hysteresis | build-up over a displacement (Dahl), lag in time (Hess & Soom), relaxation over a slip distance (rate-and-state slip law, Ruina), contact ageing (rate-and-state ageing law, Dieterich) | the sign of the branch asymmetry; the slipping speeds | branch asymmetry, low-speed μ, residual memory |
 //! | coloured noise | AR(1) with a coloured share (Lorentzian plus white), two corners | the residual autocorrelation | residual autocorrelation, peak variance |
@@ -469,6 +469,46 @@ fn harmonic_estimates(ctx: &Context<'_>) -> Vec<(f64, [(f64, f64); 4])> {
     out
 }
 
+/// The `position` form's α and β (–, shares of N0 per U0 and per U0² of
+/// displacement) that the fitting units' records suggest: per record with
+/// a normal-force channel, the least-squares fit N ≈ c0 + c1 r + c2 r²
+/// with r = x/U0, so that c0 is the load at x = 0 (N0), α = c1/c0 and
+/// β = c2/c0; averaged over records weighted by how much of r (for α) and
+/// r² (for β) each spans. The normal force's noise and the sensor's are
+/// independent of x, so the fit is unbiased whatever their size. `None`
+/// without such records.
+fn position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
+    let data = ctx.data;
+    let (mut alpha, mut beta) = ((0.0, 0.0), (0.0, 0.0));
+    for u in data.units.iter().filter(|u| !u.heldout) {
+        for &r in &u.runs {
+            let run = &data.set.runs[r];
+            let (Some(n), u0) = (&run.normal_force, run.excitation_amplitude_m) else { continue };
+            if u0 <= 0.0 {
+                continue;
+            }
+            let len = n.len().min(run.x_m.len());
+            let fill = |i: usize, row: &mut [f64]| {
+                let r = run.x_m[i] / u0;
+                row.copy_from_slice(&[1.0, r, r * r]);
+            };
+            let Some((c, _)) = least_squares(len, 3, fill, |i| n[i]) else { continue };
+            if c[0] <= 0.0 {
+                continue;
+            }
+            let spread = |p: i32| mean(&run.x_m[..len].iter().map(|x| (x / u0).powi(p)).collect::<Vec<_>>());
+            let (w1, w2) = (spread(2), (spread(4) - spread(2).powi(2)).max(0.0));
+            alpha = (alpha.0 + w1 * c[1] / c[0], alpha.1 + w1);
+            beta = (beta.0 + w2 * c[2] / c[0], beta.1 + w2);
+        }
+    }
+    if alpha.1 <= 0.0 || beta.1 <= 0.0 {
+        return None;
+    }
+    let (a, b) = (alpha.0 / alpha.1, beta.0 / beta.1);
+    (a.is_finite() && b.is_finite()).then_some((a, b))
+}
+
 /// The forms searched for `effect`, started where the data point; empty
 /// where the data carry no trace of it (no channel it could show in).
 pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
@@ -481,9 +521,31 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
             if !normal_force {
                 return Vec::new();
             }
+            let mut out = Vec::new();
+            if let Some((alpha, beta)) = position_estimate(ctx) {
+                // The load that follows the block's position: started at
+                // the regression of the measured N on x/U0 and its square,
+                // both terms scaled together.
+                out.push(Variant {
+                    effect,
+                    form: "position",
+                    params: vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)],
+                    apply: Box::new(move |m, p| {
+                        let mut m = m.clone();
+                        m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
+                            form: HarmonicForm::Position,
+                            amplitudes_n: [0.0; 4],
+                            amplitudes_per_n0: [alpha * p[0], beta * p[0], 0.0, 0.0],
+                            phases_rad: [0.0; 4],
+                            shape: 2.0,
+                        });
+                        m
+                    }),
+                });
+            }
             let estimates = harmonic_estimates(ctx);
             if estimates.is_empty() {
-                return Vec::new();
+                return out;
             }
             let phases: [f64; 4] = std::array::from_fn(|k| {
                 let p: Vec<f64> = estimates.iter().filter(|e| e.1[k].0 > 0.0).map(|e| e.1[k].1).collect();
@@ -511,7 +573,7 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                 p
             };
             let shift = |p: &[f64]| p.get(1).copied().unwrap_or(0.0);
-            vec![
+            out.extend([
                 Variant {
                     effect,
                     form: "fourier (amplitudes a share of N0)",
@@ -534,7 +596,8 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
                         m
                     }),
                 },
-            ]
+            ]);
+            out
         }
         Effect::NonGaussianFriction => {
             if !friction {

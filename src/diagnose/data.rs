@@ -14,6 +14,7 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::simulate::{RecordCache, UnitGrids};
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
+use crate::engine::effects::HarmonicForm;
 use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
 
@@ -44,8 +45,8 @@ pub(crate) struct Data<'a> {
     /// Record length per unit, s (for simulated records).
     pub(crate) record_s: Vec<f64>,
     pub(crate) sample_interval_s: f64,
-    /// Mean measured normal force per condition key (where recorded), N.
-    pub(crate) measured_normal_force_n: BTreeMap<(i64, i64), f64>,
+    /// The measured normal force per condition key (where recorded).
+    pub(crate) measured_load: BTreeMap<(i64, i64), MeasuredLoad>,
     /// Longest record, s.
     pub(crate) longest_record_s: f64,
     /// The friction law fitted to the fitting units' force channels, at the
@@ -64,6 +65,32 @@ pub(crate) struct Data<'a> {
     pub(crate) fold: Option<usize>,
     /// What every view shares: the simulation caches.
     pub(crate) caches: Arc<Caches>,
+}
+
+/// A condition's measured normal force, and the moments of its records'
+/// displacement that a load following the position needs.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct MeasuredLoad {
+    /// Mean normal force, N.
+    pub(crate) mean_n: f64,
+    /// Mean of r = x/U0 and of r² (–; U0 the run's base amplitude, 0
+    /// where it is 0).
+    pub(crate) mean_r: f64,
+    pub(crate) mean_r2: f64,
+}
+
+impl MeasuredLoad {
+    fn of(n: &[f64], x_m: &[f64], u0_m: f64) -> MeasuredLoad {
+        let r: Vec<f64> = if u0_m > 0.0 { x_m.iter().map(|x| x / u0_m).collect() } else { Vec::new() };
+        let r2: Vec<f64> = r.iter().map(|r| r * r).collect();
+        let or_zero = |v: &[f64]| if v.is_empty() { 0.0 } else { mean(v) };
+        MeasuredLoad { mean_n: mean(n), mean_r: or_zero(&r), mean_r2: or_zero(&r2) }
+    }
+
+    fn mean(loads: &[MeasuredLoad]) -> MeasuredLoad {
+        let of = |f: fn(&MeasuredLoad) -> f64| mean(&loads.iter().map(f).collect::<Vec<_>>());
+        MeasuredLoad { mean_n: of(|l| l.mean_n), mean_r: of(|l| l.mean_r), mean_r2: of(|l| l.mean_r2) }
+    }
 }
 
 /// Simulation caches of a diagnosis, shared by every view of its data.
@@ -425,16 +452,16 @@ impl<'a> Data<'a> {
             }
         }
         let sample_interval_s = set.runs.first().map(|r| r.sample_interval_s()).unwrap_or(1.0 / 600.0);
-        // Mean measured normal force per condition, over the runs that record it.
-        let mut forces: BTreeMap<(i64, i64), Vec<f64>> = BTreeMap::new();
+        // The measured normal force per condition, over the runs that record it.
+        let mut forces: BTreeMap<(i64, i64), Vec<MeasuredLoad>> = BTreeMap::new();
         for r in &set.runs {
             if let Some(n) = &r.normal_force {
                 let c =
                     Condition { excitation_frequency_hz: r.excitation_frequency_hz, normal_force_n: r.normal_force_n };
-                forces.entry(condition_key(c)).or_default().push(mean(n));
+                forces.entry(condition_key(c)).or_default().push(MeasuredLoad::of(n, &r.x_m, r.excitation_amplitude_m));
             }
         }
-        let measured_normal_force_n = forces.into_iter().map(|(k, v)| (k, mean(&v))).collect();
+        let measured_load = forces.into_iter().map(|(k, v)| (k, MeasuredLoad::mean(&v))).collect();
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
         let sensor = SensorNoise::estimate(&set.runs);
@@ -446,7 +473,7 @@ impl<'a> Data<'a> {
             features,
             record_s,
             sample_interval_s,
-            measured_normal_force_n,
+            measured_load,
             longest_record_s,
             measured_law,
             law_c: measured_law.map(|l| l.c),
@@ -500,9 +527,12 @@ impl<'a> Data<'a> {
 
     /// The condition a unit is simulated at under `model`: N0 such that the
     /// simulated record's mean normal force equals the measured mean (where
-    /// recorded), allowing for the model's drift over warm-up and record.
+    /// recorded), allowing for the model's drift over warm-up and record and
+    /// for a load that follows the position (its N0 is the load at x = 0,
+    /// read from the measured mean with the measured displacement's
+    /// moments).
     pub(crate) fn simulated_condition(&self, u: &Unit, model: &Model, warmup_cycles: u32) -> Condition {
-        let Some(&measured) = self.measured_normal_force_n.get(&condition_key(u.condition)) else { return u.condition };
+        let Some(&load) = self.measured_load.get(&condition_key(u.condition)) else { return u.condition };
         let start = f64::from(warmup_cycles) / u.condition.excitation_frequency_hz;
         let length = self.longest_record_s;
         // The engine scales N0 by the drift's nominal scale (where the model
@@ -512,7 +542,15 @@ impl<'a> Data<'a> {
             .normal_force_drift
             .as_ref()
             .map_or(1.0, |d| d.mean_factor(start, start + length) * d.nominal_scale());
-        Condition { normal_force_n: measured / factor, ..u.condition }
+        // A load that follows the position adds N0 (α r + β r²) to N, whose
+        // mean over the measured record is N0 (α r̄ + β r²̄).
+        let position = match &model.effects.normal_force_harmonics {
+            Some(h) if h.form == HarmonicForm::Position => {
+                (1.0 + h.amplitudes_per_n0[0] * load.mean_r + h.amplitudes_per_n0[1] * load.mean_r2).max(0.1)
+            }
+            _ => 1.0,
+        };
+        Condition { normal_force_n: load.mean_n / (factor * position), ..u.condition }
     }
 }
 

@@ -375,6 +375,18 @@ pub fn write_diagnosis_with(
                 "# normal_force_drift: a sweep's normal force is the drifting force's mean over {start:.3} s to {end:.3} s of each run\n# (normal_force_drift.mean_over_s), as the measured records' nominal force was their mean.\n"
             )?;
         }
+        if diagnosis
+            .fitted
+            .effects
+            .normal_force_harmonics
+            .as_ref()
+            .is_some_and(|h| h.form == crate::engine::effects::HarmonicForm::Position)
+        {
+            writeln!(
+                w,
+                "# normal_force_harmonics (position): a sweep's normal force N0 is the load with the block at x = 0; the mean\n# force over a record is N0 (1 + a mean(x/U0) + b mean((x/U0)^2)), as the measured records' mean was.\n"
+            )?;
+        }
         w.write_all(diagnosis.fitted.to_toml_string().as_bytes())
     })?;
     let files = chart::write_gap_chart(out, diagnosis)?;
