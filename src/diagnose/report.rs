@@ -89,6 +89,52 @@ pub struct VerdictEffect {
     pub folds: Vec<FoldReport>,
     /// The fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
+    /// A load dependence in physical terms: the friction coefficient at
+    /// rest at each measured load, baseline and fitted (empty for other
+    /// effects).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub friction_at_loads: Vec<FrictionAtLoad>,
+}
+
+/// The friction coefficient at rest, μ(0) = a + b with the load dependence
+/// applied (an adhesion force A counted as A/N0), at one measured load.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrictionAtLoad {
+    /// The nominal normal force, N.
+    pub normal_force_n: f64,
+    /// The calibrated baseline's μ(0) there, –.
+    pub baseline_mu: f64,
+    /// The fitted model's μ(0) there, –.
+    pub fitted_mu: f64,
+    /// The standard deviation of μ(0) over the models refitted without each
+    /// fold, –: how much the fitted value depends on which loads it saw.
+    pub fitted_mu_sd: Option<f64>,
+}
+
+/// μ(0) of `model` at nominal load `n0_n` (N): see [`FrictionAtLoad`].
+fn mu_at_rest(model: &crate::engine::Model, n0_n: f64) -> f64 {
+    let law = model.friction.a + model.friction.b;
+    let e = crate::engine::effects::EffectParams::new(&model.effects, n0_n, law, model.noise.interval_s);
+    law * e.friction_scale + e.friction_offset + e.adhesion_force_n / n0_n.max(1e-9)
+}
+
+/// The friction at each measured load, for a named load dependence.
+fn friction_at_loads(d: &Diagnosis) -> Vec<FrictionAtLoad> {
+    let mut loads: Vec<f64> = d.conditions.iter().map(|c| c.normal_force_n).collect();
+    loads.sort_by(f64::total_cmp);
+    loads.dedup();
+    loads
+        .into_iter()
+        .map(|n| {
+            let folds: Vec<f64> = d.fold_models.iter().map(|(_, after)| mu_at_rest(after, n)).collect();
+            FrictionAtLoad {
+                normal_force_n: n,
+                baseline_mu: mu_at_rest(&d.baseline, n),
+                fitted_mu: mu_at_rest(&d.fitted, n),
+                fitted_mu_sd: (folds.len() >= 2).then(|| sd(&folds)),
+            }
+        })
+        .collect()
 }
 
 /// One fold's gap before and after.
@@ -247,6 +293,11 @@ impl Diagnosis {
                         form_misfit: e.form_misfit,
                         folds: e.folds.iter().map(FoldReport::from).collect(),
                         parameters: e.parameters.clone(),
+                        friction_at_loads: if e.effect == crate::engine::Effect::LoadDependentFriction {
+                            friction_at_loads(self)
+                        } else {
+                            Vec::new()
+                        },
                     })
                     .collect(),
                 unexplained_share: self.unexplained_share,
@@ -505,6 +556,19 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
             ));
         }
         s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions in which the effect wins: its family closes the largest share of what the model before it left of the out-of-sample gap, at least half of it, above the noise. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
+        for e in report.verdict.effects.iter().filter(|e| !e.friction_at_loads.is_empty()) {
+            s.push_str(&format!("<p>{} in physical terms: the friction coefficient at rest, μ(0), at each measured load.</p><table><tr><th>normal force (N)</th><th>baseline μ(0)</th><th>fitted μ(0)</th><th>± over the folds' refits</th></tr>", escape(&e.effect)));
+            for f in &e.friction_at_loads {
+                s.push_str(&format!(
+                    "<tr><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{}</td></tr>",
+                    sig(f.normal_force_n),
+                    f.baseline_mu,
+                    f.fitted_mu,
+                    f.fitted_mu_sd.map_or("–".to_string(), |x| format!("{x:.4}"))
+                ));
+            }
+            s.push_str("</table>");
+        }
     }
     s.push_str(&format!(
         "<p>Left unexplained: {:.0}% of the baseline's out-of-sample gap above the noise floor. Folds: {}.</p>",
@@ -549,7 +613,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
         ));
     }
     s.push_str("</table>");
-    s.push_str("<p class=\"note\">The gap is the mean over every scored (condition, observable) of a loss of z, where z is measured − simulated in units of the simulator's own spread: z² up to |z| = 3 and growing linearly beyond, so a model that matches the data to within noise scores about 1.3. <b>Shrink</b> = (baseline − after) / baseline: 0.4 means the gap fell by 40%. <b>A negative shrink</b> means the fitted model predicts that fold worse than the baseline does.</p>");
+    s.push_str("<p class=\"note\">The gap is the mean over every scored (condition, observable) of ln(1 + z²), where z is measured − simulated in units of the simulator's own spread: about z² for small misses and growing only with the logarithm of large ones, so a model that matches the data to within noise scores about 0.6. <b>Shrink</b> = (baseline − after) / baseline: 0.4 means the gap fell by 40%. <b>A negative shrink</b> means the fitted model predicts that fold worse than the baseline does.</p>");
     let worse: Vec<&FoldReport> = gap.heldout_folds.iter().filter(|f| f.shrink < 0.0).collect();
     if !d.effects.is_empty() && !worse.is_empty() {
         s.push_str(&format!(
