@@ -23,9 +23,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::diagnose::calibrate::FrictionLaw;
 use crate::diagnose::data::{Data, levels};
 use crate::diagnose::features::least_squares;
+use crate::diagnose::law::FrictionLaw;
 use crate::diagnose::mean;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;

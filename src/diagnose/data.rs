@@ -2,16 +2,16 @@
 //! condition's runs, or one run, or one summary row), split into fitting and
 //! held-out units, with each unit's measured observables.
 
-use std::collections::{BTreeMap, HashMap};
-use std::sync::{Arc, Mutex};
+use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::diagnose::calibrate::{self, FrictionLaw};
+use crate::diagnose::cache::Caches;
 use crate::diagnose::features::{RunFeatures, run_features};
+use crate::diagnose::law::{self, FrictionLaw};
 use crate::diagnose::measure::{MeasurementSet, Run};
 use crate::diagnose::observable::Observable;
-use crate::diagnose::simulate::{RecordCache, UnitGrids};
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::effects::HarmonicForm;
@@ -90,42 +90,6 @@ impl MeasuredLoad {
     fn mean(loads: &[MeasuredLoad]) -> MeasuredLoad {
         let of = |f: fn(&MeasuredLoad) -> f64| mean(&loads.iter().map(f).collect::<Vec<_>>());
         MeasuredLoad { mean_n: of(|l| l.mean_n), mean_r: of(|l| l.mean_r), mean_r2: of(|l| l.mean_r2) }
-    }
-}
-
-/// Simulation caches of a diagnosis, shared by every view of its data.
-#[derive(Default)]
-pub(crate) struct Caches {
-    /// The sensor-noise draws of simulated replicate records, by (seed,
-    /// realisation): the same for every model, so drawn once per diagnosis
-    /// (they were a tenth of its time).
-    pub(crate) sensor_draws: SensorDraws,
-    /// What the last models' replicate records gave, unit by unit
-    /// (features, the law's moments): each record simulated once.
-    pub(crate) records: RecordCache,
-    /// Each unit's simulated records' sample grid, made once.
-    pub(crate) grids: UnitGrids,
-}
-
-/// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,
-/// by (seed, realisation), computed once and shared.
-#[derive(Debug, Default)]
-pub(crate) struct SensorDraws(Mutex<HashMap<(u64, u32), Draws>>);
-
-/// One record's sensor-noise draws: a standard Gaussian pair per sample.
-type Draws = Arc<Vec<(f64, f64)>>;
-
-impl SensorDraws {
-    /// The first `n` pairs of (seed, realisation), made by `draw` (given
-    /// the sample index) the first time they are asked for.
-    pub(crate) fn get(&self, seed: u64, realisation: u32, n: usize, draw: impl Fn(usize) -> (f64, f64)) -> Draws {
-        let cached = self.0.lock().expect("sensor draws lock").get(&(seed, realisation)).cloned();
-        if let Some(d) = cached.filter(|d| d.len() >= n) {
-            return d;
-        }
-        let drawn = Arc::new((0..n).map(draw).collect::<Vec<_>>());
-        self.0.lock().expect("sensor draws lock").insert((seed, realisation), Arc::clone(&drawn));
-        drawn
     }
 }
 
@@ -465,7 +429,7 @@ impl<'a> Data<'a> {
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
         let sensor = SensorNoise::estimate(&set.runs);
-        let measured_law = calibrate::fit_friction_law(&all_runs, sensor.v_m_per_s);
+        let measured_law = law::fit_friction_law(&all_runs, sensor.v_m_per_s);
         Ok(Data {
             set,
             units,
@@ -502,7 +466,7 @@ impl<'a> Data<'a> {
                 .filter(|u| !u.heldout)
                 .flat_map(|u| u.runs.iter().map(|&r| &self.set.runs[r]))
                 .collect();
-            view.measured_law = calibrate::fit_friction_law_at(&runs, self.sensor.v_m_per_s, all.c);
+            view.measured_law = law::fit_friction_law_at(&runs, self.sensor.v_m_per_s, all.c);
         }
         view
     }

@@ -23,12 +23,14 @@
 //! outputs, and [`synthetic`] and [`benchmark`] check the whole blind.
 
 pub mod benchmark;
+pub(crate) mod cache;
 pub mod calibrate;
 pub mod candidates;
 mod chart;
 pub mod data;
 pub mod features;
 mod frame;
+pub mod law;
 pub mod measure;
 pub mod observable;
 pub mod report;

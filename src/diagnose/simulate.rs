@@ -3,14 +3,14 @@
 //! are the same for every model, so differences between models are not
 //! noise), and per-path peak statistics of small ensembles.
 
-use std::collections::{BTreeMap, HashMap, VecDeque};
-use std::sync::{Arc, Mutex};
+use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
-use crate::diagnose::calibrate::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
+use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
-use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
+use crate::diagnose::features::{RunFeatures, run_features_on};
+use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
 use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
@@ -109,33 +109,6 @@ pub(crate) fn features_of(data: &Data<'_>, unit: usize, runs: &[Run]) -> Vec<Run
     runs.iter().map(|r| run_features_on(r, &grid)).collect()
 }
 
-/// The [`SampleGrid`] of each unit's simulated records, made from the first
-/// record that needs it (and again should a record be sampled otherwise).
-#[derive(Default)]
-pub(crate) struct UnitGrids(Mutex<HashMap<usize, Arc<SampleGrid>>>);
-
-impl UnitGrids {
-    /// Unit `unit`'s grid, one that serves `run`.
-    fn of(&self, unit: usize, run: &Run) -> Arc<SampleGrid> {
-        let kept = self.0.lock().expect("grids lock").get(&unit).cloned();
-        if let Some(grid) = kept.filter(|g| g.serves(run)) {
-            return grid;
-        }
-        let grid = Arc::new(SampleGrid::of(run));
-        self.0.lock().expect("grids lock").insert(unit, Arc::clone(&grid));
-        grid
-    }
-}
-
-/// What the diagnosis reads from one replicate record: its features, and
-/// the moments of its slipping samples for the friction law's fit at the
-/// measured law's Stribeck rate (where there is a measured law).
-#[derive(Clone, Debug)]
-struct RecordReading {
-    features: RunFeatures,
-    moments: Option<LawMoments>,
-}
-
 /// What the diagnosis reads from a model's replicate records of the data's
 /// fitting units (time-series units that are not held out): each record's
 /// features, and the friction law fitted to their slipping samples.
@@ -149,55 +122,6 @@ pub(crate) struct FittingRecords {
     /// measured law or with fewer than 50 slipping samples). It carries no
     /// anchors: a simulated law is read through `mu` and `sigma` alone.
     pub(crate) law: Option<FrictionLaw>,
-}
-
-/// How many models' readings a diagnosis keeps.
-const KEPT_MODELS: usize = 96;
-
-/// The readings of record units' replicate records ([`RecordReading`], per
-/// unit, replicates `0..n` in order) of the last [`KEPT_MODELS`] models, by
-/// (model, noise seed, warm-up). A replicate record is determined by
-/// (model, seed, warm-up, unit, replicate number), so each is simulated
-/// once per diagnosis, whichever view of the data (fold) asks for it: a
-/// law step reads the records of the model it steps from, which were
-/// simulated to score that model a moment before; a form's best model,
-/// searched on half the replicates, is then calibrated on all of them; a
-/// fold's held-out units are another fold's fitting units.
-#[derive(Default)]
-pub(crate) struct RecordCache(Mutex<VecDeque<KeptReadings>>);
-
-/// A model's readings by unit, with the noise seed and warm-up periods
-/// they were simulated with.
-type KeptReadings = (Model, u64, u32, BTreeMap<usize, Vec<RecordReading>>);
-
-impl RecordCache {
-    /// The readings kept for `model` under `settings` (by unit, the
-    /// replicates simulated so far), if any.
-    fn get(&self, model: &Model, settings: &DiagnoseSettings) -> BTreeMap<usize, Vec<RecordReading>> {
-        let kept = self.0.lock().expect("record cache lock");
-        kept.iter()
-            .find(|(m, seed, warmup, _)| m == model && *seed == settings.seed && *warmup == settings.warmup_cycles)
-            .map(|(_, _, _, readings)| readings.clone())
-            .unwrap_or_default()
-    }
-
-    /// Keeps `readings` for `model` under `settings` (replacing what was
-    /// kept for those units of it).
-    fn insert(&self, model: &Model, settings: &DiagnoseSettings, readings: BTreeMap<usize, Vec<RecordReading>>) {
-        let mut kept = self.0.lock().expect("record cache lock");
-        let at = kept
-            .iter()
-            .position(|(m, seed, warmup, _)| m == model && *seed == settings.seed && *warmup == settings.warmup_cycles);
-        let mut entry = match at {
-            Some(i) => kept.remove(i).expect("a kept entry"),
-            None => (model.clone(), settings.seed, settings.warmup_cycles, BTreeMap::new()),
-        };
-        entry.3.extend(readings);
-        if kept.len() == KEPT_MODELS {
-            kept.pop_front();
-        }
-        kept.push_back(entry);
-    }
 }
 
 /// The readings of `model`'s replicates `0..settings.replicates` of the

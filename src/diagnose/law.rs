@@ -1,0 +1,569 @@
+//! The friction law as the force channels give it: the paper's
+//! μ(v) = a + b / (1 + c |v|) + d v² fitted by least squares to the slipping
+//! samples of records, with the residual spread σ_μ (–), and the moments a
+//! simulated record's law is read from so that simulated and measured
+//! records are read alike.
+
+use rayon::prelude::*;
+
+use crate::diagnose::features::solve_normal;
+use crate::diagnose::measure::Run;
+use crate::engine::Model;
+
+/// The paper's law `μ(v) = a + b / (1 + c |v|) + d v²` fitted to slipping
+/// samples, with the residual standard deviation around it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FrictionLaw {
+    /// Mean level over the samples (records' levels may differ), –.
+    pub(crate) a: f64,
+    /// –
+    pub(crate) b: f64,
+    /// s/m
+    pub(crate) c: f64,
+    /// s²/m²
+    pub(crate) d: f64,
+    /// Residual standard deviation of μ within records (around the fit,
+    /// whose levels are per record, so a friction level that differs
+    /// between records — with the load, over a drift — is not counted as
+    /// noise), –. The fit over `c` minimises it; σ_μ is matched by it.
+    pub(crate) sigma: f64,
+    /// The slipping speeds' 5%, 15%, …, 95% quantiles, m/s: where the law
+    /// is known.
+    pub(crate) anchors_m_per_s: [f64; 10],
+}
+
+/// The largest |d| a fitted law may have, s²/m²: d v² then reaches 0.3 at
+/// 0.3 m/s, beyond any steel-on-steel law we know of (the paper's 0.105).
+const MAX_D_S2_PER_M2: f64 = 3.0;
+
+impl FrictionLaw {
+    /// This law moved at the `measured` law's anchor speeds by what the
+    /// measured law and the `simulated` one (the same fit on simulated
+    /// records) differ by there, refitted at this law's Stribeck rate;
+    /// `None` where the refit is singular or implausible.
+    pub(crate) fn moved(&self, measured: &FrictionLaw, simulated: &FrictionLaw) -> Option<FrictionLaw> {
+        let anchors = SlipSamples {
+            speed: measured.anchors_m_per_s.to_vec(),
+            mu: measured.anchors_m_per_s.iter().map(|&v| self.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
+            record: vec![0; measured.anchors_m_per_s.len()],
+            anchors_m_per_s: speed_deciles(&measured.anchors_m_per_s),
+        };
+        anchors.fit_at(self.c).filter(|l| l.plausible())
+    }
+
+    /// The model's law (no anchors).
+    pub(crate) fn of(model: &Model) -> FrictionLaw {
+        let f = &model.friction;
+        FrictionLaw { a: f.a, b: f.b, c: f.c, d: f.d, sigma: f.sigma, anchors_m_per_s: [0.0; 10] }
+    }
+
+    /// μ at speed `v`, m/s.
+    pub(crate) fn mu(&self, v: f64) -> f64 {
+        self.a + self.b / (1.0 + self.c * v.abs()) + self.d * v * v
+    }
+
+    /// A law a rig could have: friction non-negative at rest, a Stribeck
+    /// drop and a v² term within an order of magnitude of any published
+    /// steel-on-steel law. Beyond these the four terms only trade off
+    /// against each other within the noise.
+    fn plausible(&self) -> bool {
+        let top = self.anchors_m_per_s[9].max(0.05);
+        self.a >= 0.0
+            && self.a + self.b >= 0.0
+            && self.b.abs() <= 1.0
+            && self.d.abs() <= MAX_D_S2_PER_M2
+            && (1..=8).all(|k| self.mu(0.25 * top * f64::from(k)) >= 0.0)
+    }
+}
+
+/// Stribeck rates `c` (s/m) the fit starts from before refining: 0 and a
+/// log grid from 1 to 316 s/m.
+fn law_c_grid() -> impl Iterator<Item = f64> {
+    std::iter::once(0.0).chain((0..11).map(|i| 10f64.powf(0.25 * f64::from(i))))
+}
+
+/// The slipping samples of some records: speed |v| (m/s) and μ = |F|/N,
+/// where |v| is above 5% of its record's largest, the friction opposes the
+/// motion and N > 0, and which record each came from.
+struct SlipSamples {
+    speed: Vec<f64>,
+    mu: Vec<f64>,
+    record: Vec<usize>,
+    /// The speeds' 5%, 15%, …, 95% quantiles, m/s (sorted once: every law
+    /// fitted to these samples carries them).
+    anchors_m_per_s: [f64; 10],
+}
+
+/// The 5%, 15%, …, 95% quantiles of some speeds (m/s), each the sample
+/// at or below its rank.
+/// Found by successive selection (each rank's sample put in place, the
+/// next searched only above it), the same samples a full sort gives.
+fn speed_deciles(speed: &[f64]) -> [f64; 10] {
+    let mut values = speed.to_vec();
+    let n = values.len();
+    let ranks: [usize; 10] = std::array::from_fn(|k| ((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize);
+    let mut below = 0;
+    for &rank in &ranks {
+        if rank >= below {
+            values[below..].select_nth_unstable_by(rank - below, f64::total_cmp);
+            below = rank + 1;
+        }
+    }
+    ranks.map(|rank| values[rank])
+}
+
+/// No friction law is fitted to fewer slipping samples than this.
+pub(crate) const MIN_SLIP_SAMPLES: usize = 50;
+
+/// A sample counts as slipping only beyond this many standard deviations of
+/// the velocity sensor's noise (and beyond 5% of its record's largest
+/// speed): a stuck block's measured speed is that noise alone, and its
+/// |F|/N (the spring's force, anywhere below the static friction) read as
+/// friction at a low speed bends the fitted Stribeck curve. At 3 sd a stuck
+/// sample passes with probability 0.0013 (half of that with the sign
+/// friction has while slipping).
+const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
+
+/// The samples of one run that count as slipping: speed |v| (m/s) and
+/// μ = |F|/N, where |v| is above 5% of the run's largest and above
+/// [`SLIP_SPEED_NOISE_SDS`] standard deviations of the velocity sensor's
+/// white noise `v_noise_m_per_s` (m/s; the data's estimate, which the
+/// simulated records carry too, so both sides pick alike), the friction
+/// opposes the motion and N is at least a tenth of its median
+/// ([`crate::diagnose::features::normal_force_floor`]). Empty without force
+/// channels.
+fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
+    let (mut speed, mut mu) = (Vec::new(), Vec::new());
+    let (Some(v), Some(f), Some(n)) = (&run.v_m_per_s, &run.friction_force, &run.normal_force) else {
+        return (speed, mu);
+    };
+    let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
+    let floor = crate::diagnose::features::normal_force_floor(n);
+    for i in 0..v.len().min(f.len()).min(n.len()) {
+        if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] >= floor {
+            speed.push(v[i].abs());
+            mu.push(f[i].abs() / n[i]);
+        }
+    }
+    (speed, mu)
+}
+
+/// What the within-record fit of eq. 7 at one Stribeck rate `c` reads from
+/// slipping samples ([`SlipSamples::fit_at`]), as sums that add over
+/// records: the samples' count and sums of μ, s² and g(s) = 1/(1 + c s)
+/// (for the mean level `a`), and the cross products of the columns s², g
+/// and μ, each centred on its own record's mean (so a friction level that
+/// differs between records is not read as a curve). Records summed
+/// separately (in parallel, say) give the fit all of them give at once.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LawMoments {
+    /// Samples.
+    count: usize,
+    /// Records with at least one sample.
+    records: usize,
+    /// Σμ, –.
+    sum_mu: f64,
+    /// Σs², m²/s².
+    sum_s2: f64,
+    /// Σg, –.
+    sum_g: f64,
+    /// Σ(s² − its record's mean)², m⁴/s⁴.
+    dd: f64,
+    /// Σ(s² − mean)(g − mean), m²/s².
+    dg: f64,
+    /// Σ(g − mean)², –.
+    gg: f64,
+    /// Σ(s² − mean)(μ − mean), m²/s².
+    dy: f64,
+    /// Σ(g − mean)(μ − mean), –.
+    gy: f64,
+    /// Σ(μ − mean)², –.
+    yy: f64,
+}
+
+impl LawMoments {
+    /// The moments of one record's slipping samples (`speed`, m/s; `mu`, –)
+    /// at Stribeck rate `c` (s/m).
+    fn of_record(speed: &[f64], mu: &[f64], c: f64) -> LawMoments {
+        let n = speed.len();
+        if n == 0 {
+            return LawMoments::default();
+        }
+        let g = |s: f64| 1.0 / (1.0 + c * s);
+        let (sum_mu, sum_s2, sum_g) =
+            speed.iter().zip(mu).fold((0.0, 0.0, 0.0), |(m, d, q), (&s, &y)| (m + y, d + s * s, q + g(s)));
+        let (mean_mu, mean_s2, mean_g) = (sum_mu / n as f64, sum_s2 / n as f64, sum_g / n as f64);
+        let mut m = LawMoments { count: n, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
+        for (&s, &y) in speed.iter().zip(mu) {
+            let (d, q, y) = (s * s - mean_s2, g(s) - mean_g, y - mean_mu);
+            m.dd += d * d;
+            m.dg += d * q;
+            m.gg += q * q;
+            m.dy += d * y;
+            m.gy += q * y;
+            m.yy += y * y;
+        }
+        m
+    }
+
+    /// The moments of one run's slipping samples ([`slipping_samples`]) at
+    /// Stribeck rate `c` (s/m).
+    pub(crate) fn of_run(run: &Run, v_noise_m_per_s: f64, c: f64) -> LawMoments {
+        let (speed, mu) = slipping_samples(run, v_noise_m_per_s);
+        LawMoments::of_record(&speed, &mu, c)
+    }
+
+    /// How many samples the moments are of.
+    pub(crate) fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Adds another record's (or records') moments.
+    pub(crate) fn add(&mut self, other: &LawMoments) {
+        self.count += other.count;
+        self.records += other.records;
+        for (a, b) in [
+            (&mut self.sum_mu, other.sum_mu),
+            (&mut self.sum_s2, other.sum_s2),
+            (&mut self.sum_g, other.sum_g),
+            (&mut self.dd, other.dd),
+            (&mut self.dg, other.dg),
+            (&mut self.gg, other.gg),
+            (&mut self.dy, other.dy),
+            (&mut self.gy, other.gy),
+            (&mut self.yy, other.yy),
+        ] {
+            *a += b;
+        }
+    }
+
+    /// The least-squares law at Stribeck rate `c` (s/m, the rate the
+    /// moments were taken at) with `anchors_m_per_s`: linear in (b, d)
+    /// with basis (1/(1 + c s), s²) within records; `a` is the samples'
+    /// mean level, μ's mean less the curve's. At `c = 0` the Stribeck term
+    /// is part of `a` (reported as b = 0). Where |d| comes out beyond
+    /// [`MAX_D_S2_PER_M2`] (b and d trading off along a direction the
+    /// speeds cannot resolve) d is held at that bound and b refitted.
+    /// Otherwise not constrained: as a statistic of simulated records it
+    /// must be the same function as on the measured ones. `None` where the
+    /// fit is singular.
+    pub(crate) fn law(&self, c: f64, anchors_m_per_s: [f64; 10]) -> Option<FrictionLaw> {
+        let stribeck = c != 0.0;
+        // (b, d, residual sum of squares, fitted columns) with d free or
+        // held at `fixed_d` (μ less d s² fitted then).
+        let solve = |fixed_d: Option<f64>| -> Option<(f64, f64, f64, usize)> {
+            let fd = fixed_d.unwrap_or(0.0);
+            let (gy, yy) = (self.gy - fd * self.dg, self.yy - 2.0 * fd * self.dy + fd * fd * self.dd);
+            match (fixed_d, stribeck) {
+                (None, true) => {
+                    let (coef, rss) =
+                        solve_normal(&[[self.dd, 0.0], [self.dg, self.gg]], &[self.dy, self.gy], self.yy)?;
+                    Some((coef[1], coef[0], rss, 2))
+                }
+                (None, false) => {
+                    let (coef, rss) = solve_normal(&[[self.dd]], &[self.dy], self.yy)?;
+                    Some((0.0, coef[0], rss, 1))
+                }
+                (Some(_), true) => {
+                    let (coef, rss) = solve_normal(&[[self.gg]], &[gy], yy)?;
+                    Some((coef[0], fd, rss, 1))
+                }
+                (Some(_), false) => Some((0.0, fd, yy.max(0.0), 0)),
+            }
+        };
+        let (mut b, mut d, mut rss, mut p) = solve(None)?;
+        if d.abs() > MAX_D_S2_PER_M2 {
+            (b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
+        }
+        let n = self.count as f64;
+        let a = self.sum_mu / n - d * self.sum_s2 / n - b * self.sum_g / n;
+        let sigma = (rss.max(0.0) / (self.count.saturating_sub(p + self.records)).max(1) as f64).sqrt();
+        Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s })
+    }
+}
+
+impl SlipSamples {
+    /// The slipping samples of `runs` ([`slipping_samples`]), whose
+    /// velocity channel carries white sensor noise of `v_noise_m_per_s`
+    /// (m/s); `None` with fewer than 50.
+    fn of(runs: &[&Run], v_noise_m_per_s: f64) -> Option<SlipSamples> {
+        let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, r) in runs.iter().enumerate() {
+            let (s, m) = slipping_samples(r, v_noise_m_per_s);
+            record.extend(std::iter::repeat_n(k, s.len()));
+            speed.extend(s);
+            mu.extend(m);
+        }
+        if mu.len() < MIN_SLIP_SAMPLES {
+            return None;
+        }
+        let anchors_m_per_s = speed_deciles(&speed);
+        Some(SlipSamples { speed, mu, record, anchors_m_per_s })
+    }
+
+    /// The within-record least-squares law at a given `c` (s/m; see
+    /// [`LawMoments::law`]), with these samples' anchors. With one record
+    /// this is the ordinary fit with an intercept.
+    fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
+        let mut moments = LawMoments::default();
+        let mut start = 0;
+        // Samples are grouped by record (in the order they were collected).
+        while start < self.record.len() {
+            let end = start + self.record[start..].iter().take_while(|&&k| k == self.record[start]).count();
+            moments.add(&LawMoments::of_record(&self.speed[start..end], &self.mu[start..end], c));
+            start = end;
+        }
+        moments.law(c, self.anchors_m_per_s)
+    }
+
+    /// The law with the smallest residual: over [`law_c_grid`], then by
+    /// golden-section search in log c between the best point's neighbours.
+    fn fit(&self) -> Option<FrictionLaw> {
+        let grid: Vec<f64> = law_c_grid().collect();
+        let laws: Vec<Option<FrictionLaw>> = grid.par_iter().map(|&c| self.fit_at(c)).collect();
+        let (best, law) = laws
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| l.map(|l| (i, l)))
+            .filter(|(_, l)| l.plausible())
+            .min_by(|x, y| x.1.sigma.total_cmp(&y.1.sigma))?;
+        if best == 0 {
+            return Some(law);
+        }
+        let lo = if best == 1 { grid[1] / 3.0 } else { grid[best - 1] };
+        let hi = grid.get(best + 1).copied().unwrap_or(grid[best] * 3.0);
+        let (mut lo, mut hi) = (lo.ln(), hi.ln());
+        let golden = 0.5 * (5f64.sqrt() - 1.0);
+        let sigma_at = |x: f64| self.fit_at(x.exp()).filter(|l| l.plausible()).map_or(f64::INFINITY, |l| l.sigma);
+        let (mut x1, mut x2) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+        let (mut f1, mut f2) = (sigma_at(x1), sigma_at(x2));
+        for _ in 0..14 {
+            if f1 < f2 {
+                (hi, x2, f2) = (x2, x1, f1);
+                x1 = hi - golden * (hi - lo);
+                f1 = sigma_at(x1);
+            } else {
+                (lo, x1, f1) = (x1, x2, f2);
+                x2 = lo + golden * (hi - lo);
+                f2 = sigma_at(x2);
+            }
+        }
+        let refined = self.fit_at((0.5 * (lo + hi)).exp()).filter(|l| l.plausible());
+        Some(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law))
+    }
+}
+
+/// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`])
+/// on the slipping samples of `runs`, whose velocity sensor noise is
+/// `v_noise_m_per_s` (m/s); `None` without force channels or with fewer
+/// than 50 slipping samples.
+pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, v_noise_m_per_s)?.fit()
+}
+
+/// The law of eq. 7 at the Stribeck rate `c` (s/m) on the slipping samples
+/// of `runs` (see [`fit_friction_law`]); `None` without force channels,
+/// with fewer than 50 slipping samples, or where that law is not one a rig
+/// could have.
+pub(crate) fn fit_friction_law_at(runs: &[&Run], v_noise_m_per_s: f64, c: f64) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, v_noise_m_per_s)?.fit_at(c).filter(|l| l.plausible())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::features::least_squares;
+    use crate::engine::Sample;
+    use rand::rngs::StdRng;
+    use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn deciles_by_selection_are_those_of_a_sort() {
+        let mut rng = StdRng::seed_from_u64(7);
+        for n in [1usize, 2, 9, 10, 11, 57, 1000, 4097] {
+            // Ties included: a coarse grid of speeds.
+            let speed: Vec<f64> = (0..n).map(|_| (rng.random::<f64>() * 50.0).floor() * 0.01).collect();
+            let mut sorted = speed.clone();
+            sorted.sort_unstable_by(f64::total_cmp);
+            let expected: [f64; 10] =
+                std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
+            assert_eq!(speed_deciles(&speed), expected, "n = {n}");
+        }
+    }
+
+    /// A record sliding back and forth at 1 Hz with friction from a known
+    /// law of eq. 7 (d = 0) plus Gaussian noise of sd `sigma`.
+    fn record(a: f64, b: f64, c: f64, sigma: f64, seed: u64) -> Run {
+        record_d(a, b, c, 0.0, sigma, seed)
+    }
+
+    fn record_d(a: f64, b: f64, c: f64, d: f64, sigma: f64, seed: u64) -> Run {
+        record_at(a, b, c, d, sigma, seed, 0.4)
+    }
+
+    /// [`record_d`] with a speed amplitude `v0` (m/s).
+    #[allow(clippy::too_many_arguments)]
+    fn record_at(a: f64, b: f64, c: f64, d: f64, sigma: f64, seed: u64, v0: f64) -> Run {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let samples: Vec<Sample> = (0..12_000)
+            .map(|i| {
+                let t_s = f64::from(i) / 600.0;
+                let v = v0 * (std::f64::consts::TAU * t_s).sin();
+                let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+                let noise = sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                let mu = a + b / (1.0 + c * v.abs()) + d * v * v + noise;
+                Sample { t_s, x_m: 0.0, v_m_per_s: v, normal_force_n: 10.0, friction_force_n: -v.signum() * mu * 10.0 }
+            })
+            .collect();
+        Run::from_samples(&samples, 1.0, 1e-3, 10.0)
+    }
+
+    /// Two records whose friction levels differ (as with load-dependent
+    /// friction), the higher level sliding slower (as at a higher load): a
+    /// pooled fit would read the level step as friction falling with speed.
+    /// The within-record fit recovers the curve, the mean level, and the
+    /// noise without the step.
+    #[test]
+    fn friction_levels_that_differ_between_records_are_not_read_as_a_stribeck_curve() {
+        let (fast, slow) =
+            (record_at(0.22, 0.1, 20.0, 0.0, 0.03, 5, 0.4), record_at(0.30, 0.1, 20.0, 0.0, 0.03, 6, 0.1));
+        let law = fit_friction_law(&[&fast, &slow], 0.0).unwrap();
+        let shape = |l: &FrictionLaw, v: f64| mu(l, v) - mu(l, 0.1);
+        let truth = FrictionLaw { a: 0.26, b: 0.1, c: 20.0, d: 0.0, sigma: 0.03, anchors_m_per_s: [0.0; 10] };
+        let worst = (1..=20)
+            .map(|i| 0.02 * f64::from(i))
+            .map(|v| (shape(&law, v) - shape(&truth, v)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 0.01, "{law:?}: the curve's shape is {worst} off");
+        assert!((law.sigma / 0.03 - 1.0).abs() < 0.03, "{law:?}: sigma should leave out the 0.08 level step");
+        // The level is the two records' mean (they hold about as many
+        // slipping samples each).
+        assert!((mu(&law, 0.1) - mu(&truth, 0.1)).abs() < 0.01, "{law:?}");
+    }
+
+    /// The law from moments summed record by record (as the diagnosis sums
+    /// its replicates' in parallel) is the ordinary least-squares fit of
+    /// μ − its record's mean on the centred columns (s², g(s)), solved here
+    /// directly on the pooled rows, with and without the Stribeck term.
+    #[test]
+    fn moments_added_by_record_give_the_pooled_least_squares_fit() {
+        let runs = [record_d(0.22, 0.1, 20.0, 0.3, 0.03, 7), record_at(0.30, 0.1, 20.0, 0.3, 0.02, 8, 0.2)];
+        for c in [0.0, 20.0] {
+            let mut moments = LawMoments::default();
+            runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, 0.0, c)));
+            let law = moments.law(c, [0.0; 10]).unwrap();
+            let records: Vec<(Vec<f64>, Vec<f64>)> = runs.iter().map(|r| slipping_samples(r, 0.0)).collect();
+            let g = |s: f64| 1.0 / (1.0 + c * s);
+            let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+            let mut rows = Vec::new();
+            for (speed, mu) in &records {
+                let (s2, gs): (Vec<f64>, Vec<f64>) = speed.iter().map(|&s| (s * s, g(s))).unzip();
+                let (m_mu, m_s2, m_g) = (mean(mu), mean(&s2), mean(&gs));
+                rows.extend((0..mu.len()).map(|i| (s2[i] - m_s2, gs[i] - m_g, mu[i] - m_mu)));
+            }
+            let p = if c == 0.0 { 1 } else { 2 };
+            let (coef, rss) = least_squares(
+                rows.len(),
+                p,
+                |i, row| {
+                    row[0] = rows[i].0;
+                    if p == 2 {
+                        row[1] = rows[i].1;
+                    }
+                },
+                |i| rows[i].2,
+            )
+            .unwrap();
+            let b = if p == 2 { coef[1] } else { 0.0 };
+            assert!((law.d - coef[0]).abs() < 1e-9 && (law.b - b).abs() < 1e-9, "c {c}: {law:?} against {coef:?}");
+            let sigma = (rss / (rows.len() - p - records.len()) as f64).sqrt();
+            assert!((law.sigma / sigma - 1.0).abs() < 1e-9, "c {c}: {law:?} against sigma {sigma}");
+            // At the records' own c the fit finds their curve.
+            if c == 20.0 {
+                assert!((law.d - 0.3).abs() < 0.05, "the fit should find the records' d, {law:?}");
+            }
+        }
+    }
+
+    /// A stuck block's measured speed is the velocity sensor's noise, and
+    /// its |F|/N the spring's holding force, not friction. A record that
+    /// slides slowly (up to 3 cm/s) for half of each second and sticks for
+    /// the other half, its speed read with 2 mm/s of noise: 5% of its
+    /// largest speed is below that noise, so without the sensor's noise the
+    /// stuck samples (|F|/N = 0.1, half of them with friction's sign) pass
+    /// as slipping and pull the low-speed law down; with it they do not.
+    #[test]
+    fn stuck_samples_read_through_a_noisy_velocity_are_not_friction() {
+        let (a, b, c, sigma, v_noise) = (0.2, 0.1, 20.0, 0.01, 0.002);
+        let mut rng = StdRng::seed_from_u64(9);
+        let mut gauss = move || {
+            let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+        };
+        let samples: Vec<Sample> = (0..12_000)
+            .map(|i| {
+                let t_s = f64::from(i) / 600.0;
+                let phase = t_s.fract();
+                let (v, f) = if phase < 0.5 {
+                    let v = 0.03 * (std::f64::consts::TAU * phase).sin();
+                    (v, -(a + b / (1.0 + c * v) + sigma * gauss()) * 10.0)
+                } else {
+                    (0.0, -1.0)
+                };
+                let v_read = v + v_noise * gauss();
+                Sample { t_s, x_m: 0.0, v_m_per_s: v_read, normal_force_n: 10.0, friction_force_n: f }
+            })
+            .collect();
+        let run = Run::from_samples(&samples, 1.0, 1e-3, 10.0);
+        let truth = FrictionLaw { a, b, c, d: 0.0, sigma, anchors_m_per_s: [0.0; 10] };
+        let off = |l: &FrictionLaw| {
+            (3..=12).map(|i| 0.0025 * f64::from(i)).map(|v| (mu(l, v) - mu(&truth, v)).abs()).fold(0.0, f64::max)
+        };
+        let with_noise = fit_friction_law(&[&run], v_noise).unwrap();
+        let without = fit_friction_law(&[&run], 0.0).unwrap();
+        println!(
+            "law off by {:.4} (sigma {:.4}) with the sensor noise, {:.4} (sigma {:.4}) without",
+            off(&with_noise),
+            with_noise.sigma,
+            off(&without),
+            without.sigma
+        );
+        // σ within 30%: of ~6 000 stuck samples about 4 still pass (beyond
+        // 3 sd, with friction's sign), each 0.1 off the law.
+        assert!(off(&with_noise) < 0.01 && (with_noise.sigma / sigma - 1.0).abs() < 0.3, "{with_noise:?}");
+        assert!(
+            off(&without) > 0.02 || without.sigma > 2.0 * sigma,
+            "the premise: stuck samples pass without it: {without:?}"
+        );
+    }
+
+    /// The law's value at speed `v` (m/s).
+    fn mu(l: &FrictionLaw, v: f64) -> f64 {
+        l.a + l.b / (1.0 + l.c * v) + l.d * v * v
+    }
+
+    /// The whole of eq. 7 comes back: with d fitted too, c and b trade off
+    /// within the noise, so the fitted curve is checked against the true one
+    /// over the slipping speeds (here 0.02–0.4 m/s), and σ and d themselves.
+    #[test]
+    fn friction_law_fit_recovers_a_known_law() {
+        let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
+        let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, anchors_m_per_s: [0.0; 10] };
+        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)], 0.0).unwrap();
+        let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
+        assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
+        let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, anchors_m_per_s: [0.0; 10] };
+        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)], 0.0).unwrap();
+        let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
+        assert!((with_d.sigma / 0.019 - 1.0).abs() < 0.03, "{with_d:?}");
+        // At a fixed c the fit is the unconstrained least squares, so a law
+        // with friction falling below zero at rest is still reported.
+        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)], 0.0).unwrap();
+        let rising = samples.fit_at(80.0).unwrap();
+        assert!((rising.b + 0.3).abs() < 1e-6 && (rising.a - 0.4).abs() < 1e-6, "{rising:?}");
+        assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)], 0.0).is_none_or(|l| l.a + l.b >= 0.0));
+    }
+}
