@@ -199,9 +199,8 @@ fn solve_friction_level(
         // mean at zero with the loads off in opposite directions, and the
         // loss jumps where a load's phase passes a branch. So the loss is
         // also scanned about the best point (the baseline's whole scan,
-        // narrower). Seed 12's phase-only set 19: two runs whose trials
-        // differed in their last bits reached a = 0.3127 (gap 67) and
-        // 0.3653 (gap 158) at one strength, and the second named nothing.
+        // narrower): without it, trials that differ in their last bits can
+        // end on different branches of the loss.
         let mut around: Vec<(f64, f64)> = Vec::new();
         for k in -TRIAL_SCAN..=TRIAL_SCAN {
             let a = best + TRIAL_SCAN_STEP * f64::from(k);
@@ -524,11 +523,10 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
 /// σ step is a Newton step that takes the simulated residual variance to
 /// move one for one with σ_μ²; an effect whose form differs from the
 /// data's (a friction memory of another shape, in a trial of the search)
-/// adds a structured residual of its own, and one full step then took
-/// σ_μ straight to its floor (benchmark seed 15 set 5: 0.027 → 0.006, the
-/// fitting gap 47 → 89, which hid the effect behind a noise level no trial
-/// had tried). Repeated steps still reach a σ_μ the data imply; a single
-/// step cannot collapse it.
+/// adds a structured residual of its own, and one full step can then take
+/// σ_μ straight to its floor, hiding the effect behind a noise level no
+/// trial had tried. Repeated steps still reach a σ_μ the data imply; a
+/// single step cannot collapse it.
 const SIGMA_STEP_MIN_SHARE: f64 = 0.5;
 
 pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
