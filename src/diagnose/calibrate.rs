@@ -570,10 +570,6 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::features::least_squares;
-    use crate::engine::Sample;
-    use rand::rngs::StdRng;
-    use rand::{RngExt, SeedableRng};
 
     #[test]
     fn a_level_scan_takes_its_lowest_point_and_the_parabola_through_it() {

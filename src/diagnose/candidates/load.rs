@@ -320,3 +320,70 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
         },
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Phase tables of a rig whose phase depends on the friction force μN
+    /// through `phase_of(f, μN)`, measured where μ = μ̄ + δ0 + k (N0 − 50 N)
+    /// and simulated at μ̄ = 0.2, at loads that differ between frequencies;
+    /// at 11 Hz the simulation's phase is erratic (spread 100°).
+    fn tables(k: f64, phase_of: impl Fn(f64, f64) -> f64) -> Vec<PhaseUnit> {
+        let (mu, offset, reference) = (0.2, 0.01, 50.0);
+        let mut units = Vec::new();
+        for (hz, loads) in [(7.0, [25.0, 45.0, 65.0]), (9.0, [35.0, 60.0, 85.0]), (11.0, [30.0, 55.0, 80.0])] {
+            for n in loads {
+                let erratic = hz == 11.0;
+                units.push(PhaseUnit {
+                    excitation_frequency_hz: hz,
+                    normal_force_n: n,
+                    simulated_deg: if erratic {
+                        [-170.0, 120.0, 10.0][(n as usize / 25) % 3]
+                    } else {
+                        phase_of(hz, mu * n)
+                    },
+                    measured_deg: phase_of(hz, (mu + offset + k * (n - reference)) * n),
+                    spread_deg: if erratic { 100.0 } else { 0.05 },
+                });
+            }
+        }
+        units
+    }
+
+    #[test]
+    fn the_phase_misfit_across_loads_gives_the_slope_of_friction_with_load_and_its_sign() {
+        let mu_bar = |_: f64| 0.2;
+        // A phase linear in μN: the linearisation is exact up to the wrap.
+        let linear = |hz: f64, force: f64| 5.0 * hz + 1.5 * force;
+        for k in [0.0015, -0.0015] {
+            let found = phase_implied_slope(tables(k, linear), 50.0, mu_bar).unwrap();
+            assert!((found - k).abs() < 0.02 * k.abs(), "k {k}: found {found}");
+        }
+        // A saturating phase (its gradient across a frequency's loads is a
+        // chord): within one step of the strength search (× 1.5).
+        let saturating = |hz: f64, force: f64| 3.0 * hz + 70.0 * (force / 15.0).tanh();
+        for k in [0.0015, -0.0015] {
+            let found = phase_implied_slope(tables(k, saturating), 50.0, mu_bar).unwrap();
+            assert!(found / k > 1.0 / 1.5 && found / k < 1.5, "k {k}: found {found}");
+        }
+        // A frequency's middle load held out: two loads each, the chord.
+        // Phase tables that bend this little (about 0.8 and 0.9°/N either
+        // side of the middle load) are what phase-only sets give.
+        let gentle = |hz: f64, force: f64| 3.0 * hz + 70.0 * (force / 40.0).tanh();
+        for k in [0.0015, -0.0015] {
+            let two_loads: Vec<PhaseUnit> =
+                tables(k, gentle).into_iter().enumerate().filter(|(i, _)| i % 3 != 1).map(|(_, u)| u).collect();
+            let found = phase_implied_slope(two_loads, 50.0, mu_bar).unwrap();
+            assert!(found / k > 1.0 / 1.5 && found / k < 1.5, "k {k}: found {found}");
+        }
+        // Phases near ±180° are unwrapped, not read as a 360° jump.
+        let near_half_turn = |hz: f64, force: f64| wrap_angle((160.0 + hz + 1.5 * force).to_radians()).to_degrees();
+        let found = phase_implied_slope(tables(0.0015, near_half_turn), 50.0, mu_bar).unwrap();
+        assert!((found - 0.0015).abs() < 0.02 * 0.0015, "found {found}");
+        // Only the erratic frequency: nothing to read.
+        let erratic: Vec<PhaseUnit> =
+            tables(0.0015, linear).into_iter().filter(|u| u.excitation_frequency_hz == 11.0).collect();
+        assert_eq!(phase_implied_slope(erratic, 50.0, mu_bar), None);
+    }
+}
