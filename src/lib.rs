@@ -8,7 +8,8 @@
 //! - [`sweep`]: frequency × normal-force grids, shards, merge and figures;
 //! - [`diagnose`]: measurement sets, features, calibration, candidates,
 //!   verdict, report and the blind benchmark;
-//! - [`io`] and [`figure`]: atomic files and shared drawing helpers;
+//! - [`io`], [`text`] and [`figure`]: atomic files, quoted text for
+//!   messages and shared drawing helpers;
 //! - [`cli`]: the command line, the only module that uses `anyhow`.
 
 pub mod cli;
@@ -18,5 +19,6 @@ pub mod error;
 pub mod figure;
 pub mod io;
 pub mod sweep;
+pub mod text;
 
 pub use error::{Error, Result};

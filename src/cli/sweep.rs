@@ -9,8 +9,9 @@ use clap::Args;
 use super::{BackendArg, ModelArgs, Progress, emit, info, open_engine};
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
 use crate::engine::{GpuOptions, Job, Model, Oscillator, RunPlan};
-use crate::io::{OutputSet, excerpt, owned};
+use crate::io::{OutputSet, owned};
 use crate::sweep::{self, Grid, RefineSettings, RunIdentity, Shard, SweepSettings, write_output_set};
+use crate::text::excerpt;
 
 #[derive(Args, Debug)]
 pub(crate) struct SweepArgs {

@@ -21,8 +21,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 pub use effects::{Effect, Effects};
 pub use model::{Condition, Model};
-pub use oscillator::{InitialState, Oscillator, PathResult, Point, RunPlan, Sample};
-pub use reduce::{PeakRange, PointAccumulator, PointStats};
+pub use oscillator::{InitialState, Oscillator, PathResult, PeakRange, Point, RunPlan, Sample};
+pub use reduce::{PointAccumulator, PointStats};
 
 /// What a job keeps of each realisation.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -11,8 +11,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::model::{Condition, Model};
-use crate::engine::oscillator::PathResult;
+use crate::engine::model::Condition;
+use crate::engine::oscillator::{PathResult, PeakRange};
 
 /// Histogram bins per grid point, including the underflow and overflow bins.
 pub const HISTOGRAM_BINS: u32 = 2048;
@@ -81,34 +81,8 @@ pub fn wrap_angle(rad: f64) -> f64 {
     if w > std::f64::consts::PI { w - std::f64::consts::TAU } else { w }
 }
 
-/// Where a point's peaks are binned and how they are quantised, and the
-/// reference its phases are measured from.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PeakRange {
-    /// Lower edge of the first inner bin, m.
-    pub lo_m: f64,
-    /// Upper edge of the last inner bin, m.
-    pub hi_m: f64,
-    /// Phases are reduced as their deviation from this angle, rad (the
-    /// frictionless phase at the point; any reference gives the same
-    /// statistics, a near one keeps tiny spreads precise).
-    pub phase_ref_rad: f64,
-}
-
+/// The reduction's arithmetic on a point's range, as the kernel does it.
 impl PeakRange {
-    /// The range for a grid point: `[−0.5 A, 1.5 A]` around zero, with `A`
-    /// the frictionless steady amplitude there (friction only lowers peaks;
-    /// sticking blocks can sit on the negative side).
-    pub fn for_point(model: &Model, condition: Condition) -> PeakRange {
-        let a = model.linear_amplitude_m(condition.excitation_frequency_hz);
-        let a = if a.is_finite() && a > 0.0 { a } else { model.excitation.amplitude_m.max(1e-6) };
-        PeakRange {
-            lo_m: -0.5 * a,
-            hi_m: 1.5 * a,
-            phase_ref_rad: model.linear_phase_rad(condition.excitation_frequency_hz),
-        }
-    }
-
     /// The phase reference, rad, as the kernel sees it (f32).
     pub fn phase_ref_f32(&self) -> f32 {
         self.phase_ref_rad as f32

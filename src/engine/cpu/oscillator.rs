@@ -35,7 +35,8 @@
 
 use crate::engine::cpu::effects;
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, STICTION_DECAY_M, StictionForm,
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, STICTION_DECAY_M,
+    StictionForm, drift_factor,
 };
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
@@ -352,8 +353,8 @@ impl<'a> Path<'a> {
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
-        let mean_n = o.normal_force_mean_n
-            * effects::drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
+        let mean_n =
+            o.normal_force_mean_n * drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
         let harmonics_n = harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m);
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
