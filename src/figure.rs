@@ -1,6 +1,7 @@
 //! Drawing helpers shared by every figure: the embedded font, the palette,
-//! legends, and [`render`], which writes a figure as PNG and SVG under
-//! temporary names and renames each into place when it is complete.
+//! legends, tick labels ([`tick`], [`decade_tick`]), and [`render`], which
+//! writes a figure as PNG and SVG under temporary names and renames each
+//! into place when it is complete.
 
 use std::path::{Path, PathBuf};
 
@@ -88,4 +89,72 @@ where
         .position(position)
         .draw()
         .map_err(|e| plot_error(what, e))
+}
+
+/// A tick label without trailing zeros: 200, 2.5, 0.01 (not "200.0").
+pub fn tick(v: f64) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    let mut s = format!("{v:.6}");
+    if s.contains('.') {
+        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    if s == "-0" { "0".into() } else { s }
+}
+
+/// A log axis's tick label: 10ⁿ at the decades, nothing between them.
+pub fn decade_tick(v: f64) -> String {
+    if !(v.is_finite() && v > 0.0) {
+        return String::new();
+    }
+    let e = v.log10();
+    if (e - e.round()).abs() > 1e-6 {
+        return String::new();
+    }
+    let digits: String = (e.round() as i64)
+        .to_string()
+        .chars()
+        .map(|c| match c {
+            '-' => '⁻',
+            '0' => '⁰',
+            '1' => '¹',
+            '2' => '²',
+            '3' => '³',
+            '4' => '⁴',
+            '5' => '⁵',
+            '6' => '⁶',
+            '7' => '⁷',
+            '8' => '⁸',
+            _ => '⁹',
+        })
+        .collect();
+    format!("10{digits}")
+}
+
+/// The decades around `[lo, hi]` (both > 0): the lowest and highest decade
+/// of the axis both carry a label.
+pub fn decade_range(lo: f64, hi: f64) -> (f64, f64) {
+    let lo = 10f64.powf(lo.log10().floor());
+    let mut hi = 10f64.powf(hi.log10().ceil());
+    if hi <= lo {
+        hi = lo * 10.0;
+    }
+    (lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_have_no_trailing_zeros() {
+        assert_eq!(tick(200.0), "200");
+        assert_eq!(tick(2.5), "2.5");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(-0.0), "0");
+        assert_eq!(decade_tick(1e-3), "10⁻³");
+        assert_eq!(decade_tick(100.0), "10²");
+        assert_eq!(decade_tick(2e-3), "");
+    }
 }

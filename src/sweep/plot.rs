@@ -15,7 +15,7 @@ use crate::diagnose::measure::MeasurementSet;
 use crate::engine::reduce::HISTOGRAM_BINS;
 use crate::engine::{Condition, PointAccumulator};
 use crate::error::Result;
-use crate::figure::{FONT, colour, legend_box, plot_error, render};
+use crate::figure::{FONT, colour, decade_range, decade_tick, legend_box, plot_error, render, tick};
 use crate::sweep::SweepResult;
 
 /// How large a figure is drawn, and how large its text is relative to it.
@@ -80,58 +80,6 @@ const LEGEND_ICON: i32 = 20;
 fn caption_px(look: Look, text: &str, base: u32, width: u32) -> u32 {
     let fit = (f64::from(width) * 0.95 / (text.chars().count().max(1) as f64 * 0.56)).floor() as u32;
     look.px(base).min(fit.max(8))
-}
-
-/// A tick label without trailing zeros: 200, 2.5, 0.01 (not "200.0").
-pub fn tick(v: f64) -> String {
-    if !v.is_finite() {
-        return String::new();
-    }
-    let mut s = format!("{v:.6}");
-    if s.contains('.') {
-        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    }
-    if s == "-0" { "0".into() } else { s }
-}
-
-/// A log axis's tick label: 10ⁿ at the decades, nothing between them.
-pub fn decade_tick(v: f64) -> String {
-    if !(v.is_finite() && v > 0.0) {
-        return String::new();
-    }
-    let e = v.log10();
-    if (e - e.round()).abs() > 1e-6 {
-        return String::new();
-    }
-    let digits: String = (e.round() as i64)
-        .to_string()
-        .chars()
-        .map(|c| match c {
-            '-' => '⁻',
-            '0' => '⁰',
-            '1' => '¹',
-            '2' => '²',
-            '3' => '³',
-            '4' => '⁴',
-            '5' => '⁵',
-            '6' => '⁶',
-            '7' => '⁷',
-            '8' => '⁸',
-            _ => '⁹',
-        })
-        .collect();
-    format!("10{digits}")
-}
-
-/// The decades around `[lo, hi]` (both > 0): the lowest and highest decade
-/// of the axis both carry a label.
-fn decade_range(lo: f64, hi: f64) -> (f64, f64) {
-    let lo = 10f64.powf(lo.log10().floor());
-    let mut hi = 10f64.powf(hi.log10().ceil());
-    if hi <= lo {
-        hi = lo * 10.0;
-    }
-    (lo, hi)
 }
 
 /// Measured statistics of one condition, drawn over the simulation.
@@ -1718,17 +1666,6 @@ pub fn write_sweep_plots_with(dir: &Path, result: &SweepResult, opts: &PlotOptio
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn plot_ticks_have_no_trailing_zeros() {
-        assert_eq!(tick(200.0), "200");
-        assert_eq!(tick(2.5), "2.5");
-        assert_eq!(tick(0.1 + 0.2), "0.3");
-        assert_eq!(tick(-0.0), "0");
-        assert_eq!(decade_tick(1e-3), "10⁻³");
-        assert_eq!(decade_tick(100.0), "10²");
-        assert_eq!(decade_tick(2e-3), "");
-    }
 
     #[test]
     fn plot_log_ranges_start_and_end_on_labelled_ticks() {
