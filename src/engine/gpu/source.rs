@@ -6,7 +6,7 @@
 //! | --- | --- |
 //! | `shaders/rng.wgsl` | `engine/rng.rs` |
 //! | `shaders/effects.wgsl` | `engine/cpu/effects.rs` |
-//! | `shaders/oscillator.wgsl` | `engine/cpu/oscillator.rs` |
+//! | `shaders/oscillator.wgsl` | `engine/cpu/oscillator/` |
 //! | `shaders/reduce.wgsl` | `engine/reduce.rs` |
 //! | `shaders/ensemble.wgsl` | `engine/gpu/shared.rs`, `engine/gpu/ensemble.rs` |
 //! | `shaders/check.wgsl` | `engine/gpu/check.rs` |
@@ -25,10 +25,10 @@ use crate::engine::reduce::{HISTOGRAM_BINS, PHASE_QUANTA, QUANTISE_LIMIT, STICK_
 use crate::engine::rng;
 
 // The kernel's own settings, written into the preamble (where they differ
-// from the f64 reference's, on purpose: the table in `engine/cpu/oscillator.rs`).
+// from the f64 reference's, on purpose: the table in `engine/cpu/oscillator/mod.rs`).
 
 /// Events one invocation handles within a segment before it forces progress
-/// (the CPU allows 64; see the table in `engine/cpu/oscillator.rs`).
+/// (the CPU allows 64; see the table in `engine/cpu/oscillator/mod.rs`).
 pub const MAX_EVENTS_PER_SEGMENT: u32 = 16;
 /// Halvings of the step that probe for motion after a start from rest (CPU: 60).
 pub const PROBE_HALVINGS: u32 = 30;
