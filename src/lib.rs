@@ -10,8 +10,11 @@
 //!   verdict, report and the blind benchmark;
 //! - [`io`], [`text`] and [`figure`]: atomic files, quoted text for
 //!   messages and shared drawing helpers;
+//! - [`app`]: what a front end does with a request, which the command line
+//!   and the Python package share;
 //! - [`cli`]: the command line, the only module that uses `anyhow`.
 
+pub mod app;
 pub mod cli;
 pub mod diagnose;
 pub mod engine;
