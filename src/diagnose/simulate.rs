@@ -90,7 +90,7 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
     }
     let key = rng::seed_key(seed ^ 0x5E45_0E5E_0000_0000);
     let draws = data.caches.sensor_draws.get(seed, realisation, samples.len(), |i| {
-        rng::pair_a(rng::block(key, realisation, rng::STREAM_SENSOR, i as u64))
+        rng::pair_a(rng::noise_block(key, realisation, rng::STREAM_SENSOR, i as u64))
     });
     for (s, &(gx, gv)) in samples.iter_mut().zip(draws.iter()) {
         s.x_m += noise.x_m * gx;

@@ -17,6 +17,7 @@ pub mod model;
 pub mod oscillator;
 pub mod reduce;
 pub mod rng;
+pub mod schedule;
 
 use serde::{Deserialize, Serialize};
 
@@ -267,6 +268,12 @@ pub trait Backend: Send + Sync {
     fn kind(&self) -> BackendKind;
     /// Runs `job`; `progress(done, total)` counts integrated periods × paths.
     fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output>;
+
+    /// Whether this backend runs `job` itself; [`Engine::run`] gives the
+    /// jobs it does not run to the CPU reference.
+    fn runs(&self, _job: &Job<'_>) -> Result<bool> {
+        Ok(true)
+    }
 }
 
 /// The `--backend` choice.
@@ -378,9 +385,15 @@ impl Engine {
         &self.description
     }
 
-    /// Runs `job` on this engine's backend.
+    /// Runs `job` on this engine's backend. A job the backend does not run
+    /// itself (on a GPU: records sampled off the noise boundaries, which
+    /// would split the kernel's steps) runs on the CPU reference, on the
+    /// same noise keys.
     pub fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
         job.validate()?;
+        if !self.backend.runs(job)? {
+            return cpu::CpuBackend.run(job, progress);
+        }
         self.backend.run(job, progress)
     }
 

@@ -4,7 +4,9 @@
 //! Every function reduces to the baseline's arithmetic at zero strength
 //! (`tests/integration/effects.rs` checks paths bit for bit).
 
-use crate::engine::effects::{HarmonicForm, HysteresisForm, NonGaussianForm};
+use crate::engine::effects::{
+    HarmonicForm, HysteresisForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, NonGaussianForm,
+};
 
 /// Harmonic waveform g(c) of a form, c = cos(kθ + φ). The `position` form
 /// has none (it follows x: [`position_load`]); it reads as `fourier`'s.
@@ -53,11 +55,6 @@ pub fn non_gaussian(form: NonGaussianForm, s: f64, g: f64, g2: f64) -> f64 {
         }
     }
 }
-
-/// Share of `mixture` non-Gaussian noise drawn from its outlier component.
-pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
-/// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].
-pub const MIXTURE_OUTLIER_QUANTILE: f64 = -1.281_551_565_544_600_4;
 
 /// Excess of the static coefficient after `dwell_s` seconds stuck, with
 /// ageing time `ageing_s` (stiction `dwell`): `Δ (1 − e^(−t_d/τ_d))`, the

@@ -11,8 +11,6 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::engine::cpu::oscillator::noise_boundary_time_s;
-use crate::engine::cpu::{first_boundary_from, first_sampled_interval, record_cycles, samples_at_noise_boundaries};
 use crate::engine::gpu::shared::{EffectParams, GridPoint, Params, PathState};
 use crate::engine::gpu::source::ACCUMULATOR_WORDS;
 use crate::engine::gpu::{
@@ -20,6 +18,9 @@ use crate::engine::gpu::{
 };
 use crate::engine::oscillator::{Oscillator, PathResult, PeakRange, RunPlan, Sample};
 use crate::engine::reduce::{HISTOGRAM_BINS, PointAccumulator};
+use crate::engine::schedule::{
+    first_boundary_from, first_sampled_interval, noise_boundary_time_s, record_cycles, samples_at_noise_boundaries,
+};
 use crate::engine::{GpuOptions, Job, Output, Record};
 use crate::error::{Error, Result};
 

@@ -1,6 +1,7 @@
 //! The WGSL the kernels are compiled from: a preamble of constants
 //! generated from the Rust ones (so the two sides cannot drift apart), then
-//! the shader files, which mirror the Rust files:
+//! the shader files, which mirror the Rust files function for function
+//! under the same names (`tests/integration/twins.rs` checks it):
 //!
 //! | shader | Rust |
 //! | --- | --- |
@@ -13,11 +14,10 @@
 
 use std::fmt::Write;
 
-use crate::engine::cpu::effects::{MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE};
-use crate::engine::cpu::oscillator::Memory;
 use crate::engine::effects::{
     AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm,
-    HysteresisForm, LoadForm, NonGaussianForm, STICTION_DECAY_M, StictionForm,
+    HysteresisForm, LoadForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, Memory, NonGaussianForm,
+    STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::gpu::shared::EffectParams;
 use crate::engine::gpu::{MAX_WORKGROUPS_PER_DIMENSION, WORKGROUP_SIZE};

@@ -46,15 +46,16 @@ mod tests;
 
 #[cfg(test)]
 pub(crate) use period::HALF_LANES;
-pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, noise_boundary_time_s, run_period};
+pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
 use crate::engine::cpu::effects;
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, STICTION_DECAY_M,
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, Memory, STICTION_DECAY_M,
     StictionForm, drift_factor,
 };
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
+use crate::engine::schedule::FIXED_ONE;
 
 /// Whether the block sticks or slips, and in which direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,43 +65,10 @@ pub enum Mode {
     Slip(i8),
 }
 
-/// The friction memory the slip ODE carries as its third state (hysteresis
-/// `lag`, `slip` or `ageing` switched on), or none. The kernel sees the
-/// codes as the generated `MEMORY_*` constants.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Memory {
-    None = 0,
-    /// μ_f lags the steady law in time (memory time τ_m).
-    Lag = 1,
-    /// μ_f relaxes to the steady law over a slip distance L (the slip law).
-    Slip = 2,
-    /// The contact age θ of the ageing law.
-    Ageing = 3,
-}
-
-impl Memory {
-    /// Every memory, in code order, with its name in the kernel's constants.
-    pub(crate) const ALL: [(Memory, &'static str); 4] =
-        [(Memory::None, "NONE"), (Memory::Lag, "LAG"), (Memory::Slip, "SLIP"), (Memory::Ageing, "AGEING")];
-
-    /// The memory of flattened effects: on where its form's strength is not
-    /// zero (`lag`: τ_m > 0; `slip`: L > 0; `ageing`: L > 0 and B ≠ 0).
-    pub(crate) fn of(e: &EffectParams) -> Memory {
-        match e.hysteresis_form {
-            HysteresisForm::Lag if e.hysteresis_lag_s > 0.0 => Memory::Lag,
-            HysteresisForm::Slip if e.hysteresis_length_m > 0.0 => Memory::Slip,
-            HysteresisForm::Ageing if e.hysteresis_length_m > 0.0 && e.hysteresis_strength != 0.0 => Memory::Ageing,
-            _ => Memory::None,
-        }
-    }
-}
-
 /// Halvings of a step probing for motion after a start from rest: 2⁻⁶⁰ of
 /// a step is below f64's resolution of it.
 const MAX_PROBE_HALVINGS: i32 = 60;
 
-/// Fixed-point `2^32`.
-const FIXED_ONE: f64 = 4_294_967_296.0;
 /// Events handled within one segment before the integrator forces progress
 /// (guards against chattering at exactly balanced forces).
 const MAX_EVENTS_PER_SEGMENT: u32 = 64;
@@ -234,7 +202,7 @@ pub(crate) struct Path<'a> {
     /// slip), or has an adhesion force: whether it takes more than the
     /// baseline's arithmetic.
     history: bool,
-    /// Which friction memory is on ([`Memory::of`] the effects).
+    /// Which friction memory is on ([`Memory::form`] of the effects).
     memory_form: Memory,
     /// The law's a, b (–) and d (s²/m²) at this point's load: times
     /// (N0/Nref)^k under load dependence `scaled`, themselves otherwise.
@@ -256,7 +224,7 @@ pub(crate) struct Path<'a> {
 impl<'a> Path<'a> {
     pub(crate) fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
         let e = &osc.effects;
-        let memory_form = Memory::of(e);
+        let memory_form = Memory::form(e);
         let build_up =
             matches!(e.hysteresis_form, HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational);
         let history = memory_form != Memory::None
@@ -318,15 +286,20 @@ impl<'a> Path<'a> {
     fn draw_noise(&mut self) {
         let o = self.osc;
         let e = &o.effects;
-        let main = rng::block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
+        let main = rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
         let (white, xi_n) = rng::pair_a(main);
         let friction_block = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
-            rng::block(self.key, self.realisation, rng::STREAM_MAIN, self.interval / u64::from(e.colour_hold_intervals))
+            rng::noise_block(
+                self.key,
+                self.realisation,
+                rng::STREAM_MAIN,
+                self.interval / u64::from(e.colour_hold_intervals),
+            )
         } else {
             main
         };
         let z = if friction_block == main { white } else { rng::pair_a(friction_block).0 };
-        let colour = || rng::block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
+        let colour = || rng::noise_block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
         let first = self.interval == 0;
         let ar1 = |state: f64, rho: f64, innovation: f64| {
             if first { innovation } else { rho * state + (1.0 - rho * rho).sqrt() * innovation }

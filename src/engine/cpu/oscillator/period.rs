@@ -196,14 +196,3 @@ impl Sampler {
         self.samples.push(sample);
     }
 }
-
-/// Time (s from the run's start) at which noise interval `interval` (≥ 1)
-/// begins, in the arithmetic [`Path::run_period`] gives an aligned sample
-/// there: the boundary's period start plus its position in the period, both
-/// from the 32.32 fixed-point boundary `interval · noise_interval_fixed`.
-pub(crate) fn noise_boundary_time_s(osc: &Oscillator, interval: u64) -> f64 {
-    let boundary = u128::from(interval) * u128::from(osc.noise_interval_fixed);
-    let period_start_s = (boundary >> 32) as u64 as f64 * osc.period_s;
-    let noise_t = (boundary as u64 & 0xFFFF_FFFF) as f64 / FIXED_ONE * osc.period_s;
-    period_start_s + noise_t
-}
