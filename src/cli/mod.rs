@@ -11,7 +11,7 @@
 //! printed, and stdout is unchanged (redirect it to drop it). When stderr is
 //! a terminal progress is a bar or spinner; otherwise (a log file, Slurm,
 //! a pipe) it is plain lines, each step as it starts and a heartbeat at
-//! least every [`HEARTBEAT`].
+//! least every `HEARTBEAT`.
 
 mod diagnose;
 mod plot;

@@ -94,7 +94,7 @@ pub fn normal_force_problem(n: f64) -> Option<String> {
 pub const PAPER_RIG_TOML: &str = include_str!("../../models/paper-rig.toml");
 
 /// A complete model: rig, excitation, friction law, noise, solver, and the
-/// optional effects (each its own table; see [`crate::effects`]).
+/// optional effects (each its own table; see [`crate::engine::effects`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Model {
     pub rig: Rig,

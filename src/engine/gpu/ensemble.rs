@@ -139,7 +139,7 @@ fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histog
 
 /// Runs a job's sums (and peaks, for [`Record::Peaks`]) on the GPU, or its
 /// records for a [`Record::Samples`] job whose sampler is aligned with the
-/// noise ([`records_on_gpu`]; no sums then, like the CPU reference). Paths
+/// noise (`records_on_gpu`; no sums then, like the CPU reference). Paths
 /// and records are in invocation order: point-major, then realisation.
 pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
     let (device, queue, kernels) = (&ctx.device, &ctx.queue, &ctx.kernels);

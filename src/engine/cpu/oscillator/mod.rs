@@ -12,7 +12,7 @@
 //! span and carried through its steps by rotation (by `Ωh/2` for each half
 //! step), so a step evaluates no trigonometric function.
 //!
-//! The realisation being integrated is one type, [`Path`]:
+//! The realisation being integrated is one type, `Path`:
 //! - this file: its state, its noise and its friction law;
 //! - `step.rs`: the slip ODE's RK4 step, velocity zeros, breakaway from
 //!   stick, and a segment between two grid times;
