@@ -23,9 +23,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
-// Until the measurement-set reader names `crate::text` itself.
-use crate::text::shown;
-pub use crate::text::{EXCERPT_CHARS, excerpt};
+use crate::text::{excerpt, shown};
 
 /// Largest model file (`--config`), bytes: 1 MiB.
 pub const MAX_MODEL_FILE_BYTES: u64 = 1 << 20;

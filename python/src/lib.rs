@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 use serde_json::{Value, json};
 
 use stickslip::app::SweepRequest;
-use stickslip::diagnose::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
+use stickslip::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
 use stickslip::diagnose::report::{RunInfo, write_diagnosis_with};
 use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;

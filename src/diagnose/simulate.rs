@@ -11,12 +11,12 @@ use rayon::prelude::*;
 use crate::diagnose::calibrate::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
 use crate::diagnose::data::Data;
 use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
-use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::circular_mean_var;
 use crate::engine::{Condition, Engine, Job, Model, PathResult, Point, Record, RunPlan, Sample, rng};
 use crate::error::Result;
+use crate::measure::Run;
 
 /// Realisation numbers of unit `u`'s replicates start at `u × REPLICATE_STRIDE`.
 const REPLICATE_STRIDE: u32 = 1000;
@@ -424,7 +424,7 @@ mod tests {
         let shape =
             crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 3.0, sample_rate_hz: 600.0 };
         crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 3).expect("set");
-        let set = crate::diagnose::measure::read_measurement_set(&dir).expect("read");
+        let set = crate::measure::read_measurement_set(&dir).expect("read");
         let _ = std::fs::remove_dir_all(&dir);
         let engine = Engine::cpu("test");
         let settings = |replicates| DiagnoseSettings { replicates, warmup_cycles: 5, ..DiagnoseSettings::default() };

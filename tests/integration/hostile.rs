@@ -9,8 +9,8 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use stickslip::Error;
-use stickslip::diagnose::measure::read_measurement_set;
 use stickslip::engine::{Condition, InitialState, Job, Model, PeakRange, Point, Record, RunPlan};
+use stickslip::measure::read_measurement_set;
 use stickslip::sweep::{
     AccumulatorFile, Grid, RunIdentity, Shard, SweepSettings, merge_shards, read_accumulators, run_sweep,
     write_accumulators,

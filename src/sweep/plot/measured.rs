@@ -3,8 +3,8 @@
 //! simulated curve each is set against ([`pair`]).
 
 use super::same_load;
-use crate::diagnose::measure::MeasurementSet;
 use crate::engine::Condition;
+use crate::measure::MeasurementSet;
 
 /// Measured statistics of one condition, drawn over the simulation.
 #[derive(Clone, Debug, PartialEq)]
