@@ -1,5 +1,5 @@
 // The friction oscillator, one realisation per invocation, in f32.
-// This is src/engine/cpu/oscillator.rs's algorithm (same function names, same
+// This is src/engine/cpu/oscillator/'s algorithm (same function names, same
 // order): fixed steps per excitation period, steps split at noise-interval
 // boundaries, RK4 in slip with the slip direction frozen, velocity zeros
 // located by root finding on the RK4 map, breakaway from stick in closed form.
@@ -274,7 +274,7 @@ fn static_coefficient() -> f32 {
 
 // Where the friction memory of `lag` and `slip` starts at a breakaway: the static one less
 // the stiction excess friction_coefficient adds while it is released
-// (src/engine/cpu/oscillator.rs: Path::lag_start_coefficient).
+// (src/engine/cpu/oscillator/mod.rs: Path::lag_start_coefficient).
 fn lag_start_coefficient() -> f32 {
     let released = effects.stiction_form == STICTION_FORM_DECAYING
         || (effects.stiction_form == STICTION_FORM_CONSTANT && effects.stiction_release_m > 0.0);

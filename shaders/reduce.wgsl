@@ -62,7 +62,7 @@ fn histogram_bin(peak_m: f32) -> u32 {
     return u32(position) + 1u;
 }
 
-// Quantises and tallies one measured period; mirrors PointAccumulator::add_period.
+// Quantises and tallies one measured period; mirrors PointAccumulator::tally_period.
 fn tally_period(peak_m: f32, phase_rad: f32, stuck_share: f32) {
     if (is_non_finite(peak_m) || is_non_finite(phase_rad)) {
         non_finite_periods += 1u;

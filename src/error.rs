@@ -20,11 +20,11 @@ pub enum Error {
     InvalidSetting { what: String, message: String },
 
     /// Reading or writing a file failed.
-    #[error("{}: {source}", crate::io::shown(path))]
+    #[error("{}: {source}", crate::text::shown(path))]
     Io { path: PathBuf, source: std::io::Error },
 
     /// A measurement set (or shard accumulator file) that is refused.
-    #[error("{}{}: {message}", crate::io::shown(file), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    #[error("{}{}: {message}", crate::text::shown(file), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Measurement { file: PathBuf, line: Option<u64>, message: String },
 
     /// An integrator produced a non-finite value (the model drives it out

@@ -5,7 +5,8 @@
 //!   refused at once, without blocking) no larger than a stated limit
 //!   ([`MAX_MODEL_FILE_BYTES`], [`MAX_MANIFEST_BYTES`], [`MAX_TABLE_FILE_BYTES`],
 //!   [`MAX_ACCUMULATOR_BYTES`]). Messages quote file content only through
-//!   [`excerpt`]: short, with control and bidirectional characters escaped.
+//!   [`crate::text::excerpt`]: short, with control and bidirectional
+//!   characters escaped.
 //! - **Files.** [`write_atomically`] writes a file under a temporary name
 //!   beside its destination and renames it into place.
 //! - **Output sets.** [`OutputSet`] builds a command's whole output set in a
@@ -22,6 +23,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
+use crate::text::{excerpt, shown};
 
 /// Largest model file (`--config`), bytes: 1 MiB.
 pub const MAX_MODEL_FILE_BYTES: u64 = 1 << 20;
@@ -34,9 +36,6 @@ pub const MAX_TABLE_FILE_BYTES: u64 = 256 << 20;
 pub const MAX_ACCUMULATOR_BYTES: u64 = 1 << 30;
 /// Most bytes a measurement set's files may hold together: 2 GiB.
 pub const MAX_SET_BYTES: u64 = 2 << 30;
-
-/// Characters of file content a message may quote.
-pub const EXCERPT_CHARS: usize = 48;
 
 /// Why a file could not be read; its `Display` is one clean sentence that
 /// carries the operating system's text at most once.
@@ -126,31 +125,6 @@ pub fn read_bounded(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, Rea
 /// `bytes` without a leading UTF-8 byte-order mark.
 pub fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
-}
-
-/// A short, safe excerpt of untrusted text for a message: at most
-/// `max_chars` characters (then `…`), with control characters (including
-/// terminal escapes and NUL) and bidirectional overrides escaped.
-pub fn excerpt(text: &str, max_chars: usize) -> String {
-    let mut out = String::new();
-    for (i, c) in text.chars().enumerate() {
-        if i == max_chars {
-            out.push('…');
-            break;
-        }
-        let bidi = matches!(c, '\u{200E}' | '\u{200F}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}');
-        if c.is_control() || bidi {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// A path for a message: [`excerpt`] of its text, at most 200 characters.
-pub fn shown(path: &Path) -> String {
-    excerpt(&path.to_string_lossy(), 200)
 }
 
 /// `path` made absolute against the working directory and normalised
@@ -697,15 +671,6 @@ pub fn install_interrupt_cleanup() {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn excerpts_are_short_and_escaped() {
-        assert_eq!(excerpt("abc", 10), "abc");
-        assert_eq!(excerpt("abcdef", 3), "abc…");
-        assert_eq!(excerpt("a\u{1b}[2Jb\0", 10), "a\\u{1b}[2Jb\\u{0}");
-        assert_eq!(excerpt("x\u{202E}y", 10), "x\\u{202e}y");
-        assert_eq!(excerpt("µ ok", 10), "µ ok");
-    }
 
     #[test]
     fn confinement_refuses_names_that_climb_out() {

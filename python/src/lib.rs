@@ -18,13 +18,14 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
 
-use stickslip::diagnose::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
+use stickslip::app::SweepRequest;
+use stickslip::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
 use stickslip::diagnose::report::{RunInfo, write_diagnosis_with};
 use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;
 use stickslip::engine::{BackendChoice, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
 use stickslip::io::{self, OutputSet, owned};
-use stickslip::sweep::{self, Grid, RefineSettings, RunIdentity, Shard, SweepResult, SweepSettings, write_output_set};
+use stickslip::sweep::{self, Grid, RefineSettings, Shard, SweepResult, SweepSettings};
 
 /// A library error as a Python exception: bad input (a model key, a setting,
 /// a measurement file) is a `ValueError`, a file system failure an
@@ -59,9 +60,9 @@ type Engines = Mutex<HashMap<(String, bool, u64), Arc<Engine>>>;
 
 /// Engines by (backend, allow_software_gpu, steps per dispatch): opening a
 /// GPU adapter and compiling the kernels takes a while, so a notebook opens
-/// each once. The choice follows the command line's policy
-/// ([`stickslip::cli::open_backend`]): `gpu` refuses a software adapter
-/// (lavapipe) unless `allow_software_gpu`, as `--allow-software-gpu`.
+/// each once. Which backend a choice takes is [`Engine::open`]'s policy, the
+/// command line's too: `gpu` refuses a software adapter (lavapipe) unless
+/// `allow_software_gpu`, as `--allow-software-gpu`.
 fn engine(choice: &str, allow_software_gpu: bool, steps_per_dispatch: u64) -> PyResult<Arc<Engine>> {
     static ENGINES: OnceLock<Engines> = OnceLock::new();
     let kind = backend_choice(choice)?;
@@ -73,14 +74,7 @@ fn engine(choice: &str, allow_software_gpu: bool, steps_per_dispatch: u64) -> Py
     if let Some(e) = engines.get(&key) {
         return Ok(e.clone());
     }
-    let opened = if kind == BackendChoice::Cpu {
-        Engine::cpu("chosen with backend=\"cpu\"")
-    } else {
-        let (engine, _) = stickslip::cli::open_backend(kind, allow_software_gpu, GpuOptions { steps_per_dispatch })
-            .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
-        engine
-    };
-    let opened = Arc::new(opened);
+    let opened = Arc::new(Engine::open(kind, GpuOptions { steps_per_dispatch, allow_software_gpu }).map_err(py_err)?);
     engines.insert(key, opened.clone());
     Ok(opened)
 }
@@ -269,64 +263,26 @@ fn run_sweep(
         return Err(value_error(format!("invalid fig8_frequency: `{f}` is not a finite number")));
     }
     let settings = SweepSettings { realisations, plan: RunPlan { warmup_cycles, measured_cycles: cycles }, seed };
-    settings.validate().map_err(py_err)?;
-    for c in &grid.conditions() {
-        Oscillator::new(&model, *c).map_err(py_err)?;
-    }
     let refine = refine.then_some(RefineSettings { max_added: refine_max, ..Default::default() });
-    let (grid, refinement) =
-        py.detach(|| sweep::refined_grid(&model, grid, warmup_cycles, refine)).map_err(py_err)?;
-    let conditions = grid.conditions();
-    let points = sweep::steady_points(&model, &conditions);
-    sweep::sweep_job(&model, &points, &settings).validate().map_err(py_err)?;
-    let prepared = match &out {
-        Some(dir) => Some(OutputSet::prepare(dir, "out", owned::SWEEP, &[]).map_err(py_err)?),
-        None => None,
-    };
+    let request = SweepRequest { model, grid, settings, refine, shard: Shard::WHOLE };
+    let prepared = py.detach(|| request.prepare(out.as_deref().map(|dir| (dir, "out")))).map_err(py_err)?;
+    let added_hz = prepared.refinement.as_ref().map_or_else(Vec::new, |r| r.added_hz.clone());
     let backend = backend.to_string();
-    let added_hz = refinement.as_ref().map_or_else(Vec::new, |r| r.added_hz.clone());
     let (result, description, kind, run_s) = py.detach(move || -> PyResult<_> {
         let engine = engine(&backend, allow_software_gpu, steps_per_dispatch)?;
-        let started = Instant::now();
         let mut last_percent = u64::MAX;
-        let result = sweep::run_sweep(&model, &conditions, &settings, &engine, &mut |done, total| {
-            if progress && total > 0 {
-                let percent = done * 100 / total;
-                if percent / 10 != last_percent / 10 {
-                    last_percent = percent;
-                    eprintln!("stickslip sweep: {percent:>3}%");
+        let swept = prepared
+            .run(&engine, fig8_frequency_hz, &mut |done, total| {
+                if progress && total > 0 {
+                    let percent = done * 100 / total;
+                    if percent / 10 != last_percent / 10 {
+                        last_percent = percent;
+                        eprintln!("stickslip sweep: {percent:>3}%");
+                    }
                 }
-            }
-        })
-        .map_err(py_err)?;
-        let run_s = started.elapsed().as_secs_f64();
-        if let Some(set) = prepared {
-            let identity = RunIdentity {
-                model_toml: model.to_toml_string(),
-                frequencies_hz: grid.frequencies_hz.clone(),
-                normal_forces_n: grid.normal_forces_n.clone(),
-                realisations: settings.realisations,
-                warmup_cycles: settings.plan.warmup_cycles,
-                measured_cycles: settings.plan.measured_cycles,
-                seed: settings.seed,
-                backend: engine.kind(),
-            };
-            let timings = json!({ "run_s": run_s });
-            write_output_set(
-                set.dir(),
-                &model,
-                &identity,
-                Shard::WHOLE,
-                &result,
-                engine.description(),
-                timings,
-                refinement.as_ref(),
-                fig8_frequency_hz,
-            )
+            })
             .map_err(py_err)?;
-            set.commit().map_err(py_err)?;
-        }
-        Ok((result, engine.description().to_string(), engine.kind(), run_s))
+        Ok((swept.result, engine.description().to_string(), engine.kind(), swept.run_s))
     })?;
     result_payload(
         &result,

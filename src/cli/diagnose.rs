@@ -5,12 +5,12 @@ use std::time::Instant;
 
 use super::{BackendArg, Progress, emit, emit_bytes, open_engine};
 use crate::diagnose::benchmark::{BenchmarkSettings, Generator, Origins, run_benchmark as run_benchmark_sets};
-use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{RunInfo, write_diagnosis_with};
 use crate::diagnose::synthetic::SetShape;
 use crate::diagnose::{DiagnoseSettings, diagnose_set};
 use crate::engine::{Effect, GpuOptions, Job};
 use crate::io::{OutputSet, owned};
+use crate::measure::read_measurement_set;
 use anyhow::Result;
 use clap::Args;
 

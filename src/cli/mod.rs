@@ -11,7 +11,7 @@
 //! printed, and stdout is unchanged (redirect it to drop it). When stderr is
 //! a terminal progress is a bar or spinner; otherwise (a log file, Slurm,
 //! a pipe) it is plain lines, each step as it starts and a heartbeat at
-//! least every [`HEARTBEAT`].
+//! least every `HEARTBEAT`.
 
 mod diagnose;
 mod plot;
@@ -31,8 +31,8 @@ use anyhow::Result;
 use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::engine::gpu::{AdapterClass, GpuContext};
-use crate::engine::{BackendChoice, BackendKind, Engine, GpuOptions, Model};
+use crate::engine::gpu::AdapterClass;
+use crate::engine::{BackendChoice, Engine, GpuOptions, Model};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -262,65 +262,32 @@ pub(crate) fn allow_software_gpu() -> bool {
     global().allow_software_gpu
 }
 
-/// The refusal of a software adapter under `--backend gpu`.
-fn software_refusal(ctx: &GpuContext) -> anyhow::Error {
-    anyhow::anyhow!(
-        "--backend gpu: the only GPU adapter is the software {}, which runs the kernel on the CPU cores; \
-         pass --allow-software-gpu (allow_software_gpu=True in Python) to use it anyway, or --backend cpu for \
-         the f64 reference (faster on the same cores); on a GPU node, the GPU's Vulkan driver (ICD) is missing",
-        ctx.describe()
-    )
+/// The adapter an engine runs on, in words for the `adapter:` line.
+fn adapter_words(engine: &Engine) -> &'static str {
+    match engine.adapter() {
+        Some((AdapterClass::Hardware, _)) => "hardware GPU",
+        Some((AdapterClass::Software, _)) => "software GPU (allowed by --allow-software-gpu)",
+        None => "none (CPU reference)",
+    }
 }
 
-/// Opens a backend under the command line's policy; the Python package calls
-/// it too, so both front ends take the same adapters. `Gpu` insists on a GPU
-/// and refuses a software adapter (lavapipe) unless `allow_software_gpu`;
-/// `Auto` takes a hardware GPU, else the f64 CPU reference; `Cpu` the
-/// reference. Returns the engine and its adapter kind in words (`hardware
-/// GPU`, `software GPU (allowed ...)`, `none (CPU reference)`).
-pub fn open_backend(
-    choice: BackendChoice,
-    allow_software_gpu: bool,
-    options: GpuOptions,
-) -> Result<(Engine, &'static str)> {
-    Ok(match choice {
-        BackendChoice::Gpu => {
-            let ctx = GpuContext::new(true)?;
-            let kind = match ctx.adapter_class() {
-                AdapterClass::Hardware => "hardware GPU",
-                AdapterClass::Software if allow_software_gpu => "software GPU (allowed by --allow-software-gpu)",
-                AdapterClass::Software => return Err(software_refusal(&ctx)),
-            };
-            (Engine::gpu(ctx, options), kind)
-        }
-        other => {
-            let engine = Engine::open(other, options)?;
-            // Auto takes a GPU only when it is hardware (a software adapter
-            // falls back to the CPU reference, and says so).
-            let kind = match engine.kind() {
-                BackendKind::Gpu => "hardware GPU",
-                BackendKind::Cpu => "none (CPU reference)",
-            };
-            (engine, kind)
-        }
-    })
-}
-
-/// Opens the `--backend` choice ([`open_backend`]) and states it on stderr:
-/// the backend line and the adapter kind (hardware GPU, software GPU, or none).
+/// Opens the `--backend` choice ([`Engine::open`], with the global flags'
+/// options) and states it on stderr: the backend line and the adapter kind
+/// (hardware GPU, software GPU, or none).
 pub(crate) fn open_engine(backend: BackendArg, options: GpuOptions) -> Result<Engine> {
-    let (engine, kind) = open_backend(backend.into(), allow_software_gpu(), options)?;
+    let engine = Engine::open(backend.into(), GpuOptions { allow_software_gpu: allow_software_gpu(), ..options })?;
     info(&format!("backend: {}", engine.description()));
-    info(&format!("adapter: {kind}"));
+    info(&format!("adapter: {}", adapter_words(&engine)));
     Ok(engine)
 }
 
 fn check_gpu() -> Result<()> {
-    let ctx = GpuContext::new(true)?;
-    match ctx.adapter_class() {
-        AdapterClass::Hardware => emit(&format!("hardware GPU: {}", ctx.describe())),
-        AdapterClass::Software if allow_software_gpu() => emit(&format!("software GPU: {}", ctx.describe())),
-        AdapterClass::Software => Err(software_refusal(&ctx)),
+    let options = GpuOptions { allow_software_gpu: allow_software_gpu(), ..GpuOptions::default() };
+    let engine = Engine::open(BackendChoice::Gpu, options)?;
+    match engine.adapter() {
+        Some((AdapterClass::Hardware, name)) => emit(&format!("hardware GPU: {name}")),
+        Some((AdapterClass::Software, name)) => emit(&format!("software GPU: {name}")),
+        None => anyhow::bail!("--backend gpu opened no GPU"),
     }
 }
 

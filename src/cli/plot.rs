@@ -7,12 +7,11 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::emit;
-use crate::diagnose::measure::read_measurement_set;
 use crate::diagnose::report::{ChartData, write_charts};
 use crate::engine::model::fmt_value;
-use crate::sweep::plot::{
-    AmplitudeAxis, PlotOptions, SizePreset, loads, measured_points, pair, write_sweep_plots_with,
-};
+use crate::figure::SizePreset;
+use crate::measure::read_measurement_set;
+use crate::sweep::plot::{AmplitudeAxis, PlotOptions, loads, measured_points, pair, write_sweep_plots_with};
 use crate::sweep::read_accumulators;
 
 #[derive(Args, Debug)]

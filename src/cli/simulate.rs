@@ -7,10 +7,10 @@ use anyhow::Result;
 use clap::Args;
 
 use super::{ModelArgs, emit};
-use crate::diagnose::measure::{MIN_PERIODS, RunEntry, write_manifest, write_run_file};
 use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::engine::{Condition, Engine, Job, Oscillator, Point, Record, RunPlan, Sample};
 use crate::io::{self, OutputSet, owned};
+use crate::measure::{MIN_PERIODS, RunEntry, write_manifest, write_run_file};
 
 #[derive(Args, Debug)]
 pub(crate) struct SimulateArgs {

@@ -1,16 +1,17 @@
 //! `stickslip sweep` and `stickslip merge`.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
 
 use super::{BackendArg, ModelArgs, Progress, emit, info, open_engine};
+use crate::app::SweepRequest;
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
-use crate::engine::{GpuOptions, Job, Model, Oscillator, RunPlan};
-use crate::io::{OutputSet, excerpt, owned};
-use crate::sweep::{self, Grid, RefineSettings, RunIdentity, Shard, SweepSettings, write_output_set};
+use crate::engine::{GpuOptions, Job, Model, RunPlan};
+use crate::io::{OutputSet, owned};
+use crate::sweep::{self, Grid, RefineSettings, Shard, SweepSettings, write_output_set};
+use crate::text::excerpt;
 
 #[derive(Args, Debug)]
 pub(crate) struct SweepArgs {
@@ -156,12 +157,7 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     if !args.fig8_frequency.is_finite() {
         anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
     }
-    for c in &grid.conditions() {
-        Oscillator::new(&model, *c)?;
-    }
-    let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &[])?;
-    // The refined grid, the same in every shard (it depends on neither the
-    // seed nor the backend), before the shard takes its part.
+    // The grid is refined the same in every shard, before the shard takes its part.
     let refine = (!args.no_refine).then_some(RefineSettings { max_added: args.refine_max, ..Default::default() });
     if refine.is_some()
         && args.refine_max > 0
@@ -170,65 +166,43 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     {
         info(&format!("refine: the grid is kept as given ({why})"));
     }
-    let started = Instant::now();
-    let (grid, refinement) = sweep::refined_grid(&model, grid, args.warmup_cycles, refine)?;
-    let refine_s = started.elapsed().as_secs_f64();
-    if let Some(r) = &refinement {
+    let request = SweepRequest { model, grid, settings, refine, shard };
+    let prepared = request.prepare(Some((&args.out, "--out")))?;
+    if let Some(r) = &prepared.refinement {
         let added: Vec<String> = r.added_hz.iter().map(|f| fmt_value(*f)).collect();
         info(&format!(
-            "refine: added {} frequencies where the response changes fast{}{} ({refine_s:.1} s; --no-refine keeps the grid as given)",
+            "refine: added {} frequencies where the response changes fast{}{} ({:.1} s; --no-refine keeps the grid as given)",
             added.len(),
             if added.is_empty() { "" } else { ": " },
-            added.join(", ")
+            added.join(", "),
+            prepared.refine_s
         ));
     }
-    let all_conditions = grid.conditions();
-    let conditions = &all_conditions[shard.points(all_conditions.len())];
-    if !conditions.is_empty() {
-        let points = sweep::steady_points(&model, conditions);
-        sweep::sweep_job(&model, &points, &settings).validate()?;
-    }
-    let engine = open_engine(args.backend, GpuOptions { steps_per_dispatch: args.steps_per_dispatch })?;
-    let description = engine.description().to_string();
+    let engine =
+        open_engine(args.backend, GpuOptions { steps_per_dispatch: args.steps_per_dispatch, ..GpuOptions::default() })?;
+    let points = prepared.conditions.len();
     if shard != Shard::WHOLE {
         info(&format!(
-            "shard {}/{}: {} of {} grid points",
+            "shard {}/{}: {points} of {} grid points",
             shard.index,
             shard.count,
-            conditions.len(),
-            all_conditions.len()
+            prepared.grid.frequencies_hz.len() * prepared.grid.normal_forces_n.len()
         ));
     }
-    let started = Instant::now();
+    let added = prepared.refinement.as_ref().map_or(0, |r| r.added_hz.len());
+    let (frequencies, forces) = (prepared.grid.frequencies_hz.len(), prepared.grid.normal_forces_n.len());
     let progress = Progress::bar("sweep");
-    let result =
-        sweep::run_sweep(&model, conditions, &settings, &engine, &mut |done, total| progress.position(done, total))?;
-    progress.finish();
-    let run_s = started.elapsed().as_secs_f64();
-    let identity = RunIdentity {
-        model_toml: model.to_toml_string(),
-        frequencies_hz: grid.frequencies_hz.clone(),
-        normal_forces_n: grid.normal_forces_n.clone(),
-        realisations: settings.realisations,
-        warmup_cycles: settings.plan.warmup_cycles,
-        measured_cycles: settings.plan.measured_cycles,
-        seed: settings.seed,
-        backend: engine.kind(),
-    };
-    let timings = serde_json::json!({ "run_s": run_s, "refine_s": refine_s });
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
-    write_output_set(out.dir(), &model, &identity, shard, &result, &description, timings, refinement.as_ref(), plots)?;
-    out.commit()?;
-    let added = refinement.as_ref().map_or(0, |r| r.added_hz.len());
+    let swept = prepared.run(&engine, plots, &mut |done, total| progress.position(done, total))?;
+    progress.finish();
     emit(&format!(
-        "{} grid points ({} frequencies{}; {} normal forces{}) × {} realisations × {} cycles in {run_s:.1} s; wrote {}",
-        conditions.len(),
-        grid.frequencies_hz.len(),
+        "{points} grid points ({frequencies} frequencies{}; {forces} normal forces{}) × {} realisations × {} cycles in \
+         {:.1} s; wrote {}",
         if added > 0 { format!(", {added} added by refinement") } else { String::new() },
-        grid.normal_forces_n.len(),
         if shard == Shard::WHOLE { String::new() } else { format!("; shard {}/{}", shard.index, shard.count) },
         settings.realisations,
         settings.plan.measured_cycles,
+        swept.run_s,
         args.out.join("sweep.csv").display()
     ))?;
     Ok(())

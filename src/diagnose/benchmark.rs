@@ -13,7 +13,6 @@ use std::time::Instant;
 
 use crate::diagnose::candidates::NULL_HUBER;
 use crate::diagnose::data::condition_key;
-use crate::diagnose::measure::{MeasurementSet, RigInfo, SummaryRow, read_measurement_set};
 use crate::diagnose::report::write_diagnosis;
 use crate::diagnose::simulate::{path_stats_per_condition, record_path_stats};
 use crate::diagnose::synthetic::{PlannedSet, SetShape, benchmark_plan, random_truth, write_set};
@@ -22,6 +21,7 @@ use crate::engine::reduce::circular_mean_var;
 use crate::engine::{Condition, Effect, Engine, Model};
 use crate::error::Result;
 use crate::io::{create_dir, write_atomically};
+use crate::measure::{MeasurementSet, RigInfo, SummaryRow, read_measurement_set};
 
 /// What the benchmark runs.
 #[derive(Clone, Debug)]

@@ -10,8 +10,8 @@ use std::sync::{Arc, Mutex};
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::features::{RunFeatures, SampleGrid};
 use crate::diagnose::law::LawMoments;
-use crate::diagnose::measure::Run;
 use crate::engine::Model;
+use crate::measure::Run;
 
 /// Simulation caches of a diagnosis, shared by every view of its data.
 #[derive(Default)]

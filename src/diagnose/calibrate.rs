@@ -12,7 +12,6 @@
 use crate::diagnose::data::Data;
 use crate::diagnose::features::run_features;
 use crate::diagnose::law::FrictionLaw;
-use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
 use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fitting_records};
@@ -20,6 +19,7 @@ use crate::diagnose::{DiagnoseSettings, mean};
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
 use crate::error::Result;
+use crate::measure::Run;
 
 /// What pins the baseline where the data have no friction channels: the
 /// response statistic the friction level is solved on (the mean peak where

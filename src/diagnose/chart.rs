@@ -14,8 +14,7 @@ use serde::{Deserialize, Serialize};
 use crate::diagnose::Diagnosis;
 use crate::diagnose::observable::Observable;
 use crate::error::{Error, Result};
-use crate::figure::{FONT, colour, legend_box, plot_error, render};
-use crate::sweep::plot::{decade_tick, tick};
+use crate::figure::{FONT, colour, decade_tick, legend_box, plot_error, render, tick};
 
 /// One scored (condition, observable) unit: the measured value and what the
 /// baseline and the fitted model simulate, in the observable's unit.

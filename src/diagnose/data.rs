@@ -10,13 +10,13 @@ use serde::Serialize;
 use crate::diagnose::cache::Caches;
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::law::{self, FrictionLaw};
-use crate::diagnose::measure::{MeasurementSet, Run};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::effects::HarmonicForm;
 use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
+use crate::measure::{MeasurementSet, Run};
 
 /// One group of measured data at one condition.
 #[derive(Clone, Debug)]

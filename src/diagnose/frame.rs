@@ -14,10 +14,10 @@
 //! pattern and sets such phases aside, saying so in the report.
 
 use crate::diagnose::data::Data;
-use crate::diagnose::measure::TimeOrigin;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 use crate::engine::reduce::wrap_angle;
+use crate::measure::TimeOrigin;
 
 /// Notes on the records' time frames for the report: how many runs gave
 /// their phase through `base_x`, how many declared a free origin.

@@ -7,8 +7,8 @@
 use rayon::prelude::*;
 
 use crate::diagnose::features::solve_normal;
-use crate::diagnose::measure::Run;
 use crate::engine::Model;
+use crate::measure::Run;
 
 /// The paper's law `μ(v) = a + b / (1 + c |v|) + d v²` fitted to slipping
 /// samples, with the residual standard deviation around it.

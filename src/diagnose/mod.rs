@@ -19,7 +19,7 @@
 //!    [`data`]). The verdict is `none` unless the best candidate lowers both
 //!    the held-out and the fitting gaps by more than their noise.
 //!
-//! [`measure`] reads (and writes) measurement sets, [`report`] writes the
+//! [`crate::measure`] reads (and writes) measurement sets, [`report`] writes the
 //! outputs, and [`synthetic`] and [`benchmark`] check the whole blind.
 
 pub mod benchmark;
@@ -31,7 +31,6 @@ pub mod data;
 pub mod features;
 mod frame;
 pub mod law;
-pub mod measure;
 pub mod observable;
 pub mod report;
 pub mod score;
@@ -46,8 +45,8 @@ use serde::Serialize;
 
 use crate::engine::{Condition, Effect, Engine, Model};
 use crate::error::Result;
+use crate::measure::{MeasurementSet, read_measurement_set};
 use data::{Data, Folds, condition_key};
-use measure::{MeasurementSet, read_measurement_set};
 use observable::Observable;
 use score::{Scope, Score};
 

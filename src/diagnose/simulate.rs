@@ -11,12 +11,12 @@ use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
 use crate::diagnose::features::{RunFeatures, run_features_on};
 use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
-use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::circular_mean_var;
 use crate::engine::{Condition, Engine, Job, Model, PathResult, Point, Record, RunPlan, Sample, rng};
 use crate::error::Result;
+use crate::measure::Run;
 
 /// Realisation numbers of unit `u`'s replicates start at `u × REPLICATE_STRIDE`.
 const REPLICATE_STRIDE: u32 = 1000;
@@ -90,7 +90,7 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
     }
     let key = rng::seed_key(seed ^ 0x5E45_0E5E_0000_0000);
     let draws = data.caches.sensor_draws.get(seed, realisation, samples.len(), |i| {
-        rng::pair_a(rng::block(key, realisation, rng::STREAM_SENSOR, i as u64))
+        rng::pair_a(rng::noise_block(key, realisation, rng::STREAM_SENSOR, i as u64))
     });
     for (s, &(gx, gv)) in samples.iter_mut().zip(draws.iter()) {
         s.x_m += noise.x_m * gx;
@@ -348,7 +348,7 @@ mod tests {
         let shape =
             crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 3.0, sample_rate_hz: 600.0 };
         crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 3).expect("set");
-        let set = crate::diagnose::measure::read_measurement_set(&dir).expect("read");
+        let set = crate::measure::read_measurement_set(&dir).expect("read");
         let _ = std::fs::remove_dir_all(&dir);
         let engine = Engine::cpu("test");
         let settings = |replicates| DiagnoseSettings { replicates, warmup_cycles: 5, ..DiagnoseSettings::default() };

@@ -18,7 +18,6 @@ use std::path::Path;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
-use crate::diagnose::measure::{RunEntry, write_manifest, write_run_file};
 use crate::engine::analytic::DenHartog;
 use crate::engine::effects::{
     ColourForm, ColouredFrictionNoise, DriftForm, FrictionHysteresis, HarmonicForm, HysteresisForm,
@@ -28,6 +27,7 @@ use crate::engine::effects::{
 use crate::engine::{Condition, Effect, Engine, Job, Model, Point, Record, RunPlan};
 use crate::error::Result;
 use crate::io;
+use crate::measure::{RunEntry, write_manifest, write_run_file};
 
 /// How big the synthetic sets are.
 #[derive(Clone, Copy, Debug)]

@@ -5,7 +5,9 @@
 //! work as a [`Job`] (model, points, realisations, seed, run plan and what to
 //! [`Record`]) and hand it to [`Engine::run`]. Only this module knows that
 //! there are two backends ([`Backend`]); [`Engine::open`] is the one place
-//! that chooses between them.
+//! that chooses between them, under one policy for every front end
+//! (the command line and the Python package pass their options, such as
+//! [`GpuOptions::allow_software_gpu`], and decide nothing themselves).
 
 pub mod analytic;
 pub mod cpu;
@@ -15,14 +17,15 @@ pub mod model;
 pub mod oscillator;
 pub mod reduce;
 pub mod rng;
+pub mod schedule;
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 pub use effects::{Effect, Effects};
 pub use model::{Condition, Model};
-pub use oscillator::{InitialState, Oscillator, PathResult, Point, RunPlan, Sample};
-pub use reduce::{PeakRange, PointAccumulator, PointStats};
+pub use oscillator::{InitialState, Oscillator, PathResult, PeakRange, Point, RunPlan, Sample};
+pub use reduce::{PointAccumulator, PointStats};
 
 /// What a job keeps of each realisation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -265,6 +268,12 @@ pub trait Backend: Send + Sync {
     fn kind(&self) -> BackendKind;
     /// Runs `job`; `progress(done, total)` counts integrated periods × paths.
     fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output>;
+
+    /// Whether this backend runs `job` itself; [`Engine::run`] gives the
+    /// jobs it does not run to the CPU reference.
+    fn runs(&self, _job: &Job<'_>) -> Result<bool> {
+        Ok(true)
+    }
 }
 
 /// The `--backend` choice.
@@ -284,17 +293,21 @@ pub enum BackendChoice {
     Cpu,
 }
 
-/// Settings of the GPU backend.
+/// Settings of the GPU backend, and which adapters [`Engine::open`] may take.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GpuOptions {
     /// Integration steps (invocations × steps) per dispatch: bounds each
     /// submission's run time.
     pub steps_per_dispatch: u64,
+    /// Whether [`BackendChoice::Gpu`] may take a software adapter (Mesa's
+    /// lavapipe), which runs the kernel on the CPU cores; without it such an
+    /// adapter is refused. [`BackendChoice::Auto`] never takes one.
+    pub allow_software_gpu: bool,
 }
 
 impl Default for GpuOptions {
     fn default() -> Self {
-        GpuOptions { steps_per_dispatch: gpu::DEFAULT_STEPS_PER_DISPATCH }
+        GpuOptions { steps_per_dispatch: gpu::DEFAULT_STEPS_PER_DISPATCH, allow_software_gpu: false }
     }
 }
 
@@ -302,33 +315,41 @@ impl Default for GpuOptions {
 pub struct Engine {
     backend: Box<dyn Backend>,
     description: String,
+    /// The GPU adapter's class and description; none on the CPU.
+    adapter: Option<(gpu::AdapterClass, String)>,
 }
 
 impl Engine {
-    /// Opens the chosen backend; [`Engine::description`] says which was
-    /// taken and why.
+    /// Opens the chosen backend under the one backend policy every front end
+    /// shares: `Cpu` is the f64 reference; `Gpu` a GPU adapter or an error,
+    /// a software one only with [`GpuOptions::allow_software_gpu`]; `Auto` a
+    /// hardware GPU, else the reference. [`Engine::description`] says which
+    /// was taken and why.
     pub fn open(choice: BackendChoice, options: GpuOptions) -> Result<Engine> {
         match choice {
-            BackendChoice::Cpu => Ok(Engine::cpu("chosen with --backend cpu")),
+            BackendChoice::Cpu => Ok(Engine::cpu("chosen as the backend")),
             BackendChoice::Gpu => {
                 let ctx = gpu::GpuContext::new(true)?;
-                let description = format!("GPU: {}", ctx.describe());
-                Ok(Engine::gpu_described(ctx, options, description))
+                if ctx.adapter_class() == gpu::AdapterClass::Software && !options.allow_software_gpu {
+                    return Err(Error::NoGpu(format!(
+                        "the only GPU adapter is the software {}, which runs the kernel on the CPU cores; pass \
+                         --allow-software-gpu (allow_software_gpu=True in Python) to use it anyway, or --backend cpu \
+                         for the f64 reference (faster on the same cores); on a GPU node, the GPU's Vulkan driver \
+                         (ICD) is missing",
+                        ctx.describe()
+                    )));
+                }
+                Ok(Engine::gpu(ctx, options))
             }
             BackendChoice::Auto => match gpu::GpuContext::new(true) {
-                Ok(ctx) => {
-                    let description = match ctx.adapter_class() {
-                        gpu::AdapterClass::Hardware => format!("GPU: {}", ctx.describe()),
-                        gpu::AdapterClass::Software => {
-                            return Ok(Engine::cpu(&format!(
-                                "no hardware GPU; the only adapter is the software {}, which is slower than this \
-                                 integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway)",
-                                ctx.describe()
-                            )));
-                        }
-                    };
-                    Ok(Engine::gpu_described(ctx, options, description))
-                }
+                Ok(ctx) => match ctx.adapter_class() {
+                    gpu::AdapterClass::Hardware => Ok(Engine::gpu(ctx, options)),
+                    gpu::AdapterClass::Software => Ok(Engine::cpu(&format!(
+                        "no hardware GPU; the only adapter is the software {}, which is slower than this \
+                         integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway)",
+                        ctx.describe()
+                    ))),
+                },
                 Err(e) => Ok(Engine::cpu(&format!("no GPU adapter ({e})"))),
             },
         }
@@ -338,17 +359,20 @@ impl Engine {
     pub fn cpu(reason: &str) -> Engine {
         let description =
             format!("CPU: f64 reference integrator on {} threads ({reason})", rayon::current_num_threads());
-        Engine { backend: Box::new(cpu::CpuBackend), description }
+        Engine { backend: Box::new(cpu::CpuBackend), description, adapter: None }
     }
 
-    /// The WGSL kernel on an opened GPU context.
+    /// The WGSL kernel on an opened GPU context, whatever its adapter.
     pub fn gpu(ctx: gpu::GpuContext, options: GpuOptions) -> Engine {
         let description = format!("GPU: {}", ctx.describe());
-        Engine::gpu_described(ctx, options, description)
+        let adapter = Some((ctx.adapter_class(), ctx.describe()));
+        Engine { backend: Box::new(gpu::GpuBackend::new(ctx, options)), description, adapter }
     }
 
-    fn gpu_described(ctx: gpu::GpuContext, options: GpuOptions, description: String) -> Engine {
-        Engine { backend: Box::new(gpu::GpuBackend::new(ctx, options)), description }
+    /// The GPU adapter the jobs run on, its class and description; `None`
+    /// on the CPU reference.
+    pub fn adapter(&self) -> Option<(gpu::AdapterClass, &str)> {
+        self.adapter.as_ref().map(|(class, name)| (*class, name.as_str()))
     }
 
     /// Which integrator runs the jobs.
@@ -361,9 +385,15 @@ impl Engine {
         &self.description
     }
 
-    /// Runs `job` on this engine's backend.
+    /// Runs `job` on this engine's backend. A job the backend does not run
+    /// itself (on a GPU: records sampled off the noise boundaries, which
+    /// would split the kernel's steps) runs on the CPU reference, on the
+    /// same noise keys.
     pub fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
         job.validate()?;
+        if !self.backend.runs(job)? {
+            return cpu::CpuBackend.run(job, progress);
+        }
         self.backend.run(job, progress)
     }
 

@@ -94,7 +94,7 @@ pub fn normal_force_problem(n: f64) -> Option<String> {
 pub const PAPER_RIG_TOML: &str = include_str!("../../models/paper-rig.toml");
 
 /// A complete model: rig, excitation, friction law, noise, solver, and the
-/// optional effects (each its own table; see [`crate::effects`]).
+/// optional effects (each its own table; see [`crate::engine::effects`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Model {
     pub rig: Rig,
@@ -259,7 +259,7 @@ impl Model {
     /// optional byte-order mark), applies `--set KEY=VALUE` overrides, and
     /// validates.
     pub fn from_file(path: &std::path::Path, overrides: &[String]) -> Result<Model> {
-        let source_name = crate::io::shown(path);
+        let source_name = crate::text::shown(path);
         let refuse = |message: String| Error::ModelSyntax { source_name: source_name.clone(), message };
         let bytes = crate::io::read_bounded(path, crate::io::MAX_MODEL_FILE_BYTES)
             .map_err(|e| refuse(format!("cannot read it: {e}")))?;
@@ -516,7 +516,7 @@ impl Model {
 /// A TOML syntax error as `line L, column C: message`, without quoting the
 /// file (it may not be a model file at all).
 fn toml_problem(text: &str, e: &toml::de::Error) -> String {
-    let message = crate::io::excerpt(e.message().trim(), 200);
+    let message = crate::text::excerpt(e.message().trim(), 200);
     match e.span() {
         Some(span) => {
             let before = &text.as_bytes()[..span.start.min(text.len())];
@@ -536,7 +536,7 @@ fn schema_problem(table: &toml::Table, whole: &toml::de::Error) -> String {
         toml::from_str::<T>(text).err()
     }
     for (name, value) in table {
-        let shown_name = crate::io::excerpt(name, 60);
+        let shown_name = crate::text::excerpt(name, 60);
         let Some(inner) = value.as_table() else {
             return format!("`{shown_name}` must be a table");
         };
@@ -558,7 +558,7 @@ fn schema_problem(table: &toml::Table, whole: &toml::de::Error) -> String {
             _ => first_error::<Effects>(&text),
         };
         if let Some(e) = error {
-            let message = crate::io::excerpt(e.message().trim(), 200);
+            let message = crate::text::excerpt(e.message().trim(), 200);
             return match key_at(&text, e.span()) {
                 Some(key) if core => format!("`{shown_name}.{key}`: {message}"),
                 Some(key) => format!("`{key}`: {message}"),
@@ -566,7 +566,7 @@ fn schema_problem(table: &toml::Table, whole: &toml::de::Error) -> String {
             };
         }
     }
-    crate::io::excerpt(whole.message().trim(), 200)
+    crate::text::excerpt(whole.message().trim(), 200)
 }
 
 /// The dotted key of the `key = value` line that `span` starts on in TOML
@@ -576,13 +576,13 @@ fn key_at(text: &str, span: Option<std::ops::Range<usize>>) -> Option<String> {
     let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
     let line = text[line_start..].lines().next()?;
     let (key, _) = line.split_once('=')?;
-    let key = crate::io::excerpt(key.trim().trim_matches('"'), 60);
+    let key = crate::text::excerpt(key.trim().trim_matches('"'), 60);
     let header = text[..line_start]
         .lines()
         .rev()
         .find_map(|l| l.trim().strip_prefix('[').and_then(|h| h.strip_suffix(']')).map(|h| h.trim().to_string()));
     Some(match header {
-        Some(h) => format!("{}.{key}", crate::io::excerpt(&h, 60)),
+        Some(h) => format!("{}.{key}", crate::text::excerpt(&h, 60)),
         None => key,
     })
 }

@@ -1,11 +1,13 @@
 //! What the integrators work on: the constants of one grid point derived
 //! from a model ([`Oscillator`]), the initial state, how long a realisation
-//! runs ([`RunPlan`]), and what one realisation produces ([`PathResult`],
-//! [`Sample`]). Both backends share these types.
+//! runs ([`RunPlan`]), where its peaks are binned ([`PeakRange`]), and what
+//! one realisation produces ([`PathResult`], [`Sample`]). Both backends
+//! share these types.
+
+use serde::{Deserialize, Serialize};
 
 use crate::engine::effects::{EffectParams, HysteresisForm};
 use crate::engine::model::{Condition, Model, Solver};
-use crate::engine::reduce::PeakRange;
 use crate::error::{Error, Result};
 
 /// How long a realisation runs.
@@ -62,6 +64,36 @@ impl Point {
             condition,
             initial: InitialState::steady(model, condition),
             range: PeakRange::for_point(model, condition),
+        }
+    }
+}
+
+/// Where a point's peaks are binned and how they are quantised, and the
+/// reference its phases are measured from (the reduction's arithmetic on it
+/// is in [`crate::engine::reduce`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PeakRange {
+    /// Lower edge of the first inner bin, m.
+    pub lo_m: f64,
+    /// Upper edge of the last inner bin, m.
+    pub hi_m: f64,
+    /// Phases are reduced as their deviation from this angle, rad (the
+    /// frictionless phase at the point; any reference gives the same
+    /// statistics, a near one keeps tiny spreads precise).
+    pub phase_ref_rad: f64,
+}
+
+impl PeakRange {
+    /// The range for a grid point: `[−0.5 A, 1.5 A]` around zero, with `A`
+    /// the frictionless steady amplitude there (friction only lowers peaks;
+    /// sticking blocks can sit on the negative side).
+    pub fn for_point(model: &Model, condition: Condition) -> PeakRange {
+        let a = model.linear_amplitude_m(condition.excitation_frequency_hz);
+        let a = if a.is_finite() && a > 0.0 { a } else { model.excitation.amplitude_m.max(1e-6) };
+        PeakRange {
+            lo_m: -0.5 * a,
+            hi_m: 1.5 * a,
+            phase_ref_rad: model.linear_phase_rad(condition.excitation_frequency_hz),
         }
     }
 }

@@ -11,8 +11,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::model::{Condition, Model};
-use crate::engine::oscillator::PathResult;
+use crate::engine::model::Condition;
+use crate::engine::oscillator::{PathResult, PeakRange};
 
 /// Histogram bins per grid point, including the underflow and overflow bins.
 pub const HISTOGRAM_BINS: u32 = 2048;
@@ -81,34 +81,8 @@ pub fn wrap_angle(rad: f64) -> f64 {
     if w > std::f64::consts::PI { w - std::f64::consts::TAU } else { w }
 }
 
-/// Where a point's peaks are binned and how they are quantised, and the
-/// reference its phases are measured from.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PeakRange {
-    /// Lower edge of the first inner bin, m.
-    pub lo_m: f64,
-    /// Upper edge of the last inner bin, m.
-    pub hi_m: f64,
-    /// Phases are reduced as their deviation from this angle, rad (the
-    /// frictionless phase at the point; any reference gives the same
-    /// statistics, a near one keeps tiny spreads precise).
-    pub phase_ref_rad: f64,
-}
-
+/// The reduction's arithmetic on a point's range, as the kernel does it.
 impl PeakRange {
-    /// The range for a grid point: `[−0.5 A, 1.5 A]` around zero, with `A`
-    /// the frictionless steady amplitude there (friction only lowers peaks;
-    /// sticking blocks can sit on the negative side).
-    pub fn for_point(model: &Model, condition: Condition) -> PeakRange {
-        let a = model.linear_amplitude_m(condition.excitation_frequency_hz);
-        let a = if a.is_finite() && a > 0.0 { a } else { model.excitation.amplitude_m.max(1e-6) };
-        PeakRange {
-            lo_m: -0.5 * a,
-            hi_m: 1.5 * a,
-            phase_ref_rad: model.linear_phase_rad(condition.excitation_frequency_hz),
-        }
-    }
-
     /// The phase reference, rad, as the kernel sees it (f32).
     pub fn phase_ref_f32(&self) -> f32 {
         self.phase_ref_rad as f32
@@ -152,7 +126,7 @@ impl PeakRange {
     }
 
     /// The histogram bin of a peak. Mirrors `histogram_bin` in `reduce.wgsl`.
-    pub fn bin(&self, peak_m: f32) -> u32 {
+    pub fn histogram_bin(&self, peak_m: f32) -> u32 {
         let position = (peak_m - self.lo_m as f32) * self.bins_per_m_f32();
         if position < 0.0 {
             0
@@ -220,7 +194,7 @@ impl PointAccumulator {
     /// of the period. A period whose peak (as f32) or phase is not finite is
     /// only counted in [`PointAccumulator::non_finite`]. Mirrors
     /// `tally_period` in `reduce.wgsl`.
-    pub fn add_period(&mut self, peak_m: f64, phase_rad: f64, stuck_share: f64) {
+    pub fn tally_period(&mut self, peak_m: f64, phase_rad: f64, stuck_share: f64) {
         let peak = peak_m as f32;
         if !(peak.is_finite() && phase_rad.is_finite()) {
             self.non_finite += 1;
@@ -235,7 +209,7 @@ impl PointAccumulator {
         self.sum_q2 += (i128::from(q) * i128::from(q)) as u128;
         self.stick_units += stick_units(stuck_share);
         self.clamped += u64::from(clamped);
-        self.histogram[self.range.bin(peak) as usize] += 1;
+        self.histogram[self.range.histogram_bin(peak) as usize] += 1;
     }
 
     /// Adds another accumulator of the same point (exact).
@@ -311,7 +285,7 @@ impl PointAccumulator {
     pub fn add_path(&mut self, path: &PathResult, period_s: f64) {
         self.realisations += 1;
         for (&p, &phase) in path.peaks_m.iter().zip(&path.phases_rad) {
-            self.add_period(p, phase, 0.0);
+            self.tally_period(p, phase, 0.0);
         }
         self.stick_units += stick_units(path.stick_time_s / period_s);
     }
@@ -355,7 +329,7 @@ mod tests {
         let mut acc = PointAccumulator::new(range());
         let peaks: Vec<f64> = (0..1000).map(|i| 1e-3 + 1e-4 * ((i as f64) * 0.37).sin()).collect();
         for &p in &peaks {
-            acc.add_period(p, 0.3, 0.0);
+            acc.tally_period(p, 0.3, 0.0);
         }
         let n = peaks.len() as f64;
         let mean = peaks.iter().sum::<f64>() / n;
@@ -369,11 +343,11 @@ mod tests {
     fn merging_is_exact_in_any_order() {
         let peaks: Vec<f64> = (0..500).map(|i| 1e-3 * (1.0 + 0.3 * ((i as f64) * 1.7).cos())).collect();
         let mut whole = PointAccumulator::new(range());
-        peaks.iter().for_each(|&p| whole.add_period(p, 0.3, 0.25));
+        peaks.iter().for_each(|&p| whole.tally_period(p, 0.3, 0.25));
         let mut a = PointAccumulator::new(range());
         let mut b = PointAccumulator::new(range());
-        peaks[..123].iter().for_each(|&p| a.add_period(p, 0.3, 0.25));
-        peaks[123..].iter().rev().for_each(|&p| b.add_period(p, 0.3, 0.25));
+        peaks[..123].iter().for_each(|&p| a.tally_period(p, 0.3, 0.25));
+        peaks[123..].iter().rev().for_each(|&p| b.tally_period(p, 0.3, 0.25));
         b.merge(&a);
         assert_eq!(whole, b);
         assert_eq!(whole.stats(Condition { excitation_frequency_hz: 7.0, normal_force_n: 1.0 }).stick_fraction, 0.25);
@@ -383,7 +357,7 @@ mod tests {
     fn phase_sums_give_the_circular_mean_and_variance() {
         let mut acc = PointAccumulator::new(range());
         let phases: Vec<f64> = (0..2000).map(|i| 2.5 + 0.01 * ((i as f64) * 0.77).sin()).collect();
-        phases.iter().for_each(|&p| acc.add_period(1e-3, p, 0.0));
+        phases.iter().for_each(|&p| acc.tally_period(1e-3, p, 0.0));
         let (mean, var) = acc.phase_moments();
         let (direct_mean, direct_var) = circular_mean_var(&phases);
         let n = phases.len() as f64;
@@ -402,7 +376,7 @@ mod tests {
     fn histogram_quantiles_are_close_to_exact() {
         let mut acc = PointAccumulator::new(range());
         let peaks: Vec<f64> = (0..10_000).map(|i| 1e-3 + 2e-4 * (i as f64 / 10_000.0)).collect();
-        peaks.iter().for_each(|&p| acc.add_period(p, 0.3, 0.0));
+        peaks.iter().for_each(|&p| acc.tally_period(p, 0.3, 0.0));
         let bin = 4e-3 / f64::from(HISTOGRAM_BINS - 2);
         assert!((acc.quantile(0.5) - 1.1e-3).abs() < bin);
         assert!((acc.quantile(0.05) - 1.01e-3).abs() < bin);

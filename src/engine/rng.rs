@@ -32,6 +32,14 @@ fn mulhilo(a: u32, b: u32) -> (u32, u32) {
     ((product >> 32) as u32, product as u32)
 }
 
+/// One Philox4x32 round of counter `c` under round key `k`.
+#[inline]
+fn philox_round(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
+    let (hi0, lo0) = mulhilo(PHILOX_M0, c[0]);
+    let (hi1, lo1) = mulhilo(PHILOX_M1, c[2]);
+    [hi1 ^ c[1] ^ k[0], lo1, hi0 ^ c[3] ^ k[1], lo0]
+}
+
 /// Philox4x32 with 10 rounds.
 #[inline]
 pub fn philox4x32_10(counter: [u32; 4], key: [u32; 2]) -> [u32; 4] {
@@ -42,9 +50,7 @@ pub fn philox4x32_10(counter: [u32; 4], key: [u32; 2]) -> [u32; 4] {
             k[0] = k[0].wrapping_add(PHILOX_W0);
             k[1] = k[1].wrapping_add(PHILOX_W1);
         }
-        let (hi0, lo0) = mulhilo(PHILOX_M0, c[0]);
-        let (hi1, lo1) = mulhilo(PHILOX_M1, c[2]);
-        c = [hi1 ^ c[1] ^ k[0], lo1, hi0 ^ c[3] ^ k[1], lo0];
+        c = philox_round(c, k);
     }
     c
 }
@@ -127,7 +133,7 @@ fn gaussian_pair(radius_word: u32, angle_word: u32) -> (f64, f64) {
 
 /// The Philox block of key `(seed, realisation, stream, interval)`.
 #[inline]
-pub fn block(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> [u32; 4] {
+pub fn noise_block(key: [u32; 2], realisation: u32, stream: u32, interval: u64) -> [u32; 4] {
     philox4x32_10(noise_counter(realisation, stream, interval), key)
 }
 

@@ -29,8 +29,8 @@ use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force
 use crate::engine::reduce::{PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
 use crate::engine::{BackendKind, Condition, Job, Model, PeakRange, PointAccumulator};
 use crate::error::{Error, Result};
-use crate::io::excerpt;
 use crate::sweep::{Grid, SweepResult};
+use crate::text::{excerpt, shown};
 
 /// One part of a grid split across machines: shard `index` of `count`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -401,9 +401,9 @@ pub fn merge_shards(dirs: &[std::path::PathBuf]) -> Result<(RunIdentity, SweepRe
         if let Some(j) = c.as_ref().and_then(|c| canonical[..i].iter().position(|o| o.as_ref() == Some(c))) {
             return Err(Error::Mismatch(format!(
                 "shard directory {} is given twice (as `{}` and `{}`)",
-                crate::io::shown(&dirs[i]),
-                crate::io::shown(&dirs[j]),
-                crate::io::shown(&dirs[i])
+                shown(&dirs[i]),
+                shown(&dirs[j]),
+                shown(&dirs[i])
             )));
         }
     }
@@ -416,11 +416,7 @@ pub fn merge_shards(dirs: &[std::path::PathBuf]) -> Result<(RunIdentity, SweepRe
     let count = reference.shard.count;
     for (dir, (file, _)) in &parts {
         let differs = |what: &str| {
-            Error::Mismatch(format!(
-                "cannot merge {} with {}: the shards differ in {what}",
-                crate::io::shown(dir),
-                crate::io::shown(first)
-            ))
+            Error::Mismatch(format!("cannot merge {} with {}: the shards differ in {what}", shown(dir), shown(first)))
         };
         let other = &file.identity;
         if other.model_toml != identity.model_toml {
@@ -451,8 +447,8 @@ pub fn merge_shards(dirs: &[std::path::PathBuf]) -> Result<(RunIdentity, SweepRe
             return Err(Error::Mismatch(format!(
                 "shard {}/{count} is given twice: {} and {}",
                 a.shard.index,
-                crate::io::shown(a_dir),
-                crate::io::shown(b_dir)
+                shown(a_dir),
+                shown(b_dir)
             )));
         }
     }
@@ -469,7 +465,7 @@ pub fn merge_shards(dirs: &[std::path::PathBuf]) -> Result<(RunIdentity, SweepRe
         if result.conditions.len() != file.shard.points(total).len() {
             return Err(Error::Mismatch(format!(
                 "{} holds {} points, its shard should hold {}",
-                crate::io::shown(dir),
+                shown(dir),
                 result.conditions.len(),
                 file.shard.points(total).len()
             )));

@@ -229,7 +229,8 @@ fn a_phase_only_null_calibrates_the_baseline_from_its_phases() {
 #[test]
 fn records_with_an_undeclared_free_time_origin_do_not_make_an_effect() {
     use stickslip::diagnose::synthetic::{SetShape, random_truth, write_set};
-    use stickslip::diagnose::{DiagnoseSettings, diagnose_set, measure::read_measurement_set};
+    use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
+    use stickslip::measure::read_measurement_set;
     let dir = scratch("free-origin");
     let set_dir = dir.join("set");
     let (truth, conditions) = random_truth(4, &[], &[0.65, 0.8], &[0.4, 0.65, 0.9]).unwrap();

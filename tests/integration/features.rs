@@ -4,8 +4,8 @@
 use std::f64::consts::TAU;
 
 use stickslip::diagnose::features::{RunFeatures, SampleGrid, run_features, run_features_on};
-use stickslip::diagnose::measure::Run;
 use stickslip::engine::{Condition, Model};
+use stickslip::measure::Run;
 
 use crate::common;
 

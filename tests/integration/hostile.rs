@@ -9,8 +9,8 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use stickslip::Error;
-use stickslip::diagnose::measure::read_measurement_set;
 use stickslip::engine::{Condition, InitialState, Job, Model, PeakRange, Point, Record, RunPlan};
+use stickslip::measure::read_measurement_set;
 use stickslip::sweep::{
     AccumulatorFile, Grid, RunIdentity, Shard, SweepSettings, merge_shards, read_accumulators, run_sweep,
     write_accumulators,
@@ -357,9 +357,9 @@ fn non_finite_paths_fail_naming_the_grid_point() {
     }
     // The reduction never quantises a non-finite value.
     let mut acc = stickslip::engine::PointAccumulator::new(points[0].range);
-    acc.add_period(f64::NAN, 0.0, 0.0);
-    acc.add_period(1e300, 0.0, 0.0);
-    acc.add_period(1e-3, f64::INFINITY, 0.0);
+    acc.tally_period(f64::NAN, 0.0, 0.0);
+    acc.tally_period(1e300, 0.0, 0.0);
+    acc.tally_period(1e-3, f64::INFINITY, 0.0);
     assert_eq!((acc.non_finite, acc.peaks, acc.histogram.iter().sum::<u64>()), (3, 0, 0));
 }
 

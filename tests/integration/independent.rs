@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use stickslip::diagnose::benchmark::independent::{
     IndependentTruth, RecordShape, random_truth, simulate_run, truth_path, write_set,
 };
-use stickslip::diagnose::measure::{TimeOrigin as ReadOrigin, read_measurement_set};
 use stickslip::engine::{Condition, Effect};
+use stickslip::measure::{TimeOrigin as ReadOrigin, read_measurement_set};
 
 /// A scratch directory removed when dropped.
 struct Scratch(PathBuf);

@@ -16,3 +16,4 @@ mod props;
 mod records;
 mod rng;
 mod sweep;
+mod twins;

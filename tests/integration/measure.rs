@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use stickslip::Error;
-use stickslip::diagnose::measure::{self, read_measurement_set};
 use stickslip::engine::{Condition, Model};
+use stickslip::measure::{self, read_measurement_set};
 
 use crate::common;
 
@@ -450,7 +450,7 @@ fn run_csv_with_base(n: usize, offset_s: f64) -> String {
 #[test]
 fn a_base_x_column_puts_the_record_in_the_model_frame() {
     use stickslip::diagnose::features::run_features;
-    use stickslip::diagnose::measure::TimeOrigin;
+    use stickslip::measure::TimeOrigin;
     let s = Scratch::new("base-x");
     s.write("manifest.json", &manifest_with_run("7.0"));
     s.write("run.csv", &run_csv_with_base(1200, 0.031));
@@ -471,7 +471,7 @@ fn a_base_x_column_puts_the_record_in_the_model_frame() {
 #[test]
 fn a_free_time_origin_is_declared_by_name_and_anything_else_refused() {
     use stickslip::diagnose::features::run_features;
-    use stickslip::diagnose::measure::TimeOrigin;
+    use stickslip::measure::TimeOrigin;
     let s = Scratch::new("free-origin");
     let manifest = manifest_with_run("7.0").replacen("{ \"format\"", "{ \"time_origin\": \"free\", \"format\"", 1);
     s.write("manifest.json", &manifest);

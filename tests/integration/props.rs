@@ -11,9 +11,9 @@ use std::time::Duration;
 use proptest::prelude::*;
 use proptest::test_runner::TestRunner;
 use stickslip::Error;
-use stickslip::diagnose::measure::read_measurement_set;
 use stickslip::engine::Model;
 use stickslip::engine::model::{PAPER_RIG_TOML, limits};
+use stickslip::measure::read_measurement_set;
 use stickslip::sweep::{AccumulatorFile, merge_shards, read_accumulators, write_accumulators};
 
 use crate::hostile::{Scratch, honest_shards};

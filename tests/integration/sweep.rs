@@ -12,7 +12,7 @@ fn settings() -> SweepSettings {
 }
 
 fn gpu(steps_per_dispatch: u64, ctx: GpuContext) -> Engine {
-    Engine::gpu(ctx, GpuOptions { steps_per_dispatch })
+    Engine::gpu(ctx, GpuOptions { steps_per_dispatch, ..GpuOptions::default() })
 }
 
 fn grid() -> Vec<Condition> {

@@ -1,5 +1,5 @@
 //! Features of one time-series record, computed by the same code from
-//! measured runs ([`read_measurement_set`](crate::diagnose::measure::read_measurement_set))
+//! measured runs ([`read_measurement_set`](crate::measure::read_measurement_set))
 //! and from simulated records (the engine's samples → [`Run::from_samples`]).
 //!
 //! Each feature targets one of the effects named in `docs/model.md`:
@@ -25,8 +25,8 @@ mod stats;
 
 pub(crate) use stats::{least_squares, solve_normal};
 
-use crate::diagnose::measure::Run;
 use crate::diagnose::observable::Observable;
+use crate::measure::Run;
 
 /// Slipping samples have `|v|` above this fraction of the record's largest `|v|`.
 pub const SLIP_SPEED_FRACTION: f64 = 0.05;

@@ -3,8 +3,8 @@
 
 use super::stats::{Design, moments, shape, slope};
 use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, SLOW_DEGREE, STICK_SPEED_FRACTION};
-use crate::diagnose::measure::{self, Run};
 use crate::engine::reduce::circular_mean_var;
+use crate::measure::{self, Run};
 
 /// Per-period peaks (see [`PeakFeatures`]).
 pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatures> {

@@ -5,7 +5,7 @@
 //! (`tests/integration/effects.rs` checks paths bit for bit).
 
 use crate::engine::effects::{
-    DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, HarmonicForm, HysteresisForm, NonGaussianForm,
+    HarmonicForm, HysteresisForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, NonGaussianForm,
 };
 
 /// Harmonic waveform g(c) of a form, c = cos(kθ + φ). The `position` form
@@ -56,11 +56,6 @@ pub fn non_gaussian(form: NonGaussianForm, s: f64, g: f64, g2: f64) -> f64 {
     }
 }
 
-/// Share of `mixture` non-Gaussian noise drawn from its outlier component.
-pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
-/// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].
-pub const MIXTURE_OUTLIER_QUANTILE: f64 = -1.281_551_565_544_600_4;
-
 /// Excess of the static coefficient after `dwell_s` seconds stuck, with
 /// ageing time `ageing_s` (stiction `dwell`): `Δ (1 − e^(−t_d/τ_d))`, the
 /// full `Δ` at once when `τ_d` is 0.
@@ -107,18 +102,6 @@ pub fn ageing_rate(age_s: f64, speed: f64, length: f64) -> f64 {
 /// θ_c at rest) and the cut-off age θ_c = L/v_c (`cutoff_age_s`, s).
 pub fn contact_age_term(strength: f64, age_s: f64, reference_age_s: f64, cutoff_age_s: f64) -> f64 {
     strength * ((age_s.max(0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s)).ln()
-}
-
-/// Drift factor of N0 at time `t` (s) from the run's start, initial
-/// relative rate `rate` (1/s), relative curvature `curvature` (1/s², the
-/// quadratic form's).
-pub fn drift_factor(form: DriftForm, rate: f64, curvature: f64, t: f64) -> f64 {
-    match form {
-        DriftForm::Quadratic => (1.0 + (rate + curvature * t) * t).max(0.0),
-        DriftForm::Saturating => 1.0 + rate * DRIFT_SATURATION_S * (1.0 - (-t / DRIFT_SATURATION_S).exp()),
-        DriftForm::Wander => 1.0 + rate * DRIFT_WANDER_S * (t / DRIFT_WANDER_S).sin(),
-        DriftForm::Linear => 1.0 + rate * t,
-    }
 }
 
 /// The adhesion force of load dependence `adhesion` as it adds to a

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, Sample};
 use crate::engine::reduce::PointAccumulator;
+use crate::engine::schedule::{first_sampled_interval, record_cycles, samples_at_noise_boundaries};
 use crate::engine::{Backend, BackendKind, Job, Output, Record};
 use crate::error::{Error, Result};
 use oscillator::{LANE_WIDTHS, LANES, Path, Sampler, phase_of, run_period};
@@ -191,36 +192,6 @@ pub(crate) fn sample_records(
             samples
         })
         .collect()
-}
-
-/// Whether a record sampled every `sample_interval_s` (s) is taken at the
-/// noise-interval boundaries themselves: asked for (`at_noise_boundaries`),
-/// the noise is on, and the interval is the noise's to 1e-9. Both backends
-/// decide with this test (the GPU kernel samples only such records).
-pub(crate) fn samples_at_noise_boundaries(osc: &Oscillator, sample_interval_s: f64, at_noise_boundaries: bool) -> bool {
-    let noisy = osc.noise_interval_fixed != Oscillator::NOISELESS_INTERVAL;
-    at_noise_boundaries && noisy && (sample_interval_s / osc.noise_interval_s - 1.0).abs() < 1e-9
-}
-
-/// Index of the first noise interval a noise-aligned record samples: the
-/// interval that starts at the first boundary at or after the end of
-/// `warmup_cycles` periods.
-pub(crate) fn first_sampled_interval(osc: &Oscillator, warmup_cycles: u32) -> u64 {
-    first_boundary_from(osc, u64::from(warmup_cycles))
-}
-
-/// Index of the first noise boundary at or after the start of period
-/// `periods` (`ceil(periods · 2^32 / interval)` in the 32.32 fixed point
-/// both backends share): also how many boundaries `j ≥ 0` lie before it,
-/// and the most any `periods` consecutive periods hold.
-pub(crate) fn first_boundary_from(osc: &Oscillator, periods: u64) -> u64 {
-    (u128::from(periods) << 32).div_ceil(u128::from(osc.noise_interval_fixed)) as u64
-}
-
-/// Excitation periods a record of `seconds` (s) integrates after its
-/// warm-up: one more than it spans, so the last sample is always reached.
-pub(crate) fn record_cycles(osc: &Oscillator, seconds: f64) -> u32 {
-    (seconds / osc.period_s).ceil() as u32 + 1
 }
 
 /// Runs realisations `realisations` (at most [`LANES`]) of `osc`, stepped

@@ -46,6 +46,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 pub use params::EffectParams;
+pub(crate) use params::Memory;
 pub use tables::*;
 
 /// The unmodelled effects of `model.md`, by their fixed names. Every match
@@ -163,6 +164,11 @@ pub const STICTION_DECAY_M: f64 = 1e-4;
 /// B ln(1 + 1/(u (u + 2))), u = |v|/v_c, is about 0.1% of B at 3 cm/s and
 /// less above.
 pub const AGEING_CUTOFF_SPEED_M_PER_S: f64 = 1e-3;
+
+/// Share of `mixture` non-Gaussian noise drawn from its outlier component.
+pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
+/// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].
+pub const MIXTURE_OUTLIER_QUANTILE: f64 = -1.281_551_565_544_600_4;
 
 /// All effects of a model; `None` is off.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -152,3 +152,35 @@ impl EffectParams {
         p
     }
 }
+
+/// The friction memory the slip ODE carries as its third state (hysteresis
+/// `lag`, `slip` or `ageing` switched on), or none. The kernel sees the
+/// codes as the generated `MEMORY_*` constants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Memory {
+    None = 0,
+    /// μ_f lags the steady law in time (memory time τ_m).
+    Lag = 1,
+    /// μ_f relaxes to the steady law over a slip distance L (the slip law).
+    Slip = 2,
+    /// The contact age θ of the ageing law.
+    Ageing = 3,
+}
+
+impl Memory {
+    /// Every memory, in code order, with its name in the kernel's constants.
+    pub(crate) const ALL: [(Memory, &'static str); 4] =
+        [(Memory::None, "NONE"), (Memory::Lag, "LAG"), (Memory::Slip, "SLIP"), (Memory::Ageing, "AGEING")];
+
+    /// The memory of flattened effects: on where its form's strength is not
+    /// zero (`lag`: τ_m > 0; `slip`: L > 0; `ageing`: L > 0 and B ≠ 0). The
+    /// kernel's `memory_form` is the same.
+    pub(crate) fn form(e: &EffectParams) -> Memory {
+        match e.hysteresis_form {
+            HysteresisForm::Lag if e.hysteresis_lag_s > 0.0 => Memory::Lag,
+            HysteresisForm::Slip if e.hysteresis_length_m > 0.0 => Memory::Slip,
+            HysteresisForm::Ageing if e.hysteresis_length_m > 0.0 && e.hysteresis_strength != 0.0 => Memory::Ageing,
+            _ => Memory::None,
+        }
+    }
+}

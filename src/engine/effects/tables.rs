@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Form;
+use super::{DRIFT_SATURATION_S, DRIFT_WANDER_S, Form};
 
 /// Periodic parts of N(t) at 1×..4× the excitation frequency, or (form
 /// `position`) a normal force that follows the block's position.
@@ -385,7 +385,7 @@ impl NormalForceDrift {
         (0..n)
             .map(|i| {
                 let t = start_s + (end_s - start_s) * (f64::from(i) + 0.5) / f64::from(n);
-                crate::engine::cpu::effects::drift_factor(self.form, self.rate_per_s, self.curvature_per_s2, t)
+                drift_factor(self.form, self.rate_per_s, self.curvature_per_s2, t)
             })
             .sum::<f64>()
             / f64::from(n)
@@ -401,6 +401,21 @@ impl NormalForceDrift {
             }
             None => 1.0,
         }
+    }
+}
+
+/// Drift factor of N0 at time `t` (s) from the run's start, initial
+/// relative rate `rate` (1/s), relative curvature `curvature` (1/s², the
+/// quadratic form's). The kernel's `drift_factor` (`effects.wgsl`) is the
+/// same in f32; it is here, not with the other effects' arithmetic in
+/// `engine/cpu/effects.rs`, because the model scales N0 by its mean
+/// ([`NormalForceDrift::nominal_scale`]).
+pub fn drift_factor(form: DriftForm, rate: f64, curvature: f64, t: f64) -> f64 {
+    match form {
+        DriftForm::Quadratic => (1.0 + (rate + curvature * t) * t).max(0.0),
+        DriftForm::Saturating => 1.0 + rate * DRIFT_SATURATION_S * (1.0 - (-t / DRIFT_SATURATION_S).exp()),
+        DriftForm::Wander => 1.0 + rate * DRIFT_WANDER_S * (t / DRIFT_WANDER_S).sin(),
+        DriftForm::Linear => 1.0 + rate * t,
     }
 }
 

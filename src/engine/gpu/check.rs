@@ -11,10 +11,15 @@ use crate::engine::gpu::{
 use crate::engine::rng;
 use crate::error::{Error, Result};
 
+/// The Philox counter of check index `i`, as `check.wgsl` builds it.
+fn check_counter(i: u32) -> [u32; 4] {
+    [i, i.wrapping_mul(0x9E37_79B9), !i, i ^ 0x85EB_CA6B]
+}
+
 /// The Philox key and counter that check index `i` uses in `check.wgsl`.
 pub fn philox_check_input(seed: u64, i: u32) -> ([u32; 4], [u32; 2]) {
     let [lo, hi] = rng::seed_key(seed);
-    ([i, i.wrapping_mul(0x9E37_79B9), !i, i ^ 0x85EB_CA6B], [lo ^ i, hi.wrapping_add(i >> 3)])
+    (check_counter(i), [lo ^ i, hi.wrapping_add(i >> 3)])
 }
 
 /// Raw Philox words and Gaussians for check indices `first..first+count`,

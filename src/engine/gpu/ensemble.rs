@@ -11,31 +11,18 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::engine::cpu::oscillator::noise_boundary_time_s;
-use crate::engine::cpu::{first_boundary_from, first_sampled_interval, record_cycles, samples_at_noise_boundaries};
 use crate::engine::gpu::shared::{EffectParams, GridPoint, Params, PathState};
+use crate::engine::gpu::source::ACCUMULATOR_WORDS;
 use crate::engine::gpu::{
     GpuContext, LOOP_ITERATIONS_PER_DISPATCH, loop_iterations_per_cycle, read_back, storage_buffer, workgroups,
 };
-use crate::engine::oscillator::{Oscillator, PathResult, RunPlan, Sample};
-use crate::engine::reduce::{HISTOGRAM_BINS, PeakRange, PointAccumulator};
+use crate::engine::oscillator::{Oscillator, PathResult, PeakRange, RunPlan, Sample};
+use crate::engine::reduce::{HISTOGRAM_BINS, PointAccumulator};
+use crate::engine::schedule::{
+    first_boundary_from, first_sampled_interval, noise_boundary_time_s, record_cycles, samples_at_noise_boundaries,
+};
 use crate::engine::{GpuOptions, Job, Output, Record};
 use crate::error::{Error, Result};
-
-/// Events one invocation handles within a segment before it forces progress
-/// (the CPU allows 64; see the table in `engine/cpu/oscillator.rs`).
-pub const MAX_EVENTS_PER_SEGMENT: u32 = 16;
-/// Halvings of the step that probe for motion after a start from rest (CPU: 60).
-pub const PROBE_HALVINGS: u32 = 30;
-/// Illinois iterations locating a velocity zero (CPU: 100).
-pub const ILLINOIS_ITERATIONS: u32 = 40;
-/// Illinois stops when the bracket is below this fraction of the step (CPU: 1e-15).
-pub const ILLINOIS_TOLERANCE: f64 = 2e-7;
-/// Within a span, the base's trig is recomputed exactly every this many
-/// steps (the CPU carries it through the whole span: f32 rotations drift).
-pub const TRIG_REFRESH_STEPS: u32 = 16;
-/// Words of one point's accumulator in `reduce.wgsl`.
-pub const ACCUMULATOR_WORDS: usize = 16;
 
 /// Checks that a job can run on the GPU with `plan`: one rig and friction
 /// law for all points, noise intervals and periods that fit the kernel's
@@ -152,7 +139,7 @@ fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histog
 
 /// Runs a job's sums (and peaks, for [`Record::Peaks`]) on the GPU, or its
 /// records for a [`Record::Samples`] job whose sampler is aligned with the
-/// noise ([`records_on_gpu`]; no sums then, like the CPU reference). Paths
+/// noise (`records_on_gpu`; no sums then, like the CPU reference). Paths
 /// and records are in invocation order: point-major, then realisation.
 pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
     let (device, queue, kernels) = (&ctx.device, &ctx.queue, &ctx.kernels);

@@ -14,7 +14,6 @@ pub mod source;
 
 pub use context::{AdapterClass, GpuContext, Kernels};
 
-use crate::engine::cpu::CpuBackend;
 use crate::engine::oscillator::Oscillator;
 use crate::engine::{Backend, BackendKind, GpuOptions, Job, Output, Record};
 use crate::error::{Error, Result};
@@ -69,16 +68,20 @@ impl Backend for GpuBackend {
     /// noise boundaries (`at_noise_boundaries` with the noise on and the
     /// sampling interval equal to the noise interval, as a diagnosis's
     /// replicates are): the kernel writes a sample at each boundary, in f32.
-    /// Records sampled otherwise (between boundaries, or without noise) would
-    /// split the kernel's steps, so they fall back to the CPU reference on the
-    /// same noise keys.
     fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
-        if let Record::Samples { interval_s, at_noise_boundaries, .. } = job.record
-            && !ensemble::records_on_gpu(&job.oscillators()?, interval_s, at_noise_boundaries)
-        {
-            return CpuBackend.run(job, progress);
-        }
         ensemble::run(&self.ctx, self.options, job, progress)
+    }
+
+    /// Records sampled otherwise (between boundaries, or without noise)
+    /// would split the kernel's steps: [`Engine::run`](crate::engine::Engine::run)
+    /// runs them on the CPU reference, on the same noise keys.
+    fn runs(&self, job: &Job<'_>) -> Result<bool> {
+        Ok(match job.record {
+            Record::Samples { interval_s, at_noise_boundaries, .. } => {
+                ensemble::records_on_gpu(&job.oscillators()?, interval_s, at_noise_boundaries)
+            }
+            Record::Sums | Record::Peaks => true,
+        })
     }
 }
 

@@ -6,8 +6,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::RunPlan;
-use crate::engine::cpu::oscillator::Memory;
-use crate::engine::effects::{self, Effects, Form, HysteresisForm};
+use crate::engine::effects::{self, Effects, Form, HysteresisForm, Memory};
 use crate::engine::oscillator::{Oscillator, Point};
 use crate::engine::rng;
 

@@ -1,32 +1,46 @@
 //! The WGSL the kernels are compiled from: a preamble of constants
 //! generated from the Rust ones (so the two sides cannot drift apart), then
-//! the shader files, which mirror the Rust files:
+//! the shader files, which mirror the Rust files function for function
+//! under the same names (`tests/integration/twins.rs` checks it):
 //!
 //! | shader | Rust |
 //! | --- | --- |
 //! | `shaders/rng.wgsl` | `engine/rng.rs` |
 //! | `shaders/effects.wgsl` | `engine/cpu/effects.rs` |
-//! | `shaders/oscillator.wgsl` | `engine/cpu/oscillator.rs` |
+//! | `shaders/oscillator.wgsl` | `engine/cpu/oscillator/` |
 //! | `shaders/reduce.wgsl` | `engine/reduce.rs` |
 //! | `shaders/ensemble.wgsl` | `engine/gpu/shared.rs`, `engine/gpu/ensemble.rs` |
 //! | `shaders/check.wgsl` | `engine/gpu/check.rs` |
 
 use std::fmt::Write;
 
-use crate::engine::cpu::effects::{MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE};
-use crate::engine::cpu::oscillator::Memory;
 use crate::engine::effects::{
     AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm,
-    HysteresisForm, LoadForm, NonGaussianForm, STICTION_DECAY_M, StictionForm,
-};
-use crate::engine::gpu::ensemble::{
-    ACCUMULATOR_WORDS, ILLINOIS_ITERATIONS, ILLINOIS_TOLERANCE, MAX_EVENTS_PER_SEGMENT, PROBE_HALVINGS,
-    TRIG_REFRESH_STEPS,
+    HysteresisForm, LoadForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, Memory, NonGaussianForm,
+    STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::gpu::shared::EffectParams;
 use crate::engine::gpu::{MAX_WORKGROUPS_PER_DIMENSION, WORKGROUP_SIZE};
 use crate::engine::reduce::{HISTOGRAM_BINS, PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
 use crate::engine::rng;
+
+// The kernel's own settings, written into the preamble (where they differ
+// from the f64 reference's, on purpose: the table in `engine/cpu/oscillator/mod.rs`).
+
+/// Events one invocation handles within a segment before it forces progress
+/// (the CPU allows 64; see the table in `engine/cpu/oscillator/mod.rs`).
+pub const MAX_EVENTS_PER_SEGMENT: u32 = 16;
+/// Halvings of the step that probe for motion after a start from rest (CPU: 60).
+pub const PROBE_HALVINGS: u32 = 30;
+/// Illinois iterations locating a velocity zero (CPU: 100).
+pub const ILLINOIS_ITERATIONS: u32 = 40;
+/// Illinois stops when the bracket is below this fraction of the step (CPU: 1e-15).
+pub const ILLINOIS_TOLERANCE: f64 = 2e-7;
+/// Within a span, the base's trig is recomputed exactly every this many
+/// steps (the CPU carries it through the whole span: f32 rotations drift).
+pub const TRIG_REFRESH_STEPS: u32 = 16;
+/// Words of one point's accumulator in `reduce.wgsl`.
+pub const ACCUMULATOR_WORDS: usize = 16;
 
 const RNG: &str = include_str!("../../../shaders/rng.wgsl");
 const EFFECTS: &str = include_str!("../../../shaders/effects.wgsl");

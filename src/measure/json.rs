@@ -101,7 +101,7 @@ impl Json<'_> {
             _ => None,
         }
         .ok_or_else(|| {
-            let found = crate::io::excerpt(&value.to_string(), crate::io::EXCERPT_CHARS);
+            let found = crate::text::excerpt(&value.to_string(), crate::text::EXCERPT_CHARS);
             bad(self.file, None, format!("`{ctx}.{key}` must be a number, found {found}"))
         })?;
         match bound.violation(number, unit) {

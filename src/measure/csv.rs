@@ -9,7 +9,7 @@ use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow, TimeOrigin};
 use crate::engine::Job;
 use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::error::{Error, Result};
-use crate::io::{EXCERPT_CHARS, excerpt};
+use crate::text::{EXCERPT_CHARS, excerpt};
 
 /// A CSV column the reader wants.
 struct Column {

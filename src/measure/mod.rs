@@ -58,7 +58,7 @@ use serde_json::Value;
 use crate::engine::Sample;
 use crate::engine::model::limits;
 use crate::error::Result;
-use crate::io;
+use crate::{io, text};
 use json::{Bound, Json, bad, kind};
 
 pub use write::{RunEntry, write_manifest, write_run_file};
@@ -247,12 +247,12 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
         read_inside(&root, dir, "manifest.json", &manifest_path, "the manifest", io::MAX_MANIFEST_BYTES, &mut budget)?;
     let root_value: Value = serde_json::from_slice(io::strip_bom(&bytes)).map_err(|e| {
         let line = (e.line() > 0).then_some(e.line() as u64);
-        bad(&manifest_path, line, format!("not valid JSON: {}", io::excerpt(&e.to_string(), 160)))
+        bad(&manifest_path, line, format!("not valid JSON: {}", text::excerpt(&e.to_string(), 160)))
     })?;
     let root_json = &root_value;
     let manifest = Json { file: &manifest_path };
     let top = root_json.as_object().ok_or_else(|| bad(&manifest_path, None, "the manifest must be a JSON object"))?;
-    let quote = |v: &Value| io::excerpt(&v.to_string(), io::EXCERPT_CHARS);
+    let quote = |v: &Value| text::excerpt(&v.to_string(), text::EXCERPT_CHARS);
 
     match top.get("format") {
         None => return Err(manifest.missing("format")),
@@ -380,7 +380,7 @@ fn time_origin(value: Option<&Value>, key: &str, manifest: &Path) -> Result<bool
             format!(
                 "`{key}` is {}; the only value it takes is \"free\" (the record starts at an unknown phase of \
                  the base); leave it out when `t` is in the frame of u = U0 cos(2π f t), or give a `base_x` column",
-                io::excerpt(&other.to_string(), io::EXCERPT_CHARS)
+                text::excerpt(&other.to_string(), text::EXCERPT_CHARS)
             ),
         )),
     }
@@ -417,7 +417,7 @@ fn read_inside(
                 format!(
                     "{named_by} `{}` leads outside the measurement set (an absolute path, `..` or a link that \
                      leaves it); every file of a set must lie inside its directory, and this one was not read",
-                    io::excerpt(name, 120)
+                    text::excerpt(name, 120)
                 ),
             ));
         }

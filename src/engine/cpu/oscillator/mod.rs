@@ -1,0 +1,546 @@
+//! The f64 reference integrator of one realisation.
+//!
+//! Each realisation is integrated in steps of at most `T / steps_per_period`.
+//! Noise-interval boundaries, output samples and period ends are step
+//! boundaries (each span between them is divided into equal steps), so
+//! every random value holds exactly over its interval. Slip phases
+//! use classical RK4 with the slip direction frozen (the ODE is smooth there);
+//! a velocity zero inside a step is located by root finding on the RK4 map
+//! itself (Newton's method in a bracket), and the stick→slip breakaway is solved in closed
+//! form because the block is at rest and only the base moves. No `sgn` is
+//! smoothed. The base's `cos Ωt` and `sin Ωt` are exact at the start of each
+//! span and carried through its steps by rotation (by `Ωh/2` for each half
+//! step), so a step evaluates no trigonometric function.
+//!
+//! The realisation being integrated is one type, `Path`:
+//! - this file: its state, its noise and its friction law;
+//! - `step.rs`: the slip ODE's RK4 step, velocity zeros, breakaway from
+//!   stick, and a segment between two grid times;
+//! - `period.rs`: a period of up to `LANES` paths stepped together, and the
+//!   output samples of records.
+//!
+//! `shaders/oscillator.wgsl` is the same algorithm in f32; the functions
+//! carry the kernel's names and come in its order, file after file. The two
+//! differ on purpose in these places, and nowhere else:
+//!
+//! | what | CPU (f64) | GPU (f32) | why |
+//! | --- | --- | --- | --- |
+//! | arithmetic | f64 | f32 | WGSL has no portable f64; the CPU is the judge |
+//! | events per segment before forcing progress | 64 | 16 | a chattering guard only; the GPU's loops must stay short (lavapipe's loop limiter, SIMD divergence) |
+//! | velocity zero: method, iterations / tolerance on the step | Newton in the bracket, 100 / 1e-15 · max(h, 10⁻⁶ T) | Illinois, 40 / 2e-7 · h | each converges to its own precision: 1e-15 is f64's, 2e-7 is f32's (2⁻²³ ≈ 1.2e-7); Newton needs the acceleration at each probe's end, a fifth evaluation per probe, and under half the probes |
+//! | halvings probing for motion after a start from rest | 60, from a guess of the first under way, walked to it | 30, one by one from h/2 | 2⁻⁶⁰ and 2⁻³⁰ of the step are below each type's resolution; both find the same probe (the first under way) where the motion's sign changes once, the CPU in about two steps |
+//! | time inside a period | span start + `k · h` in f64 | the same in f32, boundary position `frac · S / 2³²` by `mulhilo` | f32 cannot hold 32.32 fixed point; both switch noise at the same instants |
+//! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
+//! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
+//! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
+//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all, then events one lane at a time (`run_period`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
+//!
+//! Output samples (records) between noise boundaries split steps on the CPU
+//! only; records sampled at the noise boundaries split none, and the GPU
+//! kernel writes those itself.
+
+mod period;
+mod step;
+#[cfg(test)]
+mod tests;
+
+#[cfg(test)]
+pub(crate) use period::HALF_LANES;
+pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
+
+use crate::engine::cpu::effects;
+use crate::engine::effects::{
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, Memory, STICTION_DECAY_M,
+    StictionForm, drift_factor,
+};
+use crate::engine::oscillator::{InitialState, Oscillator, Sample};
+use crate::engine::rng;
+use crate::engine::schedule::FIXED_ONE;
+
+/// Whether the block sticks or slips, and in which direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Stick,
+    /// Slipping with velocity sign +1 or −1.
+    Slip(i8),
+}
+
+/// Halvings of a step probing for motion after a start from rest: 2⁻⁶⁰ of
+/// a step is below f64's resolution of it.
+const MAX_PROBE_HALVINGS: i32 = 60;
+
+/// Events handled within one segment before the integrator forces progress
+/// (guards against chattering at exactly balanced forces).
+const MAX_EVENTS_PER_SEGMENT: u32 = 64;
+
+/// `cos Ωt` and `sin Ωt` of the base at one time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Trig {
+    pub(crate) cos: f64,
+    pub(crate) sin: f64,
+}
+
+impl Trig {
+    /// At phase `theta` (rad).
+    fn at(theta: f64) -> Trig {
+        let (sin, cos) = theta.sin_cos();
+        Trig { cos, sin }
+    }
+
+    /// A rotation by a half step's angle `theta` (rad): Taylor series up to
+    /// 0.1 rad (terms through θ¹⁰: the first omitted, θ¹¹/11!, is under
+    /// 3e-19, below f64's resolution), `sin_cos` above. A noise interval of
+    /// 1/600 s at 10–20 Hz is a half turn of 0.05–0.1 rad.
+    fn turn(theta: f64) -> Trig {
+        if theta.abs() > 0.1 {
+            return Trig::at(theta);
+        }
+        let t2 = theta * theta;
+        let sin = theta * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))));
+        let cos = 1.0 - t2 / 2.0 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))));
+        Trig { cos, sin }
+    }
+
+    /// Advanced by the rotation `by` (the cos and sin of an angle).
+    fn rotated(self, by: Trig) -> Trig {
+        Trig { cos: self.cos * by.cos - self.sin * by.sin, sin: self.sin * by.cos + self.cos * by.sin }
+    }
+}
+
+/// The normal force's harmonics (N) at `interval_phase` (of the excitation
+/// period, –): Σ A_k w(cos((k+1)θ + φ_k)), θ = 2π · `interval_phase`, each
+/// cosine by angle addition from one `sin_cos` of θ ((k+1)θ by repeated
+/// rotation, then φ_k's stored cos and sin) instead of a `cos` per harmonic.
+/// The `position` form instead follows `x_per_u0`, the displacement at the
+/// interval's start over the base amplitude (–): αN0 r + βN0 r².
+fn harmonics_n(e: &EffectParams, interval_phase: f64, x_per_u0: f64) -> f64 {
+    if e.harmonic_amplitudes_n.iter().all(|&a| a == 0.0) {
+        return 0.0;
+    }
+    if e.harmonic_form == HarmonicForm::Position {
+        return effects::position_load(e.harmonic_amplitudes_n[0], e.harmonic_amplitudes_n[1], x_per_u0);
+    }
+    let base = Trig::at(std::f64::consts::TAU * interval_phase);
+    let mut multiple = base;
+    let mut sum_n = 0.0;
+    for k in 0..4 {
+        if k > 0 {
+            multiple = multiple.rotated(base);
+        }
+        if e.harmonic_amplitudes_n[k] != 0.0 {
+            let (cos_phase, sin_phase) = e.harmonic_phase_cos_sin[k];
+            let c = multiple.cos * cos_phase - multiple.sin * sin_phase;
+            sum_n += e.harmonic_amplitudes_n[k]
+                * effects::harmonic_wave(e.harmonic_form, c, e.harmonic_shape, e.harmonic_shape_mean);
+        }
+    }
+    sum_n
+}
+
+/// One RK4 step of the slip ODE, with what the phase quadrature needs: the
+/// four stage displacements (m) and the base's trig at the step's start,
+/// middle and end.
+#[derive(Clone, Copy, Debug)]
+struct SlipStep {
+    x_m: f64,
+    v_m_per_s: f64,
+    /// The friction memory at the end (μ_f, –, or θ, s; see [`Memory`]).
+    memory: f64,
+    stage_x_m: [f64; 4],
+    trig: [Trig; 3],
+}
+
+/// The phase lag (rad) of a period's fundamental behind the base, from
+/// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the period: the fundamental is
+/// `sqrt(a² + b²) cos(Ωt − φ)` with `φ = atan2(b, a)` (`interfaces.md`).
+pub fn phase_of(cos_integral: f64, sin_integral: f64) -> f64 {
+    sin_integral.atan2(cos_integral)
+}
+
+/// The state of one realisation.
+#[derive(Clone, Debug)]
+pub(crate) struct Path<'a> {
+    osc: &'a Oscillator,
+    key: [u32; 2],
+    realisation: u32,
+    /// Displacement x, m.
+    pub(crate) x_m: f64,
+    /// Velocity v, m/s.
+    pub(crate) v_m_per_s: f64,
+    mode: Mode,
+    /// Index of the current excitation period.
+    period: u64,
+    /// Index of the current noise interval.
+    interval: u64,
+    /// Start of the next noise interval, in periods, 32.32 fixed point.
+    next_boundary: u64,
+    /// Friction coefficient's random part `σ_μ ξ_μ` in the current interval, –.
+    friction_noise: f64,
+    /// Normal force in the current interval, N.
+    normal_force_n: f64,
+    /// x where the current slip began, m (displacement hysteresis, stiction release).
+    slip_start_x_m: f64,
+    /// Coloured noise states: the AR(1) parts of `ar1`, `two_scale`,
+    /// `multi_scale` and `fast_slow`, –.
+    colour_state: [f64; 3],
+    /// Start of the current noise interval within its period, in periods.
+    interval_phase: f64,
+    /// Static-friction excess in the current interval, –.
+    stiction_excess: f64,
+    /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
+    /// contact age θ of `ageing` (s; while stuck, θ when the stick began).
+    memory: f64,
+    /// The static coefficient's contact-age term B ln((θ + θ_c)/(2 θ_c)) of
+    /// hysteresis `ageing`, with θ at the current interval's start while
+    /// stuck (or at the stick's start), and at the last velocity zero, –.
+    ageing_excess: f64,
+    /// When the current stick began, s from the run's start (stiction
+    /// `dwell`, hysteresis `ageing`).
+    stick_since_s: f64,
+    /// Whether sliding friction depends on more than the current velocity
+    /// and interval (hysteresis, or a stiction excess carried into the
+    /// slip), or has an adhesion force: whether it takes more than the
+    /// baseline's arithmetic.
+    history: bool,
+    /// Which friction memory is on ([`Memory::form`] of the effects).
+    memory_form: Memory,
+    /// The law's a, b (–) and d (s²/m²) at this point's load: times
+    /// (N0/Nref)^k under load dependence `scaled`, themselves otherwise.
+    law_a: f64,
+    law_b: f64,
+    law_d: f64,
+    /// 1 / m, 1/kg.
+    inv_mass: f64,
+    /// Largest x so far in the current period, m.
+    pub(crate) period_max_x_m: f64,
+    /// Time stuck so far in the current period, s.
+    pub(crate) period_stick_s: f64,
+    /// `∫ x cos(Ωt) dt` and `∫ x sin(Ωt) dt` over the current period so far,
+    /// m·s (the response's fundamental; see [`phase_of`]).
+    pub(crate) period_cos_integral: f64,
+    pub(crate) period_sin_integral: f64,
+}
+
+impl<'a> Path<'a> {
+    pub(crate) fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
+        let e = &osc.effects;
+        let memory_form = Memory::form(e);
+        let build_up =
+            matches!(e.hysteresis_form, HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational);
+        let history = memory_form != Memory::None
+            || (e.hysteresis_length_m != 0.0 && build_up)
+            || e.adhesion_force_n != 0.0
+            || e.stiction_form == StictionForm::Decaying
+            || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
+        let mut path = Path {
+            osc,
+            key: rng::seed_key(seed),
+            realisation,
+            x_m: initial.x_m,
+            v_m_per_s: initial.v_m_per_s,
+            mode: Mode::Stick,
+            period: 0,
+            interval: 0,
+            next_boundary: osc.noise_interval_fixed,
+            friction_noise: 0.0,
+            normal_force_n: 0.0,
+            slip_start_x_m: initial.x_m,
+            colour_state: [0.0; 3],
+            interval_phase: 0.0,
+            stiction_excess: 0.0,
+            memory: 0.0,
+            ageing_excess: 0.0,
+            stick_since_s: 0.0,
+            history,
+            memory_form,
+            law_a: osc.friction_a * e.friction_scale,
+            law_b: osc.friction_b * e.friction_scale,
+            law_d: osc.friction_d_s2_per_m2 * e.friction_scale,
+            inv_mass: 1.0 / osc.mass_kg,
+            period_max_x_m: initial.x_m,
+            period_stick_s: 0.0,
+            period_cos_integral: 0.0,
+            period_sin_integral: 0.0,
+        };
+        path.draw_noise();
+        path.mode = if initial.v_m_per_s > 0.0 {
+            Mode::Slip(1)
+        } else if initial.v_m_per_s < 0.0 {
+            Mode::Slip(-1)
+        } else {
+            path.stick_or_slip(Trig { cos: 1.0, sin: 0.0 })
+        };
+        if path.mode == Mode::Stick {
+            path.start_stick(0.0);
+        } else if path.memory_form != Memory::Ageing {
+            // The contact age starts at 0 whether the block sticks or slips.
+            path.memory = path.lag_start_coefficient();
+        }
+        path
+    }
+
+    /// Noise values (and everything else held per interval) of the current
+    /// interval. The main stream's pair A gives the friction's white value
+    /// and the normal force's; pair B and the colour stream are drawn only
+    /// by the effects that use them.
+    fn draw_noise(&mut self) {
+        let o = self.osc;
+        let e = &o.effects;
+        let main = rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
+        let (white, xi_n) = rng::pair_a(main);
+        let friction_block = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
+            rng::noise_block(
+                self.key,
+                self.realisation,
+                rng::STREAM_MAIN,
+                self.interval / u64::from(e.colour_hold_intervals),
+            )
+        } else {
+            main
+        };
+        let z = if friction_block == main { white } else { rng::pair_a(friction_block).0 };
+        let colour = || rng::noise_block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
+        let first = self.interval == 0;
+        let ar1 = |state: f64, rho: f64, innovation: f64| {
+            if first { innovation } else { rho * state + (1.0 - rho * rho).sqrt() * innovation }
+        };
+        let g = match e.colour_form {
+            _ if e.colour_rho == 0.0 => z,
+            ColourForm::Ar1 if e.colour_share >= 1.0 => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, z);
+                self.colour_state[0]
+            }
+            ColourForm::Ar1 => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, rng::pair_a(colour()).0);
+                (1.0 - e.colour_share).sqrt() * z + e.colour_share.sqrt() * self.colour_state[0]
+            }
+            ColourForm::Hold => z,
+            ColourForm::TwoScale => {
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rho, rng::pair_a(colour()).0);
+                std::f64::consts::FRAC_1_SQRT_2 * (z + self.colour_state[0])
+            }
+            ColourForm::MultiScale => {
+                let words = colour();
+                let ((c0, c1), (c2, _)) = (rng::pair_a(words), rng::pair_b(words));
+                for (k, innovation) in [c0, c1, c2].into_iter().enumerate() {
+                    self.colour_state[k] = ar1(self.colour_state[k], e.colour_rhos[k], innovation);
+                }
+                self.colour_state.iter().sum::<f64>() * (1.0 / 3f64.sqrt())
+            }
+            ColourForm::FastSlow => {
+                let (fast, slow) = rng::pair_a(colour());
+                self.colour_state[0] = ar1(self.colour_state[0], e.colour_rhos[0], fast);
+                self.colour_state[1] = ar1(self.colour_state[1], e.colour_rhos[1], slow);
+                (1.0 - e.colour_share).sqrt() * self.colour_state[0] + e.colour_share.sqrt() * self.colour_state[1]
+            }
+        };
+        let xi_mu = if e.non_gaussian_strength == 0.0 {
+            g
+        } else {
+            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block).0)
+        };
+        self.friction_noise = o.friction_sigma * xi_mu;
+        let t_s = self.interval as f64 * o.noise_interval_s;
+        let mean_n =
+            o.normal_force_mean_n * drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
+        let harmonics_n = harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m);
+        self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
+        self.stiction_excess = match e.stiction_form {
+            StictionForm::Noisy if e.stiction_excess != 0.0 => {
+                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main).1).max(0.0)
+            }
+            StictionForm::Dwell if self.mode == Mode::Stick => {
+                effects::dwell_excess(e.stiction_excess, t_s - self.stick_since_s, e.stiction_dwell_s)
+            }
+            StictionForm::Dwell => 0.0,
+            _ => e.stiction_excess,
+        };
+        if self.memory_form == Memory::Ageing && self.mode == Mode::Stick {
+            self.ageing_excess = self.contact_age_excess(self.contact_age_at(t_s));
+        }
+    }
+
+    /// The contact age θ (s) of hysteresis `ageing` while stuck, held over
+    /// the noise interval that starts at `interval_start_s` (s from the
+    /// run's start): θ at the stick's start plus the time stuck up to the
+    /// interval's start (none in the interval the stick began).
+    fn contact_age_at(&self, interval_start_s: f64) -> f64 {
+        self.memory + (interval_start_s - self.stick_since_s).max(0.0)
+    }
+
+    /// The static coefficient's contact-age term at age `age_s` (s):
+    /// `B ln((θ + θ_c)/(2 θ_c))`, the sliding friction's term at v = 0, –.
+    fn contact_age_excess(&self, age_s: f64) -> f64 {
+        let e = &self.osc.effects;
+        let cutoff_age_s = e.hysteresis_length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        effects::contact_age_term(e.hysteresis_strength, age_s, cutoff_age_s, cutoff_age_s)
+    }
+
+    /// Marks the start of a stick at `t_s` (from the run's start): the
+    /// `dwell` stiction's ageing starts again.
+    fn start_stick(&mut self, t_s: f64) {
+        self.stick_since_s = t_s;
+        if self.osc.effects.stiction_form == StictionForm::Dwell {
+            let e = &self.osc.effects;
+            self.stiction_excess = effects::dwell_excess(e.stiction_excess, 0.0, e.stiction_dwell_s);
+        }
+    }
+
+    /// Force of springs and damper on the block at rest, `k (u − x)` with
+    /// the base at `cos_omega_t` of its amplitude, N.
+    #[inline(always)]
+    fn spring_force(&self, cos_omega_t: f64, x_m: f64) -> f64 {
+        let o = self.osc;
+        o.stiffness_n_per_m * (o.base_amplitude_m * cos_omega_t - x_m)
+    }
+
+    /// The steady friction law while slipping with speed `speed` (m/s) at
+    /// velocity `v` (m/s), before effects of history:
+    /// `a + Δa + b S(c, s) + d v² + σ ξ` with `S` = [`stribeck_factor`]
+    /// (a, b and d at this point's load), –.
+    #[inline(always)]
+    fn steady_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+        self.mean_law(speed_m_per_s, v_m_per_s) + self.friction_noise
+    }
+
+    /// The steady law without its random part, `a + Δa + b S(c, s) + d v²`:
+    /// what a friction memory that relaxes (`lag`, `slip`) follows, the
+    /// random part added on top. The random part of friction comes from
+    /// asperity contacts faster than any memory of the contact's state (the
+    /// rate-and-state and bristle laws carry no noise): a memory that
+    /// filtered it would lower and colour the record's friction noise, –.
+    #[inline(always)]
+    fn mean_law(&self, speed_m_per_s: f64, v_m_per_s: f64) -> f64 {
+        let o = self.osc;
+        self.law_a
+            + o.effects.friction_offset
+            + self.law_b * stribeck_factor(o.friction_c_s_per_m, speed_m_per_s)
+            + self.law_d * v_m_per_s * v_m_per_s
+    }
+
+    /// Friction coefficient while slipping with speed `speed` (m/s) at
+    /// displacement `x_m`, with the friction memory `memory` (μ_f of
+    /// hysteresis `lag` and `slip`, θ of `ageing`; unused otherwise),
+    /// clipped at 0.
+    #[inline(always)]
+    fn friction_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
+        if !self.history {
+            return self.steady_law(speed_m_per_s, v_m_per_s).max(0.0);
+        }
+        let e = &self.osc.effects;
+        let slipped_m = (x_m - self.slip_start_x_m).abs();
+        let mut mu = match self.memory_form {
+            Memory::Lag | Memory::Slip => memory + self.friction_noise,
+            Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
+            Memory::None => {
+                self.steady_law(speed_m_per_s, v_m_per_s)
+                    * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
+            }
+        };
+        if e.stiction_form == StictionForm::Decaying {
+            mu += self.stiction_excess * (-slipped_m / STICTION_DECAY_M).exp();
+        } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
+            mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
+        }
+        mu.max(0.0)
+    }
+
+    /// The magnitude of the friction force while slipping, the arguments
+    /// those of [`Path::friction_coefficient`]: μN, plus the adhesion force
+    /// under load dependence `adhesion` (the sum clipped at 0), N. The
+    /// adhesion is added on the history path only ([`Path::history`] is set
+    /// with it), so the baseline's stages test nothing more.
+    #[inline(always)]
+    fn friction_force_n(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
+        let friction_n = self.friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * self.normal_force_n;
+        if !self.history {
+            return friction_n;
+        }
+        friction_n + effects::adhesion(friction_n, self.osc.effects.adhesion_force_n)
+    }
+
+    /// The sliding coefficient of hysteresis `ageing` with contact age
+    /// `age_s` (s), before stiction: `μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c))`,
+    /// θ_ss(v) = L/(|v| + v_c), –. Not inlined: it calls `ln` anyway.
+    #[inline(never)]
+    fn ageing_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, age_s: f64) -> f64 {
+        let e = &self.osc.effects;
+        let length_m = e.hysteresis_length_m;
+        let steady_age_s = length_m / (v_m_per_s.abs() + AGEING_CUTOFF_SPEED_M_PER_S);
+        let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        self.steady_law(speed_m_per_s, v_m_per_s)
+            + effects::contact_age_term(e.hysteresis_strength, age_s, steady_age_s, cutoff_age_s)
+    }
+
+    /// The static coefficient `μ(0) + stiction excess + contact-age term`,
+    /// clipped at 0, –.
+    fn static_coefficient(&self) -> f64 {
+        let o = self.osc;
+        (self.law_a
+            + o.effects.friction_offset
+            + self.law_b
+            + self.friction_noise
+            + self.stiction_excess
+            + self.ageing_excess)
+            .max(0.0)
+    }
+
+    /// Where the friction memory μ_f of hysteresis `lag` and `slip` starts
+    /// when the block breaks away: the static coefficient the breakaway was judged by, less
+    /// the stiction excess that [`Path::friction_coefficient`] adds on top
+    /// while it is released (`decaying`, or `constant` with a release
+    /// length), so that sliding starts at exactly the static coefficient.
+    /// Counted twice, friction at the start of a slip exceeded the force
+    /// that broke the block away: it stopped at once and re-slipped, up to
+    /// the event limit of every segment (a diagnosis's trials of `lag` on
+    /// top of a released stiction took 20–45 s instead of under 1 s), –.
+    fn lag_start_coefficient(&self) -> f64 {
+        let e = &self.osc.effects;
+        let released = e.stiction_form == StictionForm::Decaying
+            || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
+        // The memory holds the mean part: the noise is added on top.
+        self.static_coefficient() - if released { self.stiction_excess } else { 0.0 } - self.friction_noise
+    }
+
+    /// Breakaway force `μ_s N` (plus the adhesion force under load
+    /// dependence `adhesion`, the sum clipped at 0), N.
+    fn breakaway_force(&self) -> f64 {
+        let friction_n = self.static_coefficient() * self.normal_force_n;
+        let adhesion_n = self.osc.effects.adhesion_force_n;
+        if adhesion_n != 0.0 { friction_n + effects::adhesion(friction_n, adhesion_n) } else { friction_n }
+    }
+
+    /// Rate of the friction memory while slipping at velocity `v` (m/s)
+    /// with speed `speed` (m/s, the slip direction's): `lag`
+    /// (μ_ss − μ_f)/τ_m and `slip` (|v|/L)(μ_ss − μ_f), 1/s; `ageing`
+    /// 1 − |v| θ/L, –.
+    #[inline(always)]
+    fn memory_rate(&self, speed_m_per_s: f64, v_m_per_s: f64, memory: f64) -> f64 {
+        let e = &self.osc.effects;
+        match self.memory_form {
+            Memory::Lag => (self.mean_law(speed_m_per_s, v_m_per_s) - memory) / e.hysteresis_lag_s,
+            Memory::Slip => effects::slip_law_rate(
+                self.mean_law(speed_m_per_s, v_m_per_s),
+                memory,
+                v_m_per_s.abs(),
+                e.hysteresis_length_m,
+            ),
+            Memory::Ageing => effects::ageing_rate(memory, v_m_per_s.abs(), e.hysteresis_length_m),
+            Memory::None => 0.0,
+        }
+    }
+}
+
+/// The law's Stribeck factor `1/(1 + c s)` at speed `s` (m/s) with rate `c`
+/// (s/m, ≥ 0), –; for `s < 0` its first-order continuation `1 − c s`, equal
+/// to it in value and slope at 0. Only an RK4 stage past a velocity zero
+/// sees `s < 0` (a slip's sign is held over its steps, so its speed is
+/// `sign · v`), and `1/(1 + c s)` has a pole at `s = −1/c`: with a steep law
+/// (c ≈ 950 s/m, which a diagnosis's calibration can reach) a stage 1 mm/s
+/// past the zero reached it, the friction turned into a huge driving force
+/// and the path ran away to x ≈ 1e12 m (`benches/RESULTS.md`, "A friction
+/// law's pole"). The kernel's `stribeck_factor` is the same.
+#[inline(always)]
+pub(crate) fn stribeck_factor(c_s_per_m: f64, speed_m_per_s: f64) -> f64 {
+    if speed_m_per_s >= 0.0 { 1.0 / (1.0 + c_s_per_m * speed_m_per_s) } else { 1.0 - c_s_per_m * speed_m_per_s }
+}
