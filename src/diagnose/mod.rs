@@ -89,7 +89,7 @@ pub struct Unexplained {
 pub struct Candidate {
     pub effect: Effect,
     /// The form that fitted best, in the model file's words.
-    pub form: &'static str,
+    pub form: candidates::SearchedForm,
     /// Gap over every unit after fitting this effect (in sample), –.
     pub gap_fit: f64,
     /// Relative fall of that gap from the model it was added to, –.
@@ -124,7 +124,7 @@ pub struct Candidate {
 pub struct NamedEffect {
     pub effect: Effect,
     /// The form that fitted best.
-    pub form: &'static str,
+    pub form: candidates::SearchedForm,
     /// Its fitted parameters by name (names carry units).
     pub parameters: BTreeMap<String, f64>,
     /// The share of what the model before it left of the out-of-sample gap

@@ -109,7 +109,7 @@ pub(super) fn normal_force_harmonics(effect: Effect, ctx: &Context<'_>) -> Vec<V
         // both terms scaled together.
         out.push(Variant {
             effect,
-            form: "position",
+            form: SearchedForm::Position,
             params: vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -156,7 +156,7 @@ pub(super) fn normal_force_harmonics(effect: Effect, ctx: &Context<'_>) -> Vec<V
     out.extend([
         Variant {
             effect,
-            form: "fourier (amplitudes a share of N0)",
+            form: SearchedForm::FourierShareOfN0,
             params: params(),
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -167,7 +167,7 @@ pub(super) fn normal_force_harmonics(effect: Effect, ctx: &Context<'_>) -> Vec<V
         },
         Variant {
             effect,
-            form: "fourier (amplitudes in N)",
+            form: SearchedForm::FourierNewtons,
             params: params(),
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();

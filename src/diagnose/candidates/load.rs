@@ -148,8 +148,8 @@ fn phase_implied_slope(mut units: Vec<PhaseUnit>, reference_n: f64, mu_at: impl 
 /// by the chord's error. Searched only from a slope that fitted (see the
 /// search's round), starting there: it costs no trials where there is no
 /// load dependence to bend.
-pub(crate) fn bent(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
-    if effect != Effect::LoadDependentFriction || form != "linear" {
+pub(crate) fn bent(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
+    if effect != Effect::LoadDependentFriction || form != SearchedForm::Linear {
         return None;
     }
     if levels(ctx.by_load(Observable::FrictionMuMean).iter().map(|p| p.0)).len() < 3 {
@@ -158,7 +158,7 @@ pub(crate) fn bent(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>
     let reference = ctx.mean_load();
     Some(Variant {
         effect,
-        form: "quadratic",
+        form: SearchedForm::Quadratic,
         params: vec![
             Param::log("strength_per_n", *values.first()?, 1.2, -1.0, 1.0),
             Param::linear("bend", 0.0, 0.25, -3.0, 3.0),
@@ -196,7 +196,7 @@ pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<
     vec![
         Variant {
             effect,
-            form: "linear",
+            form: SearchedForm::Linear,
             params: vec![Param::log("strength_per_n", start, 1.5, -1.0, 1.0)],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -211,7 +211,7 @@ pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<
         },
         Variant {
             effect,
-            form: "power",
+            form: SearchedForm::Power,
             // Slope μ₀·k/Nref at the reference (μ₀ = a + b, the level at
             // rest that the form scales): k from the same slope.
             params: vec![Param::log("exponent", (start * reference / mu_at_rest).clamp(-3.0, 3.0), 1.5, -5.0, 5.0)],
@@ -231,7 +231,7 @@ pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<
         // reference.
         Variant {
             effect,
-            form: "adhesion",
+            form: SearchedForm::Adhesion,
             params: vec![Param::log("adhesion_n", (-start * reference * reference).clamp(-50.0, 50.0), 1.5, -1e3, 1e3)],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -248,7 +248,7 @@ pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<
         // reference is k times the law's mean level over Nref.
         Variant {
             effect,
-            form: "scaled",
+            form: SearchedForm::Scaled,
             params: vec![Param::log("exponent", (start * reference / mu_at_rest).clamp(-3.0, 3.0), 1.5, -5.0, 5.0)],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -297,7 +297,7 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
     vec![
         Variant {
             effect,
-            form: "linear",
+            form: SearchedForm::DriftLinear,
             params: vec![Param::log("rate_per_s", rate, 1.4, -0.5, 0.5)],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
@@ -307,7 +307,7 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
         },
         Variant {
             effect,
-            form: "quadratic",
+            form: SearchedForm::DriftQuadratic,
             params: vec![
                 Param::linear("rate_per_s", initial_rate, 0.2 * initial_rate.abs().max(1e-4), -0.5, 0.5),
                 Param::linear("curvature_per_s2", curvature, 0.2 * curvature.abs().max(1e-6), -1e-2, 1e-2),

@@ -27,7 +27,7 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     // is higher then. Both are searched, the likelier first.
     let build_up = Variant {
         effect,
-        form: "exponential",
+        form: SearchedForm::BuildUp,
         params: vec![Param::log("length_m", 1.5e-4, 2.5, 1e-6, 5e-3)],
         apply: Box::new(|m, p| {
             let mut m = m.clone();
@@ -47,7 +47,7 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     // steps at 0.1 ms, the bulk of a diagnosis's time).
     let lag = Variant {
         effect,
-        form: "lag",
+        form: SearchedForm::Lag,
         params: vec![Param::log("time_constant_s", 6.0e-3_f64.max(interval), 2.5, interval, 0.2)],
         apply: Box::new(|m, p| {
             let mut m = m.clone();
@@ -74,7 +74,7 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     };
     let slip = Variant {
         effect,
-        form: "slip",
+        form: SearchedForm::Slip,
         params: vec![Param::log("length_m", length, 2.5, SLIP_MEMORY_MIN_M, 1e-2)],
         apply: Box::new(move |m, p| {
             let mut m = m.clone();
@@ -84,7 +84,7 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     };
     let ageing = Variant {
         effect,
-        form: "ageing",
+        form: SearchedForm::Ageing,
         params: vec![
             Param::log("strength", 0.01, 2.0, -0.2, 0.2),
             Param::log("length_m", length, 2.5, SLIP_MEMORY_MIN_M, 1e-2),
@@ -129,7 +129,7 @@ pub(super) fn stiction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
     vec![
         Variant {
             effect,
-            form: "constant",
+            form: SearchedForm::Constant,
             params: vec![
                 Param::log("excess", excess, 1.6, 0.005, 1.5),
                 Param::linear("release_length_m", release, 1e-4, 0.0, 1e-3),
@@ -142,7 +142,7 @@ pub(super) fn stiction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
         },
         Variant {
             effect,
-            form: "dwell",
+            form: SearchedForm::Dwell,
             params: vec![
                 Param::log("excess", excess, 1.6, 0.005, 1.5),
                 Param::log("dwell_time_s", 0.01, 3.0, 1e-4, 1.0),

@@ -80,12 +80,89 @@ impl Param {
     }
 }
 
+/// A form the search fits, by name: the model file's form of the effect,
+/// with the parameterisation where one form is searched in two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SearchedForm {
+    /// Normal-force harmonics, `fourier`, amplitudes a share of N0.
+    FourierShareOfN0,
+    /// Normal-force harmonics, `fourier`, amplitudes in N.
+    FourierNewtons,
+    /// A normal force that follows the block's position.
+    Position,
+    /// Skewed friction noise.
+    Skew,
+    /// Heavy-tailed friction noise (Tukey h).
+    TukeyH,
+    /// Friction that builds up over a displacement after each reversal (Dahl).
+    BuildUp,
+    /// Friction that lags the law in time.
+    Lag,
+    /// Rate-and-state slip law: relaxation over a slip distance.
+    Slip,
+    /// Rate-and-state ageing law: contact ageing.
+    Ageing,
+    /// AR(1) coloured noise with a white part.
+    Ar1,
+    /// Coloured noise with two corners.
+    FastSlow,
+    /// Stiction of a constant excess.
+    Constant,
+    /// Stiction that ages with the dwell time.
+    Dwell,
+    /// Friction linear in the load.
+    Linear,
+    /// Friction linear in the load, bent.
+    Quadratic,
+    /// The friction level a power of the load.
+    Power,
+    /// Adhesion, F = μN + A.
+    Adhesion,
+    /// The whole law scaled by a power of the load.
+    Scaled,
+    /// A linear drift of the normal force.
+    DriftLinear,
+    /// A quadratic drift of the normal force.
+    DriftQuadratic,
+}
+
+impl SearchedForm {
+    /// The form as the model file and the report name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SearchedForm::FourierShareOfN0 => "fourier (amplitudes a share of N0)",
+            SearchedForm::FourierNewtons => "fourier (amplitudes in N)",
+            SearchedForm::Position => "position",
+            SearchedForm::Skew => "skew",
+            SearchedForm::TukeyH => "tukey_h",
+            SearchedForm::BuildUp => "exponential",
+            SearchedForm::Lag => "lag",
+            SearchedForm::Slip => "slip",
+            SearchedForm::Ageing => "ageing",
+            SearchedForm::Ar1 => "ar1",
+            SearchedForm::FastSlow => "fast_slow",
+            SearchedForm::Constant => "constant",
+            SearchedForm::Dwell => "dwell",
+            SearchedForm::Linear | SearchedForm::DriftLinear => "linear",
+            SearchedForm::Quadratic | SearchedForm::DriftQuadratic => "quadratic",
+            SearchedForm::Power => "power",
+            SearchedForm::Adhesion => "adhesion",
+            SearchedForm::Scaled => "scaled",
+        }
+    }
+}
+
+impl std::fmt::Display for SearchedForm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One form of an effect as the search fits it.
 pub(crate) struct Variant {
     pub(crate) effect: Effect,
-    /// The form, in the model file's words (with a qualifier where a form is
-    /// searched in two parameterisations).
-    pub(crate) form: &'static str,
+    /// The form.
+    pub(crate) form: SearchedForm,
     pub(crate) params: Vec<Param>,
     pub(crate) apply: Apply,
 }

@@ -20,7 +20,7 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
     vec![
         Variant {
             effect,
-            form: "skew",
+            form: SearchedForm::Skew,
             params: vec![
                 Param::log("strength", sign * 0.4, 1.8, -30.0, 30.0),
                 Param::linear("load_exponent", 0.0, 1.0, -3.0, 3.0),
@@ -33,7 +33,7 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
         },
         Variant {
             effect,
-            form: "tukey_h",
+            form: SearchedForm::TukeyH,
             params: vec![
                 Param::log("strength", 0.08, 1.6, 0.005, 0.2),
                 Param::linear("load_exponent", 0.0, 1.0, -3.0, 3.0),
@@ -61,7 +61,7 @@ pub(super) fn coloured_friction_noise(effect: Effect, ctx: &Context<'_>) -> Vec<
     let rho = if lag1 > 0.05 && lag10 > 0.0 { (lag10 / lag1).powf(1.0 / 9.0).clamp(0.3, 0.995) } else { 0.8 };
     let tau = (-interval / rho.ln()).clamp(2.0 * interval, 200.0 * interval);
     let share = if lag1 > 0.0 { (lag1 / rho).clamp(0.2, 1.0) } else { 1.0 };
-    let coloured = |form: &'static str, colour: ColourForm, params: Vec<Param>| Variant {
+    let coloured = |form: SearchedForm, colour: ColourForm, params: Vec<Param>| Variant {
         effect,
         form,
         params,
@@ -74,7 +74,7 @@ pub(super) fn coloured_friction_noise(effect: Effect, ctx: &Context<'_>) -> Vec<
     };
     vec![
         coloured(
-            "ar1",
+            SearchedForm::Ar1,
             ColourForm::Ar1,
             vec![
                 Param::log("correlation_time_s", tau, 2.0, interval, 500.0 * interval),
@@ -86,7 +86,7 @@ pub(super) fn coloured_friction_noise(effect: Effect, ctx: &Context<'_>) -> Vec<
         // can only mimic by running to its longest time, widening the
         // response where the data do not.
         coloured(
-            "fast_slow",
+            SearchedForm::FastSlow,
             ColourForm::FastSlow,
             vec![
                 Param::log("correlation_time_s", (tau / 3.0).max(interval), 2.0, interval, 50.0 * interval),

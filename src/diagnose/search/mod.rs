@@ -37,7 +37,7 @@ pub(crate) mod verdict;
 use std::collections::BTreeMap;
 
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
-use crate::diagnose::candidates::{Context, Variant, bent, variants};
+use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
@@ -74,7 +74,7 @@ impl From<Trial> for Fitted {
 /// ([`pair_losses`]).
 #[derive(Clone, Debug)]
 struct Member {
-    form: &'static str,
+    form: SearchedForm,
     values: Vec<f64>,
     losses: UnitLosses,
     reference: UnitLosses,
@@ -82,7 +82,7 @@ struct Member {
 
 impl Member {
     /// A member made of a trial of `form` on top of `current`.
-    fn of(form: &'static str, trial: &Trial, current: &Fitted, data: &Data<'_>) -> Member {
+    fn of(form: SearchedForm, trial: &Trial, current: &Fitted, data: &Data<'_>) -> Member {
         let (reference, losses) = pair_losses(&current.scores, &trial.scores, data);
         Member { form, values: trial.values.clone(), losses, reference }
     }
@@ -93,7 +93,7 @@ struct Family {
     effect: Effect,
     /// The best full-data trial and its form.
     best: Trial,
-    form: &'static str,
+    form: SearchedForm,
     parameters: BTreeMap<String, f64>,
     /// Every trial, any form.
     pool: Vec<Member>,
@@ -460,11 +460,11 @@ fn candidates_of(
 
 /// The form `form` of `effect` as the context `ctx` builds it (the bent
 /// load dependence from the linear one at `values`), if there is one.
-fn variant_named(effect: Effect, form: &str, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
+fn variant_named(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
     variants(effect, ctx)
         .into_iter()
         .find(|v| v.form == form)
-        .or_else(|| bent(effect, "linear", values, ctx).filter(|v| v.form == form))
+        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form))
 }
 
 /// Every family's coarse fit on the full data (each form at the start the
