@@ -4,6 +4,7 @@
 //! dependence: the rate-and-state slip and ageing laws, adhesion and the
 //! load-scaled law have a test of their own).
 
+use stickslip::engine::gpu::AdapterClass;
 use stickslip::engine::{Condition, InitialState, Model, Oscillator, PathResult, RunPlan, Sample};
 
 use crate::common;
@@ -156,13 +157,35 @@ fn paths(m: &Model, realisations: u32) -> (Vec<PathResult>, Vec<PathResult>) {
     )
 }
 
+/// Whether two GPU ensembles agree as this adapter can promise. The kernel
+/// is compiled with the model's effect parameters as constants, so a model
+/// with an effect at zero strength runs another compiled kernel than the
+/// baseline: lavapipe gives the same bits, a hardware GPU's compiler may
+/// contract and reorder f32 arithmetic differently (on an NVIDIA H100 the
+/// paths differed by at most 8.4e-7 relative, a few f32 units in the last
+/// place grown over the record). Hardware GPUs are held to 1e-5 relative.
+fn gpu_paths_agree(a: &[PathResult], b: &[PathResult]) -> bool {
+    let software = common::gpu().adapter().is_none_or(|(class, _)| class == AdapterClass::Software);
+    if software {
+        return a == b;
+    }
+    let close = |x: f64, y: f64| (x - y).abs() <= 1e-5 * x.abs().max(y.abs()).max(1e-12);
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(p, q)| {
+            p.peaks_m.len() == q.peaks_m.len()
+                && p.peaks_m.iter().zip(&q.peaks_m).all(|(x, y)| close(*x, *y))
+                && p.phases_rad.iter().zip(&q.phases_rad).all(|(x, y)| close(*x, *y))
+                && close(p.stick_time_s, q.stick_time_s)
+        })
+}
+
 #[test]
 fn zero_strength_is_the_baseline_path_by_path() {
     let (cpu_base, gpu_base) = paths(&Model::default(), 64);
     for sets in ZERO {
         let (cpu, gpu) = paths(&model(sets), 64);
         assert_eq!(cpu, cpu_base, "CPU paths differ from the baseline with {sets:?}");
-        assert_eq!(gpu, gpu_base, "GPU paths differ from the baseline with {sets:?}");
+        assert!(gpu_paths_agree(&gpu, &gpu_base), "GPU paths differ from the baseline with {sets:?}");
     }
 }
 
