@@ -285,7 +285,9 @@ pub enum BackendChoice {
     /// machine: 9.6 s on lavapipe against 9.1 s, with the kernel specialised
     /// for no effects; any effect takes the general kernel, about half as
     /// fast; `benches/RESULTS.md`), so it is only used when asked for with
-    /// `--backend gpu`.
+    /// `--backend gpu`. On a hardware GPU, jobs that sample time-series
+    /// records (a diagnosis's replicates, `simulate`) still run on the
+    /// reference, which is the faster path for them.
     Auto,
     /// A GPU adapter (hardware or software); an error when there is none.
     Gpu,
@@ -317,6 +319,15 @@ pub struct Engine {
     description: String,
     /// The GPU adapter's class and description; none on the CPU.
     adapter: Option<(gpu::AdapterClass, String)>,
+    /// Whether jobs that sample time-series records run on the CPU
+    /// reference although a GPU is open (`Auto` on a hardware GPU): a
+    /// diagnosis's replicate jobs are a few records of one condition, far
+    /// too small to fill a GPU, and each pays a dispatch and a read-back;
+    /// on an NVIDIA H100 with 16 CPU threads beside it, an 18-run
+    /// diagnosis took 233 s with its records from the kernel and 26 s from
+    /// the reference, with the same verdict (`benches/RESULTS.md`).
+    /// `--backend gpu` keeps every job on the GPU.
+    records_on_cpu: bool,
 }
 
 impl Engine {
@@ -343,7 +354,12 @@ impl Engine {
             }
             BackendChoice::Auto => match gpu::GpuContext::new(true) {
                 Ok(ctx) => match ctx.adapter_class() {
-                    gpu::AdapterClass::Hardware => Ok(Engine::gpu(ctx, options)),
+                    gpu::AdapterClass::Hardware => {
+                        let mut engine = Engine::gpu(ctx, options);
+                        engine.records_on_cpu = true;
+                        engine.description.push_str("; time-series records on the f64 CPU reference");
+                        Ok(engine)
+                    }
                     gpu::AdapterClass::Software => Ok(Engine::cpu(&format!(
                         "no hardware GPU; the only adapter is the software {}, which is slower than this \
                          integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway)",
@@ -359,14 +375,14 @@ impl Engine {
     pub fn cpu(reason: &str) -> Engine {
         let description =
             format!("CPU: f64 reference integrator on {} threads ({reason})", rayon::current_num_threads());
-        Engine { backend: Box::new(cpu::CpuBackend), description, adapter: None }
+        Engine { backend: Box::new(cpu::CpuBackend), description, adapter: None, records_on_cpu: false }
     }
 
     /// The WGSL kernel on an opened GPU context, whatever its adapter.
     pub fn gpu(ctx: gpu::GpuContext, options: GpuOptions) -> Engine {
         let description = format!("GPU: {}", ctx.describe());
         let adapter = Some((ctx.adapter_class(), ctx.describe()));
-        Engine { backend: Box::new(gpu::GpuBackend::new(ctx, options)), description, adapter }
+        Engine { backend: Box::new(gpu::GpuBackend::new(ctx, options)), description, adapter, records_on_cpu: false }
     }
 
     /// The GPU adapter the jobs run on, its class and description; `None`
@@ -391,7 +407,8 @@ impl Engine {
     /// same noise keys.
     pub fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
         job.validate()?;
-        if !self.backend.runs(job)? {
+        let records = matches!(job.record, Record::Samples { .. });
+        if (records && self.records_on_cpu) || !self.backend.runs(job)? {
             return cpu::CpuBackend.run(job, progress);
         }
         self.backend.run(job, progress)
