@@ -84,7 +84,8 @@ fn position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
                 continue;
             }
             let spread = |p: i32| mean(&run.x_m[..len].iter().map(|x| (x / u0).powi(p)).collect::<Vec<_>>());
-            let (w1, w2) = (spread(2), (spread(4) - spread(2).powi(2)).max(0.0));
+            let mean_r2 = spread(2);
+            let (w1, w2) = (mean_r2, (spread(4) - mean_r2 * mean_r2).max(0.0));
             alpha = (alpha.0 + w1 * c[1] / c[0], alpha.1 + w1);
             beta = (beta.0 + w2 * c[2] / c[0], beta.1 + w2);
         }
