@@ -13,11 +13,11 @@
 //! The contest ([`contest`]) resamples the units (a bootstrap: whole
 //! conditions drawn with replacement) and in each resample asks which family
 //! closes the largest share of the current model's explainable
-//! out-of-sample gap; it wins when that share is at least half (the family
-//! explains most of what is left) and the gap stands above its noise. An
-//! effect is named when it wins in more than half of the resamples, and its
-//! confidence is the share of resamples it wins: a probability over the
-//! conditions the data happened to hold.
+//! out-of-sample gap; it leads when that share is the largest and beyond
+//! the noise and the gap stands above its noise. Which leaders are named,
+//! and how sure that is, is [`super::verdict`]'s: the share of resamples
+//! that give the same verdict, a probability over the conditions the data
+//! happened to hold, discounted by what the named forms leave unexplained.
 
 use std::collections::BTreeMap;
 
@@ -28,8 +28,9 @@ use crate::diagnose::data::{Data, Folds};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 
-/// A share of the explainable gap a family must close to win a resample:
-/// at least half, i.e. most of it.
+/// Most of a gap: at least half of it. A further effect must close this
+/// share of what the ones before it left; a named model that closes less
+/// of the baseline's gap has its confidence scaled down in proportion.
 pub(crate) const MOST: f64 = 0.5;
 
 /// Bootstrap resamples of the contest.

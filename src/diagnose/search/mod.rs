@@ -14,14 +14,13 @@
 //!    every load level in turn, the outer ones included) is predicted by the
 //!    family member (form and parameters) that fits the other folds best
 //!    ([`cv::pool_predictions`]).
-//! 3. **The contest** ([`cv::contest`]) names the family that closes the
-//!    largest share of the current model's out-of-sample gap, when that
-//!    share is at least half and the gap stands above its noise, in more
-//!    than half of the bootstrap resamples of the conditions. The leading
-//!    contender is then refitted fold by fold from scratch on each fold's
-//!    own units, friction law included ([`refit_folds`]), and must explain
-//!    most of the gap that way too. Its confidence is the share of
-//!    resamples it wins.
+//! 3. **The contest** ([`cv::contest`]) leads with the family that closes
+//!    the largest share of the current model's out-of-sample gap, beyond
+//!    the noise. The leading contender is then refitted fold by fold from
+//!    scratch on each fold's own units, friction law included
+//!    ([`refit_folds`]), and must close a share beyond the noise that way
+//!    too (a further effect: most of what the ones before it left).
+//!    [`verdict::judge`] says which leaders are named and how sure that is.
 //! 4. The named family's best fit on the full data is polished on every
 //!    replicate ([`fit::polish`]) and becomes the model the next round
 //!    builds on; its fold refits become the next round's fold models.
@@ -134,8 +133,8 @@ pub(crate) struct Selection {
     /// How sure "the baseline explains the data" is where nothing was
     /// named: the share of resamples in which its out-of-sample gap stood
     /// within its noise of the floor, –. (Where it misfits and no family
-    /// explains most of the misfit the verdict is still `none`, but not a
-    /// confident one.)
+    /// explains any of the misfit beyond the noise the verdict is still
+    /// `none`, but not a confident one.)
     pub(crate) none_confidence: f64,
     /// The baseline refitted without each fold.
     pub(crate) baseline_folds: Vec<Fitted>,
@@ -294,7 +293,8 @@ pub(crate) fn select(
         };
         current_folds = refits;
     }
-    let (count, confidence, each) = verdict::judge(&rounds, &units, null, seed);
+    let fold_units: Vec<Vec<usize>> = data.folds.folds.iter().map(|f| f.units.clone()).collect();
+    let (count, confidence, each) = verdict::judge(&rounds, &fold_units, &units, null, seed);
     if tracing() {
         eprintln!("verdict: {count} of {} leaders named, confidence {confidence:.3}, each {each:?}", rounds.len());
     }
@@ -310,8 +310,8 @@ pub(crate) fn select(
         steps[0].confidence = confidence;
     } else if let Some(first) = rounds.first() {
         // "None" is sure only where the baseline fits: where its gap stands
-        // m noise thresholds above the floor and nothing explains most of
-        // it, the misfit may be an effect no candidate has, and the share
+        // m noise thresholds above the floor and nothing explains it, the
+        // misfit may be an effect no candidate has, and the share
         // of resamples that name nothing is divided by √m.
         let ones = vec![1.0; units.len()];
         let point = cv::Weights { units: &units, w: &ones, null };
