@@ -229,7 +229,7 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
         s.colour_state_2, s.memory, s.stick_since_s, s.ageing_excess, 0.0, 0.0, 0.0, 0.0);
     sample_row = n * params.sample_slots;
     interval_at_dispatch = s.interval;
-    tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u));
+    tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u), 0u, 0u);
     for (var c = 0u; c < params.cycles; c++) {
         let measuring = params.first_cycle + c >= params.warmup_cycles;
         run_period(measuring);

@@ -8,7 +8,8 @@
 // 9 clamped peaks, 10-11 Σ(s + 2^31) of the phases' quantised sines (u64),
 // 12-13 Σ of their quantised versines (u64), 14 periods whose peak or phase
 // was not finite (never quantised or binned; the host refuses the result),
-// 15 unused.
+// 15 the largest peak and 16 the negated smallest, each as an order-keeping
+// key of its f32 (`order_key`; 0 before any peak), 17 unused.
 
 // This invocation's sums over the dispatch, flushed once at its end.
 struct Tally {
@@ -19,6 +20,8 @@ struct Tally {
     clamped: u32,
     phase_sin_biased: vec2<u32>,
     phase_versine: vec2<u32>,
+    highest_key: u32,
+    negated_lowest_key: u32,
 }
 
 var<private> tally: Tally;
@@ -31,6 +34,14 @@ var<private> non_finite_periods: u32;
 // implementations may assume floats finite, so `x != x` is not reliable.
 fn is_non_finite(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7f800000u) == 0x7f800000u;
+}
+
+// An f32's bits as a u32 whose order is the floats' (negative floats have
+// their bits inverted, others their sign bit set): every finite float's key
+// is above 0, so a maximum of keys starting at 0 is the largest float's.
+fn order_key(x: f32) -> u32 {
+    let bits = bitcast<u32>(x);
+    return select(bits | 0x80000000u, ~bits, (bits & 0x80000000u) != 0u);
 }
 
 fn add_u64(a: vec2<u32>, b: u32) -> vec2<u32> {
@@ -84,6 +95,8 @@ fn tally_period(peak_m: f32, phase_rad: f32, stuck_share: f32) {
     let versine = u32(round(2.0 * half_sine * half_sine * PHASE_QUANTA));
     tally.phase_sin_biased = add_u64(tally.phase_sin_biased, bitcast<u32>(sine) ^ 0x80000000u);
     tally.phase_versine = add_u64(tally.phase_versine, versine);
+    tally.highest_key = max(tally.highest_key, order_key(peak_m));
+    tally.negated_lowest_key = max(tally.negated_lowest_key, order_key(-peak_m));
     atomicAdd(&histograms[point_index * HISTOGRAM_BINS + histogram_bin(peak_m)], 1u);
 }
 
@@ -119,4 +132,6 @@ fn flush_tally() {
     atomicAdd(&accumulators[base + 9u], tally.clamped);
     atomic_add_u64(base + 10u, tally.phase_sin_biased);
     atomic_add_u64(base + 12u, tally.phase_versine);
+    atomicMax(&accumulators[base + 15u], tally.highest_key);
+    atomicMax(&accumulators[base + 16u], tally.negated_lowest_key);
 }

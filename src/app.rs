@@ -47,6 +47,9 @@ pub struct PreparedSweep {
 pub struct Swept {
     pub result: SweepResult,
     pub run_s: f64,
+    /// Grid points whose peaks left their histogram's range and were run
+    /// again over a range that holds them (`sweep.json`'s `widened_ranges`).
+    pub widened_points: usize,
 }
 
 impl SweepRequest {
@@ -86,6 +89,7 @@ impl PreparedSweep {
         let started = Instant::now();
         let result = sweep::run_sweep(&self.model, &self.conditions, &self.settings, engine, progress)?;
         let run_s = started.elapsed().as_secs_f64();
+        let widened_points = sweep::output::widened_ranges(&self.model, &result).len();
         if let Some(out) = self.out {
             let identity = RunIdentity {
                 model_toml: self.model.to_toml_string(),
@@ -111,6 +115,6 @@ impl PreparedSweep {
             )?;
             out.commit()?;
         }
-        Ok(Swept { result, run_s })
+        Ok(Swept { result, run_s, widened_points })
     }
 }

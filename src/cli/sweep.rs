@@ -195,6 +195,14 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
     let swept = prepared.run(&engine, plots, &mut |done, total| progress.position(done, total))?;
     progress.finish();
+    if swept.widened_points > 0 {
+        info(&format!(
+            "note: the peaks of {} grid point(s) left the range their histogram covers (−0.5 to 1.5 times the \
+             frictionless amplitude); each was run again over a range that holds them, so its statistics are exact \
+             (sweep.json lists them under widened_ranges)",
+            swept.widened_points
+        ));
+    }
     emit(&format!(
         "{points} grid points ({frequencies} frequencies{}; {forces} normal forces{}) × {} realisations × {} cycles in \
          {:.1} s; wrote {}",

@@ -227,6 +227,72 @@ impl Job<'_> {
     }
 }
 
+/// The largest displacement a simulated path may reach at `point`, m: 100
+/// times the sum of the frictionless steady amplitude there, the base
+/// amplitude and the starting displacement, and at least
+/// [`model::limits::DISPLACEMENT_MAX_M`]. Friction only takes energy out,
+/// and a stuck block sits within its breakaway force of the base, so a path
+/// beyond this is an integration that went unstable, not physics.
+pub fn plausible_displacement_m(model: &Model, point: &Point) -> f64 {
+    let scale = model.linear_amplitude_m(point.condition.excitation_frequency_hz).abs()
+        + model.excitation.amplitude_m.abs()
+        + point.initial.x_m.abs();
+    (100.0 * scale).max(model::limits::DISPLACEMENT_MAX_M)
+}
+
+/// Refuses `output` when a displacement in it (a point's extreme peak, a
+/// path's peak or a record's sample) lies beyond
+/// [`plausible_displacement_m`], naming the point.
+fn refuse_diverged(job: &Job<'_>, output: &Output) -> Result<()> {
+    let per_point = job.realisations as usize;
+    for (i, point) in job.points.iter().enumerate() {
+        let paths = output.paths.get(i * per_point..(i + 1) * per_point).unwrap_or_default();
+        let records = output.records.get(i * per_point..(i + 1) * per_point).unwrap_or_default();
+        let farthest = [
+            output
+                .sums
+                .get(i)
+                .and_then(|a| a.peak_extremes_m)
+                .map_or(0.0, |(lo, hi)| f64::from(lo.abs().max(hi.abs()))),
+            paths.iter().flat_map(|p| &p.peaks_m).fold(0.0, |m: f64, x| m.max(x.abs())),
+            records.iter().flatten().fold(0.0, |m: f64, s| m.max(s.x_m.abs())),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        let bound = plausible_displacement_m(job.model, point);
+        if farthest > bound {
+            return Err(Error::Diverged {
+                point: point.condition.describe(),
+                message: format!(
+                    "the block reaches {} m, beyond the {} m no physical path of this model \
+                     reaches (100 times its frictionless and base amplitudes, and at least {} m): the \
+                     integration is unstable here (a friction law this steep or strong needs more steps, \
+                     solver.steps_per_period), and nothing of it is reported",
+                    model::fmt_value(farthest),
+                    model::fmt_value(bound),
+                    model::limits::DISPLACEMENT_MAX_M
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The refusal of a point whose peaks lie outside every range it can be
+/// reduced in.
+fn peaks_outside(point: &Point, a: &PointAccumulator) -> Error {
+    let extremes = a.peak_extremes_m.map_or(String::new(), |(lo, hi)| format!(" (they span {lo:e} to {hi:e} m)"));
+    Error::Diverged {
+        point: point.condition.describe(),
+        message: format!(
+            "{} of {} peaks lie outside the range they can be binned and summed in{extremes}; no statistic of \
+             this point would be what it claims to be",
+            a.outside_range(),
+            a.peaks
+        ),
+    }
+}
+
 /// What a job produced. Paths and records are point-major: realisation `r`
 /// of point `i` is at `i × realisations + r`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -404,19 +470,47 @@ impl Engine {
     /// Runs `job` on this engine's backend. A job the backend does not run
     /// itself (on a GPU: records sampled off the noise boundaries, which
     /// would split the kernel's steps) runs on the CPU reference, on the
-    /// same noise keys.
+    /// same noise keys. A result with a displacement beyond
+    /// [`plausible_displacement_m`] is refused, naming the point.
     pub fn run(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Output> {
         job.validate()?;
         let records = matches!(job.record, Record::Samples { .. });
-        if (records && self.records_on_cpu) || !self.backend.runs(job)? {
-            return cpu::CpuBackend.run(job, progress);
-        }
-        self.backend.run(job, progress)
+        let output = if (records && self.records_on_cpu) || !self.backend.runs(job)? {
+            cpu::CpuBackend.run(job, progress)?
+        } else {
+            self.backend.run(job, progress)?
+        };
+        refuse_diverged(job, &output)?;
+        Ok(output)
     }
 
-    /// Runs `job` and returns its per-point sums.
+    /// Runs `job` and returns its per-point sums, every point's peaks inside
+    /// its range: a point with peaks outside it is run again (the same
+    /// realisations, so the same peaks) over the range that holds them
+    /// ([`PointAccumulator::range_holding_peaks`]); its sums then carry that
+    /// range. A point whose peaks still leave it is an error.
     pub fn sums(&self, job: &Job<'_>, progress: &mut dyn FnMut(u64, u64)) -> Result<Vec<PointAccumulator>> {
-        Ok(self.run(&Job { record: Record::Sums, ..*job }, progress)?.sums)
+        let job = Job { record: Record::Sums, ..*job };
+        let mut sums = self.run(&job, progress)?.sums;
+        let outside: Vec<usize> = (0..sums.len()).filter(|&i| sums[i].outside_range() > 0).collect();
+        if outside.is_empty() {
+            return Ok(sums);
+        }
+        let mut points = Vec::with_capacity(outside.len());
+        for &i in &outside {
+            let range = sums[i].range_holding_peaks().ok_or_else(|| peaks_outside(&job.points[i], &sums[i]))?;
+            points.push(Point { range, ..job.points[i] });
+        }
+        let again = Job { points: &points, ..job };
+        let (first, total) = (job.work(), job.work() + again.work());
+        let wider = self.run(&again, &mut |done, _| progress(first + done, total))?.sums;
+        for (&i, a) in outside.iter().zip(wider) {
+            if a.outside_range() > 0 {
+                return Err(peaks_outside(&job.points[i], &a));
+            }
+            sums[i] = a;
+        }
+        Ok(sums)
     }
 
     /// Runs `job` and returns every realisation's peaks, point-major.

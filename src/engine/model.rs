@@ -39,6 +39,13 @@ pub mod limits {
     pub const TIME_MAX_S: f64 = 1e6;
     /// Effect rates (normal-force drift), 1/s; effect strengths and exponents, –.
     pub const RATE_MAX: f64 = 100.0;
+    /// Largest displacement of the block a measurement may hold (`x`,
+    /// `base_x`, a summary's peak mean; a peak variance up to its square),
+    /// and the least bound on a simulated one
+    /// ([`crate::engine::plausible_displacement_m`]), m.
+    pub const DISPLACEMENT_MAX_M: f64 = 10.0;
+    /// Largest speed of the block a measurement may hold (`v`), m/s.
+    pub const SPEED_MAX_M_PER_S: f64 = 1e4;
     /// Stiffness `k = m (2π f0)²` the ranges above allow, N/m.
     pub const STIFFNESS_N_PER_M: (f64, f64) = (1e-15, 1e20);
 }

@@ -8,6 +8,14 @@
 //! across dispatches, chunks or shards, gives the same bits. Quantiles come
 //! from a fixed-range histogram of `HISTOGRAM_BINS` bins (the first and last
 //! catch peaks below and above the range).
+//!
+//! **Peaks outside the range.** No statistic is taken from a point whose
+//! peaks left its range: a peak beyond the range has no bin to place it
+//! (a quantile there would be the range's edge), and one far beyond it is
+//! clamped (its sums are no longer exact). The sums therefore also keep the
+//! smallest and largest peak, and [`crate::engine::Engine::sums`] runs such
+//! a point again (the same noise, so the same peaks) over
+//! [`PointAccumulator::range_holding_peaks`], which holds every one of them.
 
 use serde::{Deserialize, Serialize};
 
@@ -142,6 +150,21 @@ impl PeakRange {
         let w = (self.hi_m - self.lo_m) / f64::from(HISTOGRAM_BINS - 2);
         (self.lo_m + f64::from(b - 1) * w, self.lo_m + f64::from(b) * w)
     }
+
+    /// A range with this one's phase reference whose inner bins hold every
+    /// peak in `[lowest_m, highest_m]`: that interval widened by a thousandth
+    /// of its span, a ten-thousandth of its magnitude and a thousandth of
+    /// this range's width on each side (far more than the f32 rounding of the
+    /// bin arithmetic). `None` when the result is not finite as f32 (peaks
+    /// near the largest f32 cannot be binned).
+    pub fn holding(&self, lowest_m: f64, highest_m: f64) -> Option<PeakRange> {
+        let pad =
+            1e-3 * (highest_m - lowest_m) + 1e-4 * lowest_m.abs().max(highest_m.abs()) + 1e-3 * (self.hi_m - self.lo_m);
+        let range = PeakRange { lo_m: lowest_m - pad, hi_m: highest_m + pad, phase_ref_rad: self.phase_ref_rad };
+        let as_f32 = [range.lo_m as f32, range.hi_m as f32, range.centre_f32(), range.inv_quantum_f32()];
+        (as_f32.iter().all(|v| v.is_finite()) && range.lo_m < range.hi_m && range.bins_per_m_f32() > 0.0)
+            .then_some(range)
+    }
 }
 
 /// Exact integer sums for one grid point.
@@ -171,6 +194,11 @@ pub struct PointAccumulator {
     /// refuses a result where this is not zero.
     #[serde(default)]
     pub non_finite: u64,
+    /// The smallest and largest peak (as f32, m) added or merged here;
+    /// `None` before any, and for sums read back from `accumulators.json`
+    /// (which does not keep them). Exact in any order, like the sums.
+    #[serde(skip)]
+    pub peak_extremes_m: Option<(f32, f32)>,
 }
 
 impl PointAccumulator {
@@ -187,6 +215,7 @@ impl PointAccumulator {
             sum_phase_sin: 0,
             sum_phase_versine: 0,
             non_finite: 0,
+            peak_extremes_m: None,
         }
     }
 
@@ -210,6 +239,7 @@ impl PointAccumulator {
         self.stick_units += stick_units(stuck_share);
         self.clamped += u64::from(clamped);
         self.histogram[self.range.histogram_bin(peak) as usize] += 1;
+        self.peak_extremes_m = widest(self.peak_extremes_m, Some((peak, peak)));
     }
 
     /// Adds another accumulator of the same point (exact).
@@ -224,9 +254,26 @@ impl PointAccumulator {
         self.sum_phase_sin += other.sum_phase_sin;
         self.sum_phase_versine += other.sum_phase_versine;
         self.non_finite += other.non_finite;
+        self.peak_extremes_m = widest(self.peak_extremes_m, other.peak_extremes_m);
         for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
             *a += b;
         }
+    }
+
+    /// Peaks that lie outside the range (in the first or last bin; a clamped
+    /// peak is one of them). Its quantiles, and with clamped peaks its sums,
+    /// are not to be used when this is not zero.
+    pub fn outside_range(&self) -> u64 {
+        self.histogram[0] + self.histogram[self.histogram.len() - 1]
+    }
+
+    /// The range a second run of this point needs so that every one of its
+    /// peaks lies inside ([`PeakRange::holding`] its extremes); `None` when
+    /// every peak already does, or when the extremes are unknown or cannot
+    /// be binned.
+    pub fn range_holding_peaks(&self) -> Option<PeakRange> {
+        let (lowest, highest) = self.peak_extremes_m?;
+        (self.outside_range() > 0).then(|| self.range.holding(f64::from(lowest), f64::from(highest)))?
     }
 
     /// Quantile from the histogram, interpolating linearly inside the bin.
@@ -311,6 +358,14 @@ impl PointAccumulator {
     }
 }
 
+/// The wider of two (smallest, largest) pairs.
+fn widest(a: Option<(f32, f32)>, b: Option<(f32, f32)>) -> Option<(f32, f32)> {
+    match (a, b) {
+        (Some((lo_a, hi_a)), Some((lo_b, hi_b))) => Some((lo_a.min(lo_b), hi_a.max(hi_b))),
+        (one, None) | (None, one) => one,
+    }
+}
+
 /// Stuck share of a period in units of T/2^20. Mirrors the kernel.
 pub fn stick_units(stuck_share: f64) -> u64 {
     ((stuck_share as f32) * STICK_UNITS_PER_PERIOD as f32).round_ties_even() as u64
@@ -380,5 +435,31 @@ mod tests {
         let bin = 4e-3 / f64::from(HISTOGRAM_BINS - 2);
         assert!((acc.quantile(0.5) - 1.1e-3).abs() < bin);
         assert!((acc.quantile(0.05) - 1.01e-3).abs() < bin);
+    }
+
+    /// Peaks far outside the range (clamped ones among them) are counted,
+    /// and the range their extremes ask for holds every one of them, with
+    /// exact sums and quantiles inside it.
+    #[test]
+    fn peaks_outside_the_range_ask_for_a_range_that_holds_them() {
+        let peaks: Vec<f64> = (0..1000).map(|i| 0.5 + 1e-3 * (i as f64 * 0.37).sin()).collect();
+        let mut acc = PointAccumulator::new(range());
+        peaks.iter().for_each(|&p| acc.tally_period(p, 0.3, 0.0));
+        assert_eq!((acc.outside_range(), acc.clamped), (1000, 1000));
+        let wide = acc.range_holding_peaks().expect("a range that holds them");
+        let mut again = PointAccumulator::new(wide);
+        peaks.iter().for_each(|&p| again.tally_period(p, 0.3, 0.0));
+        assert_eq!((again.outside_range(), again.clamped, again.range_holding_peaks()), (0, 0, None));
+        let n = peaks.len() as f64;
+        let mean = peaks.iter().sum::<f64>() / n;
+        assert!((again.moments().0 - mean).abs() < 1e-7, "{} vs {mean}", again.moments().0);
+        let mut sorted = peaks.clone();
+        sorted.sort_by(f64::total_cmp);
+        let bin = (wide.hi_m - wide.lo_m) / f64::from(HISTOGRAM_BINS - 2);
+        assert!((again.quantile(0.5) - sorted[500]).abs() < 2.0 * bin);
+        // Inside the range nothing is asked for.
+        let mut inside = PointAccumulator::new(range());
+        inside.tally_period(1e-3, 0.3, 0.0);
+        assert_eq!(inside.range_holding_peaks(), None);
     }
 }

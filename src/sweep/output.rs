@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use crate::engine::{Model, PointStats};
+use crate::engine::{Model, PeakRange, PointStats};
 use crate::error::Error;
 use crate::error::Result;
 use crate::io::{OutputSet, owned, write_atomically};
@@ -123,9 +123,22 @@ pub fn write_output_set(
     set.commit()
 }
 
-/// Refuses a result with a statistic that is not finite (nothing
-/// non-finite is written or plotted).
+/// Refuses a result with a statistic that is not finite, or with a point
+/// whose peaks lie outside its range (its quantiles would be the range's
+/// edge): nothing of either is written or plotted.
 pub fn check_finite(result: &SweepResult) -> Result<()> {
+    for (c, a) in result.conditions.iter().zip(&result.accumulators) {
+        if a.outside_range() > 0 {
+            return Err(Error::Diverged {
+                point: c.describe(),
+                message: format!(
+                    "{} of its {} peaks lie outside its histogram range; nothing was written",
+                    a.outside_range(),
+                    a.peaks
+                ),
+            });
+        }
+    }
     for row in result.rows() {
         let values = [
             row.peak_mean_m,
@@ -145,6 +158,25 @@ pub fn check_finite(result: &SweepResult) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The points whose peaks left the range their model gives, each with the
+/// range that holds them (`sweep.json`'s `widened_ranges`).
+pub fn widened_ranges(model: &Model, result: &SweepResult) -> Vec<serde_json::Value> {
+    result
+        .conditions
+        .iter()
+        .zip(&result.accumulators)
+        .filter(|(c, a)| a.range != PeakRange::for_point(model, **c))
+        .map(|(c, a)| {
+            serde_json::json!({
+                "excitation_frequency_hz": c.excitation_frequency_hz,
+                "normal_force_n": c.normal_force_n,
+                "lo_m": a.range.lo_m,
+                "hi_m": a.range.hi_m,
+            })
+        })
+        .collect()
 }
 
 /// Writes the files of a sweep's output set into the directory `dir`.
@@ -185,6 +217,7 @@ pub fn write_output_files(
         "adapter": description,
         "shard": shard,
         "refinement": refinement.map(|r| serde_json::json!({ "added_frequencies_hz": r.added_hz })),
+        "widened_ranges": widened_ranges(model, result),
         "files": files,
         "timings": timings,
     });

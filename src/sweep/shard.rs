@@ -15,6 +15,10 @@
 //!   the peak range the model gives it;
 //! - every point has the run's realisations and realisations × measured
 //!   cycles peaks; its histogram's bins exist, are sorted and total the peaks;
+//! - every peak lies inside the point's range (none in the bins below and
+//!   above it, none clamped), and a range other than the model's is the one
+//!   that holds the point's stored extremes, which lie in its first and last
+//!   occupied bins;
 //! - Σq and Σq² lie within the bounds that the histogram's bins put on each
 //!   quantised peak, and (Σq)² ≤ n Σq² (so no variance is negative);
 //! - the stuck time is at most the measured time, clamped peaks lie in the
@@ -26,7 +30,7 @@
 use std::path::Path;
 
 use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force_problem};
-use crate::engine::reduce::{PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
+use crate::engine::reduce::{HISTOGRAM_BINS, PHASE_QUANTA, QUANTISE_LIMIT, STICK_UNITS_PER_PERIOD};
 use crate::engine::{BackendKind, Condition, Job, Model, PeakRange, PointAccumulator};
 use crate::error::{Error, Result};
 use crate::sweep::{Grid, SweepResult};
@@ -133,11 +137,18 @@ pub struct StoredPoint {
     pub sum_phase_sin: String,
     pub sum_phase_versine: String,
     pub histogram: Vec<(u32, u64)>,
+    /// The smallest and largest peak (as f32), m; absent in format 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_extremes_m: Option<(f32, f32)>,
 }
 
-/// Format tag of `accumulators.json` (3: with the integrity digest; 2 had
-/// the same content without it).
-pub const ACCUMULATOR_FORMAT: &str = "stickslip-accumulators/3";
+/// Format tag of `accumulators.json` (4: with each point's peak extremes;
+/// 3 had the same content without them, 2 without the integrity digest).
+pub const ACCUMULATOR_FORMAT: &str = "stickslip-accumulators/4";
+
+/// The previous format, still read: its points have no extremes, so each
+/// must have its model's range.
+const ACCUMULATOR_FORMAT_3: &str = "stickslip-accumulators/3";
 
 impl StoredPoint {
     fn from_accumulator(c: Condition, a: &PointAccumulator) -> Self {
@@ -154,6 +165,7 @@ impl StoredPoint {
             sum_phase_sin: a.sum_phase_sin.to_string(),
             sum_phase_versine: a.sum_phase_versine.to_string(),
             histogram: a.histogram.iter().enumerate().filter(|(_, c)| **c > 0).map(|(b, c)| (b as u32, *c)).collect(),
+            peak_extremes_m: a.peak_extremes_m,
         }
     }
 
@@ -178,6 +190,7 @@ impl StoredPoint {
             previous = Some(b);
             *a.histogram.get_mut(b as usize).ok_or_else(|| bad(format!("histogram bin {b} out of range")))? = c;
         }
+        a.peak_extremes_m = self.peak_extremes_m;
         let c =
             Condition { excitation_frequency_hz: self.excitation_frequency_hz, normal_force_n: self.normal_force_n };
         Ok((c, a))
@@ -219,7 +232,7 @@ pub fn read_accumulators(dir: &Path) -> Result<(AccumulatorFile, SweepResult)> {
         )
     })?;
     match value.get("format").and_then(|f| f.as_str()) {
-        Some(ACCUMULATOR_FORMAT) => {}
+        Some(ACCUMULATOR_FORMAT | ACCUMULATOR_FORMAT_3) => {}
         Some("stickslip-accumulators/2") => {
             return Err(refuse(
                 None,
@@ -307,8 +320,17 @@ fn verify(file: &AccumulatorFile, result: &SweepResult) -> std::result::Result<(
         {
             return Err(format!("{at} is not grid point {} ({}) of its grid", range.start + j, want.describe()));
         }
-        if a.range != PeakRange::for_point(&model, *c) {
-            return Err(format!("{at}: its peak range is not the one its model gives"));
+        // A range other than the model's is the one that holds the point's
+        // extremes, one of which lies outside the model's range.
+        let own = PeakRange::for_point(&model, *c);
+        let widened = a.peak_extremes_m.is_some_and(|(lo, hi)| {
+            let left_own = own.histogram_bin(lo) == 0 || own.histogram_bin(hi) == HISTOGRAM_BINS - 1;
+            left_own && own.holding(f64::from(lo), f64::from(hi)) == Some(a.range)
+        });
+        if a.range != own && !widened {
+            return Err(format!(
+                "{at}: its peak range is neither the one its model gives nor the one that holds its peaks"
+            ));
         }
         verify_point(a, id).map_err(|m| format!("{at}: {m}"))?;
     }
@@ -332,8 +354,23 @@ fn verify_point(a: &PointAccumulator, id: &RunIdentity) -> std::result::Result<(
         return Err(format!("its histogram holds {total} peaks, not {n}"));
     }
     let last = a.histogram.len() - 1;
-    if u128::from(a.clamped) > u128::from(a.histogram[0]) + u128::from(a.histogram[last]) {
-        return Err(format!("{} clamped peaks, more than lie outside its range", a.clamped));
+    if a.outside_range() > 0 || a.clamped > 0 {
+        return Err(format!(
+            "{} of its peaks lie outside its range ({} clamped): its quantiles would sit at the range's edge; \
+             re-run it with this version, which runs such a point again over a range that holds its peaks",
+            a.outside_range(),
+            a.clamped
+        ));
+    }
+    if let Some((lo, hi)) = a.peak_extremes_m {
+        let occupied = |b: u32| a.histogram[b as usize] > 0;
+        let first = (0..=last as u32).find(|&b| occupied(b));
+        let final_bin = (0..=last as u32).rev().find(|&b| occupied(b));
+        if !(lo <= hi && first == Some(a.range.histogram_bin(lo)) && final_bin == Some(a.range.histogram_bin(hi))) {
+            return Err(format!(
+                "its peak extremes {lo:e} and {hi:e} m do not lie in its first and last occupied bins"
+            ));
+        }
     }
     let stuck_periods = a.stick_units as f64 / STICK_UNITS_PER_PERIOD;
     if stuck_periods > n as f64 * (1.0 + 1e-6) {

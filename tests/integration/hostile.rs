@@ -49,22 +49,22 @@ impl Drop for Scratch {
     }
 }
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_stickslip"))
 }
 
-fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("stickslip runs")
 }
 
-fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Runs the command line and asserts a refusal with exit code 1 whose
 /// message contains every string of `names`; returns the message.
 #[track_caller]
-fn refused(args: &[&str], names: &[&str]) -> String {
+pub(crate) fn refused(args: &[&str], names: &[&str]) -> String {
     let o = run(args);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{args:?} should be refused with exit code 1: {err}");
@@ -85,9 +85,9 @@ fn within<T: Send + 'static>(limit: Duration, f: impl FnOnce() -> T + Send + 'st
     rx.recv_timeout(limit).expect("the call hung")
 }
 
-const RIG: &str = r#"{ "mass_kg": 1.028, "natural_frequency_hz": 10.05, "damping_ratio": 0.00225 }"#;
+pub(crate) const RIG: &str = r#"{ "mass_kg": 1.028, "natural_frequency_hz": 10.05, "damping_ratio": 0.00225 }"#;
 
-fn manifest(file: &str) -> String {
+pub(crate) fn manifest(file: &str) -> String {
     let file = serde_json::to_string(file).unwrap();
     format!(
         r#"{{ "format": "stickslip-measurements/1", "rig": {RIG},
@@ -97,7 +97,7 @@ fn manifest(file: &str) -> String {
 }
 
 /// A valid run file: 2 s at 600 Hz of a 7 Hz oscillation.
-fn run_csv() -> String {
+pub(crate) fn run_csv() -> String {
     let mut text = String::from("t,x,v,normal_force,friction_force\n");
     for i in 0..1200 {
         let t = i as f64 / 600.0;
@@ -108,7 +108,7 @@ fn run_csv() -> String {
 }
 
 #[track_caller]
-fn measurement_refused(dir: &Path, names: &[&str]) -> String {
+pub(crate) fn measurement_refused(dir: &Path, names: &[&str]) -> String {
     let err = read_measurement_set(dir).expect_err("the set should be refused");
     assert!(matches!(err, Error::Measurement { .. }), "{err:?}");
     let text = err.to_string();
@@ -460,7 +460,7 @@ fn absurd_diagnosis_settings() {
 }
 
 /// A small CPU sweep into `out`; a flag in `extra` replaces the default.
-fn sweep_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+pub(crate) fn sweep_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let defaults = [
         ("--frequencies", "7"),
         ("--normal-forces", "10"),
@@ -479,7 +479,7 @@ fn sweep_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
 }
 
 /// The names in a directory, sorted.
-fn listing(dir: &Path) -> Vec<String> {
+pub(crate) fn listing(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = match std::fs::read_dir(dir) {
         Ok(entries) => entries.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect(),
         Err(_) => Vec::new(),
@@ -489,7 +489,7 @@ fn listing(dir: &Path) -> Vec<String> {
 }
 
 /// Every file's bytes, by name.
-fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+pub(crate) fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
     listing(dir).into_iter().map(|n| (n.clone(), std::fs::read(dir.join(&n)).unwrap())).collect()
 }
 
@@ -610,7 +610,7 @@ pub(crate) fn honest_shards(s: &Scratch) -> (PathBuf, PathBuf) {
 
 /// A forged copy of `shard` at `name`: `edit` changes the file, and the
 /// digest is recomputed so that only the invariants can catch it.
-fn forged(s: &Scratch, shard: &Path, name: &str, edit: impl FnOnce(&mut AccumulatorFile)) -> PathBuf {
+pub(crate) fn forged(s: &Scratch, shard: &Path, name: &str, edit: impl FnOnce(&mut AccumulatorFile)) -> PathBuf {
     let (mut file, _) = read_accumulators(shard).unwrap();
     edit(&mut file);
     file.integrity.digest = file.content_digest();

@@ -14,6 +14,7 @@ mod layout;
 mod measure;
 mod props;
 mod records;
+mod reliability;
 mod rng;
 mod sweep;
 mod twins;

@@ -50,6 +50,13 @@ const EXCEPTIONS: &[(&str, &str, Option<&str>, &str)] = &[
         "`Memory::form`, beside the flattened effects it reads: the GPU host specialises the kernel by it too",
     ),
     ("reduce.wgsl", "is_non_finite", None, "Rust has `f32::is_finite`; WGSL has no isnan or isinf"),
+    (
+        "reduce.wgsl",
+        "order_key",
+        None,
+        "a peak's f32 as a u32 that atomicMax can order (WGSL has no atomic float max); the CPU keeps the \
+         extremes as floats (`widest`), and the GPU host decodes the keys (`from_order_key` in ensemble.rs)",
+    ),
     ("reduce.wgsl", "add_u64", None, "WGSL has no 64-bit integers, so sums carry in u32 words; Rust adds u64"),
     ("reduce.wgsl", "add_u96", None, "the 96-bit sum of squares in u32 words; Rust adds u128"),
     (

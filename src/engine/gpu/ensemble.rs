@@ -133,8 +133,14 @@ fn decode_accumulator(range: PeakRange, realisations: u32, words: &[u32], histog
     acc.sum_phase_sin = wide(&words[10..12]) as i128 - (i128::from(peaks) << 31);
     acc.sum_phase_versine = wide(&words[12..14]);
     acc.non_finite = u64::from(words[14]);
+    acc.peak_extremes_m = (peaks > 0).then(|| (-from_order_key(words[16]), from_order_key(words[15])));
     acc.histogram = histogram.iter().map(|&c| u64::from(c)).collect();
     acc
+}
+
+/// The f32 whose `order_key` (in `reduce.wgsl`) is `key`.
+fn from_order_key(key: u32) -> f32 {
+    f32::from_bits(if key & 0x8000_0000 != 0 { key & 0x7fff_ffff } else { !key })
 }
 
 /// Runs a job's sums (and peaks, for [`Record::Peaks`]) on the GPU, or its

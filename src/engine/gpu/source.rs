@@ -40,7 +40,7 @@ pub const ILLINOIS_TOLERANCE: f64 = 2e-7;
 /// steps (the CPU carries it through the whole span: f32 rotations drift).
 pub const TRIG_REFRESH_STEPS: u32 = 16;
 /// Words of one point's accumulator in `reduce.wgsl`.
-pub const ACCUMULATOR_WORDS: usize = 16;
+pub const ACCUMULATOR_WORDS: usize = 18;
 
 const RNG: &str = include_str!("../../../shaders/rng.wgsl");
 const EFFECTS: &str = include_str!("../../../shaders/effects.wgsl");

@@ -1,0 +1,124 @@
+//! Reliability (issue 43): no number that is not what it claims to be, a
+//! bounded cost for every input, output sets that never mix, ambiguity
+//! refused, and messages that name the place and quote nothing raw.
+
+use stickslip::Error;
+use stickslip::engine::{Condition, Job, Model, PeakRange, Point, Record, RunPlan};
+use stickslip::sweep::{SweepSettings, merge_shards, read_accumulators, run_sweep};
+
+use crate::common;
+use crate::hostile::{Scratch, forged, refused, run, stderr, sweep_args};
+
+/// A friction law strong enough to hold the block where its frictionless
+/// start puts it, at 20 Hz: every peak lies below `−0.5 A`, outside the
+/// range the point's histogram covers by default.
+fn holding_law() -> Model {
+    Model::paper_rig(&["friction.a=5".into()]).unwrap()
+}
+
+const HELD: Condition = Condition { excitation_frequency_hz: 20.0, normal_force_n: 16.39 };
+
+/// Peaks far outside the default range: the point is run again over a range
+/// that holds them, on either backend, and its mean, variance and quantiles
+/// are those of the peaks themselves (not the range's edge).
+#[test]
+fn peaks_outside_the_range_give_exact_statistics() {
+    let model = holding_law();
+    let plan = RunPlan { warmup_cycles: 10, measured_cycles: 20 };
+    let settings = SweepSettings { realisations: 4, plan, seed: 3 };
+    let own = PeakRange::for_point(&model, HELD);
+    for engine in [common::cpu(), common::gpu()] {
+        let result = run_sweep(&model, &[HELD], &settings, engine, &mut |_, _| {}).unwrap();
+        let a = &result.accumulators[0];
+        assert_ne!(a.range, own, "the range was widened");
+        assert_eq!((a.outside_range(), a.clamped), (0, 0));
+        let points = [Point::steady(&model, HELD)];
+        let job = Job {
+            model: &model,
+            points: &points,
+            realisations: 4,
+            first_realisation: 0,
+            seed: 3,
+            plan,
+            record: Record::Peaks,
+        };
+        let mut peaks: Vec<f64> =
+            engine.paths(&job).unwrap().iter().flat_map(|p| p.peaks_m.iter().map(|&x| f64::from(x as f32))).collect();
+        assert!(peaks.iter().all(|&x| x < own.lo_m), "every peak lies below the default range");
+        peaks.sort_by(f64::total_cmp);
+        let n = peaks.len();
+        let row = &result.rows()[0];
+        let mean = peaks.iter().sum::<f64>() / n as f64;
+        assert!((row.peak_mean_m - mean).abs() < 1e-12, "mean {} vs {mean}", row.peak_mean_m);
+        let var = peaks.iter().map(|p| (p - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        assert!((row.peak_var_m2 - var).abs() <= 1e-3 * var + 1e-24, "variance {} vs {var}", row.peak_var_m2);
+        let bin = (a.range.hi_m - a.range.lo_m) / 2046.0;
+        for (q, p) in [(row.peak_p05_m, 0.05), (row.peak_p50_m, 0.5), (row.peak_p95_m, 0.95)] {
+            let exact = peaks[((p * n as f64) as usize).min(n - 1)];
+            assert!((q - exact).abs() <= 2.0 * bin, "p{p}: {q} vs {exact} (bins of {bin} m)");
+        }
+    }
+}
+
+/// The command line: such a point is written with exact statistics and no
+/// bin without edges, said on stderr and in sweep.json; shards with such a
+/// point merge into the unsharded run byte for byte, and a forged widened
+/// range is refused. A law the integrator cannot follow (peaks of metres
+/// to kilometres) is refused, and nothing is written.
+#[test]
+fn widened_ranges_on_the_command_line() {
+    let s = Scratch::new("widened");
+    let whole = s.path("whole");
+    let args =
+        ["--set", "friction.a=5", "--frequencies", "7,20", "--normal-forces", "16.39", "--no-plots", "--no-refine"];
+    let o = run(&sweep_args(whole.to_str().unwrap(), &args));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("widened_ranges"), "{}", stderr(&o));
+    let histograms = std::fs::read_to_string(whole.join("histograms.csv")).unwrap();
+    assert!(!histograms.contains("inf"), "{histograms}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("sweep.json")).unwrap()).unwrap();
+    let widened = sidecar["widened_ranges"].as_array().unwrap();
+    assert_eq!(widened.len(), 1, "{widened:?}");
+    assert_eq!(widened[0]["excitation_frequency_hz"], 20.0);
+    let mut shards = Vec::new();
+    for k in 0..2 {
+        let dir = s.path(&format!("shard-{k}"));
+        let shard = format!("{k}/2");
+        let mut shard_args = args.to_vec();
+        shard_args.extend(["--shard", &shard]);
+        let o = run(&sweep_args(dir.to_str().unwrap(), &shard_args));
+        assert!(o.status.success(), "{}", stderr(&o));
+        shards.push(dir);
+    }
+    let merged = s.path("merged");
+    let o =
+        run(&["merge", "--out", merged.to_str().unwrap(), shards[0].to_str().unwrap(), shards[1].to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["sweep.csv", "histograms.csv", "accumulators.json"] {
+        assert_eq!(std::fs::read(whole.join(f)).unwrap(), std::fs::read(merged.join(f)).unwrap(), "{f}");
+    }
+    // A forged range (digest recomputed) is refused; so is a forged extreme.
+    let forged_range = forged(&s, &shards[1], "forged-range", |f| f.points[0].range.lo_m *= 1.5);
+    let err = merge_shards(&[shards[0].clone(), forged_range]).unwrap_err().to_string();
+    assert!(err.contains("forged-range/accumulators.json") && err.contains("peak range"), "{err}");
+    let forged_extreme = forged(&s, &shards[1], "forged-extreme", |f| {
+        f.points[0].peak_extremes_m = f.points[0].peak_extremes_m.map(|(lo, hi)| (lo * 0.5, hi));
+    });
+    let err = merge_shards(&[shards[0].clone(), forged_extreme]).unwrap_err().to_string();
+    assert!(err.contains("forged-extreme/accumulators.json"), "{err}");
+    read_accumulators(&whole).expect("a widened range reads back");
+    // A law too steep for the step: refused by name on either backend, nothing written.
+    let out = s.path("unstable");
+    let err = refused(
+        &sweep_args(out.to_str().unwrap(), &["--set", "friction.d=1e6", "--frequencies", "7", "--no-plots"]),
+        &["7 Hz, 10 N", "unstable", "solver.steps_per_period"],
+    );
+    assert!(!err.contains("inf"), "{err}");
+    assert!(!out.exists());
+    let model = Model::paper_rig(&["friction.d=1e6".into()]).unwrap();
+    let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 10.0 };
+    let settings = SweepSettings { realisations: 2, plan: RunPlan { warmup_cycles: 1, measured_cycles: 2 }, seed: 1 };
+    let err = run_sweep(&model, &[condition], &settings, common::cpu(), &mut |_, _| {}).unwrap_err();
+    assert!(matches!(err, Error::Diverged { .. }), "{err:?}");
+}
