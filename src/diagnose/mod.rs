@@ -436,6 +436,18 @@ pub fn diagnose_set(
     });
     let floor = selection.null.mean;
     let in_sample = search::pair_gaps(&baseline_scores, &fitted_scores, &data, 0..data.units.len());
+    let gaps = [in_sample.0, in_sample.1].into_iter().chain(cv_gaps.into_iter().flat_map(|(b, a)| [b, a]));
+    if gaps.chain(fold_gaps.iter().flat_map(|f| [f.before, f.after])).any(|g| !g.is_finite()) {
+        return Err(crate::Error::Measurement {
+            file: set.dir.clone(),
+            line: None,
+            message: format!(
+                "the gap between the set and the model is not a finite number (baseline {} -> after {}): a \
+                 measured value lies where the scores overflow, so there is no result to report",
+                in_sample.0, in_sample.1
+            ),
+        });
+    }
     let unexplained_share = match cv_gaps {
         Some((before, after)) => ((after - floor).max(0.0) / (before - floor).max(1e-9)).clamp(0.0, 1.0),
         None => 1.0,

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 use crate::diagnose::{Diagnosis, FoldGap, Unexplained, chart, sd};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::{OutputSet, owned, write_atomically};
 
 /// The format tag of `report.json`.
@@ -251,6 +251,23 @@ pub struct ModelFiles {
     pub fitted: String,
 }
 
+impl Report {
+    /// Refuses a report that would hold a number that is not finite: JSON
+    /// has none (it would be written as `null`, where a number is promised).
+    /// Written and read back, the report must be itself.
+    pub fn check_numbers(&self) -> Result<()> {
+        let text = serde_json::to_string(self).map_err(|e| Error::Mismatch(format!("report.json: {e}")))?;
+        match serde_json::from_str::<Report>(&text) {
+            Ok(back) if back == *self => Ok(()),
+            _ => Err(Error::Mismatch(format!(
+                "the diagnosis of {} gave a number that is not finite (gap {} -> {}): the data lie where the \
+                 scores overflow; nothing was written",
+                self.source, self.gap.baseline, self.gap.after
+            ))),
+        }
+    }
+}
+
 impl From<&Unexplained> for UnexplainedReport {
     fn from(u: &Unexplained) -> Self {
         UnexplainedReport {
@@ -402,6 +419,7 @@ pub fn write_diagnosis_with(
     let set = OutputSet::prepare(out, "output directory", owned::DIAGNOSIS, &[source])?;
     let out = set.dir();
     let report = diagnosis.report(source, elapsed_s);
+    report.check_numbers()?;
     write_atomically(&out.join("report.json"), |w| {
         serde_json::to_writer_pretty(&mut *w, &report)?;
         writeln!(w)

@@ -177,6 +177,31 @@ const RUN_COLUMNS: [Column; 6] = [
     Column::optional("base_x"),
 ];
 
+/// The physically plausible range and unit of each of [`RUN_COLUMNS`]
+/// (`docs/formats.md`): displacements within ±10 m, speeds within ±1e4 m/s,
+/// a normal force of 0 to 1e6 N (a contact cannot pull) and a friction force
+/// within ±1e8 N (the largest force times the largest friction coefficient).
+fn run_column_bound(j: usize) -> (Bound, &'static str) {
+    let (x, v, n) = (limits::DISPLACEMENT_MAX_M, limits::SPEED_MAX_M_PER_S, limits::FORCE_MAX_N);
+    let f = n * limits::FRICTION_COEFFICIENT_MAX;
+    match j {
+        0 => (Bound::Finite, "s"),
+        2 => (Bound::within(-v, v), "m/s"),
+        3 => (Bound::within(0.0, n), "N"),
+        4 => (Bound::within(-f, f), "N"),
+        _ => (Bound::within(-x, x), "m"),
+    }
+}
+
+/// `value` of column `j` of `columns` if it lies in `bound`, else the
+/// refusal naming the file, the line and the column.
+fn within_bound(path: &Path, line: u64, columns: &[Column], j: usize, value: f64, bound: (Bound, &str)) -> Result<f64> {
+    match bound.0.violation(value, bound.1) {
+        None => Ok(value),
+        Some(problem) => Err(bad(path, Some(line), format!("column `{}`: {problem}", columns[j].name))),
+    }
+}
+
 /// Checks one run file's content (`bytes`, read from `path`).
 pub(super) fn read_run_file(
     path: &Path,
@@ -197,6 +222,11 @@ pub(super) fn read_run_file(
     let mut friction = Vec::new();
     let mut lines = Vec::new();
     table.for_each_row(&RUN_COLUMNS, |line, values| {
+        for (j, value) in values.iter().enumerate() {
+            if let Some(value) = *value {
+                within_bound(path, line, &RUN_COLUMNS, j, value, run_column_bound(j))?;
+            }
+        }
         let t = values[0].unwrap_or(f64::NAN);
         match t_s.last() {
             Some(&previous) if t <= previous => {
@@ -375,15 +405,7 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
     let mut rows = Vec::new();
     table.for_each_row(&SUMMARY_COLUMNS, |line, values| {
         let check = |j: usize, bound: Bound, unit: &str| -> Result<Option<f64>> {
-            match values[j] {
-                None => Ok(None),
-                Some(value) => match bound.violation(value, unit) {
-                    None => Ok(Some(value)),
-                    Some(problem) => {
-                        Err(bad(path, Some(line), format!("column `{}`: {problem}", SUMMARY_COLUMNS[j].name)))
-                    }
-                },
-            }
+            values[j].map(|value| within_bound(path, line, &SUMMARY_COLUMNS, j, value, (bound, unit))).transpose()
         };
         // Required columns are always present here (`Table::open` checked).
         let required = |j: usize, bound: Bound, unit: &str| -> Result<f64> {
@@ -422,8 +444,9 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
             }
             _ => {}
         }
-        let peak_mean_m = check(4, Bound::Finite, "m")?;
-        let phase_mean_deg = check(7, Bound::Finite, "degrees")?;
+        let displacement = limits::DISPLACEMENT_MAX_M;
+        let peak_mean_m = check(4, Bound::within(0.0, displacement), "m")?;
+        let phase_mean_deg = check(7, Bound::Range { lo: -360.0, hi: 360.0, lo_open: true }, "degrees")?;
         if peak_mean_m.is_none() && phase_mean_deg.is_none() {
             return Err(bad(
                 path,
@@ -439,10 +462,10 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
             normal_force_mean_n: required(2, Bound::within(0.0, force_max), "N")?,
             normal_force_var_n2: check(3, Bound::within(0.0, force_max * force_max), "N²")?,
             peak_mean_m,
-            peak_var_m2: check(5, Bound::NonNegative, "m²")?,
+            peak_var_m2: check(5, Bound::within(0.0, displacement * displacement), "m²")?,
             n_peaks,
             phase_mean_deg,
-            phase_var_deg2: check(8, Bound::NonNegative, "degrees²")?,
+            phase_var_deg2: check(8, Bound::within(0.0, 360.0 * 360.0), "degrees²")?,
             line,
         });
         Ok(())

@@ -29,8 +29,6 @@ pub(super) fn kind(v: &Value) -> &'static str {
 pub(super) enum Bound {
     /// Any finite number.
     Finite,
-    /// Finite and ≥ 0.
-    NonNegative,
     /// Finite, in `[lo, hi]` (`lo` itself refused when `lo_open`): the
     /// physically sensible ranges of [`crate::engine::model::limits`].
     Range { lo: f64, hi: f64, lo_open: bool },
@@ -52,11 +50,10 @@ impl Bound {
         }
         match self {
             Bound::Finite => None,
-            Bound::NonNegative if value < 0.0 => Some(format!("{shown} must not be negative (≥ 0{unit})")),
             Bound::Range { lo, .. } if value < 0.0 && lo >= 0.0 => {
                 Some(format!("{shown} must not be negative (≥ {}{unit})", fmt_bound(lo)))
             }
-            Bound::Range { lo, lo_open, .. } if value == 0.0 && (lo > 0.0 || lo_open) => {
+            Bound::Range { lo, lo_open, .. } if value == 0.0 && (lo > 0.0 || (lo_open && lo == 0.0)) => {
                 Some(format!("{shown} must be positive (≥ {}{unit})", fmt_bound(lo)))
             }
             Bound::Range { lo, lo_open, .. } if value < lo || (lo_open && value == lo) => {

@@ -3,11 +3,13 @@
 //! refused, and messages that name the place and quote nothing raw.
 
 use stickslip::Error;
+use stickslip::measure::read_measurement_set;
+use stickslip::diagnose::report::Report;
 use stickslip::engine::{Condition, Job, Model, PeakRange, Point, Record, RunPlan};
 use stickslip::sweep::{SweepSettings, merge_shards, read_accumulators, run_sweep};
 
 use crate::common;
-use crate::hostile::{Scratch, forged, refused, run, stderr, sweep_args};
+use crate::hostile::{RIG, Scratch, forged, manifest, measurement_refused, refused, run, run_csv, stderr, sweep_args};
 
 /// A friction law strong enough to hold the block where its frictionless
 /// start puts it, at 20 Hz: every peak lies below `−0.5 A`, outside the
@@ -121,4 +123,109 @@ fn widened_ranges_on_the_command_line() {
     let settings = SweepSettings { realisations: 2, plan: RunPlan { warmup_cycles: 1, measured_cycles: 2 }, seed: 1 };
     let err = run_sweep(&model, &[condition], &settings, common::cpu(), &mut |_, _| {}).unwrap_err();
     assert!(matches!(err, Error::Diverged { .. }), "{err:?}");
+}
+
+/// A set with a summary table `rows` (after the header below).
+fn summary_set(s: &Scratch, name: &str, rows: &str) -> std::path::PathBuf {
+    let dir = s.path(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("manifest.json"),
+        format!(r#"{{ "format": "stickslip-measurements/1", "rig": {RIG}, "summary": "s.csv" }}"#),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.csv"),
+        format!(
+            "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,peak_mean_m,peak_var_m2,\
+             phase_mean_deg,n_peaks\n{rows}"
+        ),
+    )
+    .unwrap();
+    dir
+}
+
+/// A run file `r.csv` whose lines (after the header) are edited by `edit`.
+fn run_set(s: &Scratch, name: &str, edit: impl Fn(usize, &str) -> String) -> std::path::PathBuf {
+    let dir = s.path(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("manifest.json"), manifest("r.csv")).unwrap();
+    let text: String = run_csv().lines().enumerate().map(|(i, l)| edit(i, l) + "\n").collect();
+    std::fs::write(dir.join("r.csv"), text).unwrap();
+    dir
+}
+
+/// Every number read is finite and physically plausible; the refusal names
+/// the file, the line and the column, and a plausible set still reads.
+#[test]
+fn implausible_numbers_are_refused_by_file_line_and_column() {
+    let s = Scratch::new("plausible");
+    let good = "7,0.0025,16.39,0.0038,2.8e-8,45,350\n";
+    read_measurement_set(&summary_set(&s, "good", good)).expect("a plausible summary reads");
+    for (name, row, column) in [
+        ("phase-720", "7,0.0025,16.39,0.0038,2.8e-8,720,350\n", "phase_mean_deg"),
+        ("phase-900", "7,0.0025,16.39,0.0038,2.8e-8,-900,350\n", "phase_mean_deg"),
+        ("phase-360", "7,0.0025,16.39,0.0038,2.8e-8,-360,350\n", "phase_mean_deg"),
+        ("negative-mean", "7,0.0025,16.39,-0.0038,2.8e-8,45,350\n", "peak_mean_m"),
+        ("huge-mean", "7,0.0025,16.39,1e10,2.8e-8,45,350\n", "peak_mean_m"),
+        ("huge-variance", "7,0.0025,16.39,0.0038,1e300,45,350\n", "peak_var_m2"),
+    ] {
+        let err = measurement_refused(&summary_set(&s, name, &format!("{good}{row}")), &["s.csv:3", column]);
+        assert!(err.len() < 300, "{err}");
+    }
+    // The phase range is (−360°, 360°]: 360 and 0 read.
+    read_measurement_set(&summary_set(
+        &s,
+        "phase-edges",
+        "7,0.0025,16.39,0.0038,2.8e-8,360,350\n7,0.0025,10,0.004,2.8e-8,0,350\n",
+    ))
+    .expect("360 and 0 degrees read");
+    // Run files: a displacement scaled by 1e300, a negative measured normal
+    // force, an absurd speed or friction force; the header is line 1.
+    let scaled = run_set(&s, "scaled", |i, l| {
+        if i == 0 {
+            return l.to_string();
+        }
+        let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+        f[1] = format!("{:e}", f[1].parse::<f64>().unwrap() * 1e300);
+        f.join(",")
+    });
+    measurement_refused(&scaled, &["r.csv:2", "column `x`", "10 m"]);
+    let negative = run_set(&s, "negative-force", |i, l| if i == 40 { l.replace(",16,", ",-16,") } else { l.into() });
+    let err = measurement_refused(&negative, &["r.csv:41", "column `normal_force`", "negative"]);
+    assert!(err.contains("-16"), "{err}");
+    let fast = run_set(&s, "fast", |i, l| if i == 7 { l.replace(",16,-1", ",16,-1e9") } else { l.into() });
+    measurement_refused(&fast, &["r.csv:8", "column `friction_force`"]);
+    // The command line refuses the same before any work, writing nothing.
+    let out = s.path("out");
+    refused(
+        &["diagnose", "--backend", "cpu", negative.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        &["r.csv:41", "normal_force"],
+    );
+    assert!(!out.exists());
+}
+
+/// A report never holds a number that is not finite: one with an infinite
+/// or NaN gap is refused before anything is written.
+#[test]
+fn a_report_with_a_number_that_is_not_finite_is_refused() {
+    let text = r#"{ "format": "stickslip-diagnosis/1",
+        "verdict": { "effect": "none", "confidence": 0.5 },
+        "gap": { "metric": "m", "baseline": 1.5, "after": 1.2, "shrink": 0.2, "heldout_shrink": null,
+                 "heldout_baseline": null, "heldout_after": null, "noise_threshold": 0.4 },
+        "locations": [], "candidates": [],
+        "models": { "baseline": "baseline-model.toml", "fitted": "fitted-model.toml" },
+        "source": "set", "elapsed_s": 1.0 }"#;
+    let report: Report = serde_json::from_str(text).unwrap();
+    report.check_numbers().expect("a finite report passes");
+    let mut bad = report.clone();
+    bad.gap.baseline = f64::INFINITY;
+    let err = bad.check_numbers().unwrap_err().to_string();
+    assert!(err.contains("not finite") && err.contains("nothing was written"), "{err}");
+    let mut bad = report.clone();
+    bad.gap.heldout_shrink = Some(f64::NAN);
+    assert!(bad.check_numbers().is_err());
+    let mut bad = report;
+    bad.verdict.confidence = f64::NAN;
+    assert!(bad.check_numbers().is_err());
 }
