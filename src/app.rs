@@ -8,6 +8,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use crate::budget::{Cost, Force};
 use crate::engine::{Condition, Engine, Model, Oscillator};
 use crate::error::Result;
 use crate::io::{OutputSet, owned};
@@ -24,6 +25,8 @@ pub struct SweepRequest {
     /// (`None`: the grid as given).
     pub refine: Option<RefineSettings>,
     pub shard: Shard,
+    /// Whether a run beyond the cost budget ([`crate::budget`]) goes ahead.
+    pub force: Force,
 }
 
 /// A sweep checked, refined and ready to run ([`SweepRequest::prepare`]).
@@ -39,6 +42,7 @@ pub struct PreparedSweep {
     pub shard: Shard,
     /// The grid points this shard runs.
     pub conditions: Vec<Condition>,
+    pub force: Force,
     /// Where the output set is written, prepared before anything ran.
     out: Option<OutputSet>,
 }
@@ -59,7 +63,7 @@ impl SweepRequest {
     /// writes nothing). Then refines the grid, takes this shard's points and
     /// checks the job they make.
     pub fn prepare(self, out: Option<(&Path, &str)>) -> Result<PreparedSweep> {
-        let SweepRequest { model, grid, settings, refine, shard } = self;
+        let SweepRequest { model, grid, settings, refine, shard, force } = self;
         settings.validate()?;
         for c in &grid.conditions() {
             Oscillator::new(&model, *c)?;
@@ -77,15 +81,28 @@ impl SweepRequest {
             let points = sweep::steady_points(&model, &conditions);
             sweep::sweep_job(&model, &points, &settings).validate()?;
         }
-        Ok(PreparedSweep { model, grid, refinement, refine_s, settings, shard, conditions, out })
+        Ok(PreparedSweep { model, grid, refinement, refine_s, settings, shard, conditions, force, out })
     }
 }
 
 impl PreparedSweep {
     /// Runs this shard's points on `engine` and, where an output directory
     /// was prepared, writes the output set there (the figures with Figure 8
-    /// at `plots_at_hz`; none without) and swaps it into place.
+    /// at `plots_at_hz`; none without) and swaps it into place. A run whose
+    /// estimated work is beyond the budget of `engine`'s backend is refused
+    /// first, unless forced.
     pub fn run(self, engine: &Engine, plots_at_hz: Option<f64>, progress: &mut dyn FnMut(u64, u64)) -> Result<Swept> {
+        if !self.conditions.is_empty() {
+            let points = sweep::steady_points(&self.model, &self.conditions);
+            let cost = Cost::of_job(&sweep::sweep_job(&self.model, &points, &self.settings))?;
+            cost.check(
+                engine.kind(),
+                rayon::current_num_threads(),
+                self.force,
+                "sweep",
+                "ask for fewer realisations, cycles or grid points, or a longer noise.interval_s",
+            )?;
+        }
         let started = Instant::now();
         let result = sweep::run_sweep(&self.model, &self.conditions, &self.settings, engine, progress)?;
         let run_s = started.elapsed().as_secs_f64();

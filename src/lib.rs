@@ -12,11 +12,13 @@
 //!   blind benchmark;
 //! - [`io`], [`text`] and [`figure`]: atomic files, quoted text for
 //!   messages and shared drawing helpers;
+//! - [`budget`]: the work a run may take before it needs `--force`;
 //! - [`app`]: what a front end does with a request, which the command line
 //!   and the Python package share;
 //! - [`cli`]: the command line, the only module that uses `anyhow`.
 
 pub mod app;
+pub mod budget;
 pub mod cli;
 pub mod diagnose;
 pub mod engine;

@@ -19,12 +19,13 @@ use pyo3::prelude::*;
 use serde_json::{Value, json};
 
 use stickslip::app::SweepRequest;
-use stickslip::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
+use stickslip::budget::Force;
 use stickslip::diagnose::report::{RunInfo, write_diagnosis_with};
 use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;
 use stickslip::engine::{BackendChoice, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
 use stickslip::io::{self, OutputSet, owned};
+use stickslip::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
 use stickslip::sweep::{self, Grid, RefineSettings, Shard, SweepResult, SweepSettings};
 
 /// A library error as a Python exception: bad input (a model key, a setting,
@@ -264,7 +265,7 @@ fn run_sweep(
     }
     let settings = SweepSettings { realisations, plan: RunPlan { warmup_cycles, measured_cycles: cycles }, seed };
     let refine = refine.then_some(RefineSettings { max_added: refine_max, ..Default::default() });
-    let request = SweepRequest { model, grid, settings, refine, shard: Shard::WHOLE };
+    let request = SweepRequest { model, grid, settings, refine, shard: Shard::WHOLE, force: Force::keyword(false) };
     let prepared = py.detach(|| request.prepare(out.as_deref().map(|dir| (dir, "out")))).map_err(py_err)?;
     let added_hz = prepared.refinement.as_ref().map_or_else(Vec::new, |r| r.added_hz.clone());
     let backend = backend.to_string();

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::{BackendArg, Progress, emit, emit_bytes, open_engine};
+use crate::budget::Cost;
 use crate::diagnose::benchmark::{BenchmarkSettings, Generator, Origins, run_benchmark as run_benchmark_sets};
 use crate::diagnose::report::{RunInfo, write_diagnosis_with};
 use crate::diagnose::synthetic::SetShape;
@@ -152,6 +153,12 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
         ensemble_realisations: args.realisations,
         ..DiagnoseSettings::default()
     };
+    super::check_budget(
+        Cost::of_diagnosis(&set, &settings),
+        &engine,
+        "diagnose",
+        "lower --replicates or --realisations, or give fewer or shorter records",
+    )?;
     let started = Instant::now();
     let progress = Progress::steps("diagnose");
     let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| progress.step(step))?;

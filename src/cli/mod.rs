@@ -59,6 +59,10 @@ struct Global {
     /// kernel on the CPU cores; without it such an adapter is refused.
     #[arg(long, global = true)]
     allow_software_gpu: bool,
+    /// Run a sweep, simulation or diagnosis whose estimated work is beyond the cost budget
+    /// (docs/formats.md); without it such a run is refused before it starts.
+    #[arg(long, global = true)]
+    force: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -255,6 +259,18 @@ fn man_page() -> Result<()> {
     }
     man.render_version_section(&mut out)?;
     emit_bytes(&out)
+}
+
+/// Refuses `cost` beyond the budget of `engine`'s backend unless `--force`
+/// (see [`crate::budget`]).
+pub(crate) fn check_budget(cost: crate::budget::Cost, engine: &Engine, what: &str, lower: &str) -> Result<()> {
+    cost.check(engine.kind(), rayon::current_num_threads(), force(), what, lower)?;
+    Ok(())
+}
+
+/// Whether `--force` was given: a run beyond the cost budget goes ahead.
+pub(crate) fn force() -> crate::budget::Force {
+    crate::budget::Force::flag(global().force)
 }
 
 /// Whether a software adapter may run `--backend gpu`.

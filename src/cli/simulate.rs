@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use super::{ModelArgs, emit};
+use super::{ModelArgs, Progress, emit};
+use crate::budget::Cost;
 use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::engine::{Condition, Engine, Job, Oscillator, Point, Record, RunPlan, Sample};
 use crate::io::{self, OutputSet, owned};
@@ -121,11 +122,19 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
         },
     };
     job.validate()?;
-    let out = OutputSet::prepare(&args.out, "--out", owned::SIMULATION, &[])?;
     let engine = Engine::cpu("simulate runs on the reference");
+    super::check_budget(
+        Cost::of_job(&job)?,
+        &engine,
+        "simulate",
+        "lower --realisations, --duration or --sample-rate, or raise noise.interval_s",
+    )?;
+    let out = OutputSet::prepare(&args.out, "--out", owned::SIMULATION, &[])?;
     super::info(&format!("backend: {}", engine.description()));
     super::info("adapter: none (CPU reference)");
-    let mut records = engine.records(&Job { record: Record::Sums, ..job }, 1.0 / args.sample_rate, args.duration)?;
+    let progress = Progress::bar("simulate");
+    let mut records = engine.run(&job, &mut |done, total| progress.position(done, total))?.records;
+    progress.finish();
     exact_sample_times(&mut records, args.sample_rate);
     let mut runs = Vec::new();
     for (r, samples) in records.iter().enumerate() {

@@ -166,7 +166,7 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     {
         info(&format!("refine: the grid is kept as given ({why})"));
     }
-    let request = SweepRequest { model, grid, settings, refine, shard };
+    let request = SweepRequest { model, grid, settings, refine, shard, force: super::force() };
     let prepared = request.prepare(Some((&args.out, "--out")))?;
     if let Some(r) = &prepared.refinement {
         let added: Vec<String> = r.added_hz.iter().map(|f| fmt_value(*f)).collect();

@@ -2,14 +2,18 @@
 //! bounded cost for every input, output sets that never mix, ambiguity
 //! refused, and messages that name the place and quote nothing raw.
 
+use std::path::Path;
+
 use stickslip::Error;
-use stickslip::measure::read_measurement_set;
 use stickslip::diagnose::report::Report;
 use stickslip::engine::{Condition, Job, Model, PeakRange, Point, Record, RunPlan};
+use stickslip::measure::read_measurement_set;
 use stickslip::sweep::{SweepSettings, merge_shards, read_accumulators, run_sweep};
 
 use crate::common;
-use crate::hostile::{RIG, Scratch, forged, manifest, measurement_refused, refused, run, run_csv, stderr, sweep_args};
+use crate::hostile::{
+    RIG, Scratch, forged, listing, manifest, measurement_refused, refused, run, run_csv, stderr, sweep_args,
+};
 
 /// A friction law strong enough to hold the block where its frictionless
 /// start puts it, at 20 Hz: every peak lies below `−0.5 A`, outside the
@@ -228,4 +232,51 @@ fn a_report_with_a_number_that_is_not_finite_is_refused() {
     let mut bad = report;
     bad.verdict.confidence = f64::NAN;
     assert!(bad.check_numbers().is_err());
+}
+
+/// Work beyond the budget is refused before it starts, saying the estimate
+/// and the limit; `--force` runs it. A noise interval of 1e-9 s is 1.4e8
+/// steps per period at 7 Hz, whatever the run's size.
+#[test]
+fn work_beyond_the_budget_is_refused_unless_forced() {
+    let s = Scratch::new("budget");
+    let out = s.path("out");
+    let out_s = out.to_str().unwrap();
+    let started = std::time::Instant::now();
+    let tiny_noise = ["--set", "noise.interval_s=1e-9", "--no-plots", "--no-refine"];
+    refused(&sweep_args(out_s, &tiny_noise), &["per period", "2097152", "realisation-steps", "--force"]);
+    refused(
+        &["simulate", "--set", "noise.interval_s=1e-9", "--duration", "2", "--warmup-cycles", "1", "--out", out_s],
+        &["simulate", "per period", "--force"],
+    );
+    refused(
+        &sweep_args(out_s, &["--realisations", "100000", "--cycles", "40000", "--no-plots"]),
+        &["estimated", "realisation-steps", "over the limit of 1e11", "--force"],
+    );
+    let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
+    refused(
+        &["diagnose", "--backend", "cpu", figure8.to_str().unwrap(), "--realisations", "1000000", "--out", out_s],
+        &["diagnose", "estimated", "--force"],
+    );
+    assert!(started.elapsed() < std::time::Duration::from_secs(20), "refusals come before any work");
+    assert_eq!(listing(&s.0), Vec::<String>::new(), "a refused run writes nothing");
+    // --force runs what the budget refuses (here two periods of one
+    // realisation at 100 Hz with 1e7 noise intervals each: a second or two).
+    let forced = [
+        "--set",
+        "noise.interval_s=1e-9",
+        "--frequencies",
+        "100",
+        "--realisations",
+        "1",
+        "--cycles",
+        "1",
+        "--no-plots",
+        "--no-refine",
+    ];
+    refused(&sweep_args(out_s, &forced), &["per period"]);
+    let mut args = sweep_args(out_s, &forced);
+    args.push("--force");
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
