@@ -153,7 +153,7 @@ impl Cost {
             ),
             BackendKind::Gpu => String::new(),
         };
-        let problem = if !(self.steps_per_period <= MAX_STEPS_PER_PERIOD) {
+        let problem = if self.steps_per_period.is_nan() || self.steps_per_period > MAX_STEPS_PER_PERIOD {
             format!(
                 "one excitation period of one realisation takes {} integration steps (noise intervals and samples \
                  each split a step), over the limit of {} per period; {:.2e} realisation-steps in all{time}",
@@ -161,7 +161,7 @@ impl Cost {
                 fmt_value(MAX_STEPS_PER_PERIOD),
                 self.steps
             )
-        } else if !(self.steps <= limit) {
+        } else if self.steps.is_nan() || self.steps > limit {
             format!(
                 "it would take an estimated {:.2e} realisation-steps{time}, over the limit of {limit:e} on {on}",
                 self.steps
