@@ -12,7 +12,7 @@ use stickslip::sweep::{SweepSettings, merge_shards, read_accumulators, run_sweep
 
 use crate::common;
 use crate::hostile::{
-    RIG, Scratch, forged, listing, manifest, measurement_refused, refused, run, run_csv, stderr, sweep_args,
+    RIG, Scratch, forged, listing, manifest, measurement_refused, refused, run, run_csv, snapshot, stderr, sweep_args,
 };
 
 /// A friction law strong enough to hold the block where its frictionless
@@ -279,4 +279,52 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
     args.push("--force");
     let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `plot A --out B` writes only into a new or empty directory or one that
+/// holds figures of the same kind and source, never beside another run's
+/// set; redrawn in place, the whole set is swapped in with its data as it
+/// was, under the same lock and atomic rules as `sweep`.
+#[test]
+fn plot_outputs_stay_one_runs() {
+    let s = Scratch::new("plot");
+    let (a, b) = (s.path("a"), s.path("b"));
+    let (a_s, b_s) = (a.to_str().unwrap(), b.to_str().unwrap());
+    for (dir, seed) in [(a_s, "1"), (b_s, "2")] {
+        let o = run(&sweep_args(dir, &["--no-plots", "--seed", seed]));
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    // Into another sweep's set, or a diagnosis's: refused, nothing changes.
+    let before = snapshot(&b);
+    refused(&["plot", a_s, "--out", b_s], &["--out", "does not write"]);
+    assert_eq!(snapshot(&b), before);
+    s.write("diagnosis/report.json", "{}");
+    let diagnosis = s.path("diagnosis");
+    refused(&["plot", a_s, "--out", diagnosis.to_str().unwrap()], &["--out", "report.json"]);
+    assert_eq!(listing(&diagnosis), ["report.json"]);
+    // A directory of its own, redrawn from the same source; another source is refused.
+    let figs = s.path("figs");
+    let figs_s = figs.to_str().unwrap();
+    for _ in 0..2 {
+        let o = run(&["plot", a_s, "--out", figs_s]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert!(listing(&figs).contains(&"plot.json".to_string()) && listing(&figs).contains(&"fig8.png".to_string()));
+    let drawn = snapshot(&figs);
+    refused(&["plot", b_s, "--out", figs_s], &["--out", "figures of the sweep", "same kind and source"]);
+    assert_eq!(snapshot(&figs), drawn);
+    // Loose figures that no plot.json attributes are not replaced.
+    s.write("loose/fig8.png", "not ours");
+    refused(&["plot", a_s, "--out", s.path("loose").to_str().unwrap()], &["--out", "plot.json"]);
+    refused(&["plot", a_s, "--out", &format!("{a_s}/sub")], &["--out", "inside"]);
+    // In place: the data stay as they were, the figures join them.
+    let data = snapshot(&a);
+    let o = run(&["plot", a_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = snapshot(&a);
+    for (name, bytes) in &data {
+        assert!(after.contains(&(name.clone(), bytes.clone())), "{name} changed");
+    }
+    assert!(listing(&a).contains(&"fig9a.svg".to_string()));
+    assert_eq!(listing(&s.0), ["a", "b", "diagnosis", "figs", "loose"], "no temporaries or locks are left");
 }

@@ -6,7 +6,8 @@
 //!   ([`MAX_MODEL_FILE_BYTES`], [`MAX_MANIFEST_BYTES`], [`MAX_TABLE_FILE_BYTES`],
 //!   [`MAX_ACCUMULATOR_BYTES`]). Messages quote file content only through
 //!   [`crate::text::excerpt`]: short, with control and bidirectional
-//!   characters escaped.
+//!   characters escaped. JSON is parsed with [`parse_json`], which refuses
+//!   a key given twice.
 //! - **Files.** [`write_atomically`] writes a file under a temporary name
 //!   beside its destination and renames it into place.
 //! - **Output sets.** [`OutputSet`] builds a command's whole output set in a
@@ -22,8 +23,11 @@ use std::path::{Component, Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+mod json;
+
 use crate::error::{Error, Result};
 use crate::text::{excerpt, shown};
+pub use json::parse_json;
 
 /// Largest model file (`--config`), bytes: 1 MiB.
 pub const MAX_MODEL_FILE_BYTES: u64 = 1 << 20;
@@ -235,6 +239,24 @@ pub mod owned {
     ];
     /// `simulate`.
     pub const SIMULATION: &[&str] = &["manifest.json", "model.toml", "run-*.csv"];
+    /// `plot`: the figures it draws, of a sweep and of a diagnosis, and,
+    /// in a directory of their own (`--out`), the `plot.json` that names
+    /// their kind and source.
+    pub const PLOT: &[&str] = &[
+        "plot.json",
+        "fig9a.png",
+        "fig9a.svg",
+        "fig9b.png",
+        "fig9b.svg",
+        "fig9c.png",
+        "fig9c.svg",
+        "fig8.png",
+        "fig8.svg",
+        "gap.png",
+        "gap.svg",
+        "comparison.png",
+        "comparison.svg",
+    ];
 }
 
 fn matches_pattern(pattern: &str, name: &str) -> bool {
@@ -441,6 +463,35 @@ impl OutputSet {
     /// The destination as given.
     pub fn dest(&self) -> &Path {
         &self.dest
+    }
+
+    /// Puts into the set being built every regular file of the destination
+    /// that matches none of `except` (hard-linked where the file system
+    /// allows, else copied): for a command that redraws part of a set in
+    /// place (`plot`), which still swaps in a whole set. Nothing for a
+    /// nested set, which is the destination itself.
+    pub fn carry_over(&self, except: &[&str]) -> Result<()> {
+        if self.staging == self.target {
+            return Ok(());
+        }
+        let entries = match std::fs::read_dir(&self.target) {
+            Ok(entries) => entries,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => return Err(Error::io(&self.target, e)),
+        };
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io(&self.target, e))?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let regular = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
+            if !regular || name.starts_with('.') || except.iter().any(|p| matches_pattern(p, &name)) {
+                continue;
+            }
+            let to = self.staging.join(entry.file_name());
+            if std::fs::hard_link(entry.path(), &to).is_err() {
+                std::fs::copy(entry.path(), &to).map_err(|e| Error::io(entry.path(), e))?;
+            }
+        }
+        Ok(())
     }
 
     /// Refuses a destination whose entries are not all files this command
