@@ -95,7 +95,26 @@ fn grid_values(flag: &str, text: &str, check: fn(f64) -> Option<String>) -> Resu
             anyhow::bail!("invalid {flag}: `{}`: {problem}", fmt_value(v));
         }
     }
-    Ok(values)
+    // A value given twice is one grid point: it runs once, and that is said.
+    let mut unique: Vec<f64> = Vec::with_capacity(values.len());
+    let mut repeated: Vec<String> = Vec::new();
+    for v in values {
+        if unique.contains(&v) {
+            if !repeated.contains(&fmt_value(v)) {
+                repeated.push(fmt_value(v));
+            }
+        } else {
+            unique.push(v);
+        }
+    }
+    if !repeated.is_empty() {
+        info(&format!(
+            "note: {flag} gives {} more than once; each value runs once ({} distinct)",
+            repeated.join(", "),
+            unique.len()
+        ));
+    }
+    Ok(unique)
 }
 
 /// The run settings' limits, blamed on their flags (the engine checks the

@@ -123,7 +123,7 @@ impl ChartData {
         let report_path = dir.join("report.json");
         let report: serde_json::Value = crate::io::read_bounded(&report_path, 256 << 20)
             .ok()
-            .and_then(|b| serde_json::from_slice(&b).ok())
+            .and_then(|b| crate::io::parse_json(&b).ok())
             .unwrap_or_default();
         let verdict = report
             .pointer("/verdict/effects")

@@ -473,5 +473,24 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
     if rows.is_empty() {
         return Err(bad(path, None, "the summary table has a header but no rows"));
     }
+    // A condition is given once: two rows of it would be two answers to one question.
+    let condition = |r: &SummaryRow| (r.excitation_frequency_hz, r.excitation_amplitude_m, r.normal_force_mean_n);
+    for (k, row) in rows.iter().enumerate() {
+        if let Some(first) = rows[..k].iter().find(|r| condition(r) == condition(row)) {
+            let same = SummaryRow { line: first.line, ..*row } == *first;
+            return Err(bad(
+                path,
+                Some(row.line),
+                format!(
+                    "the condition {} Hz, {} m, {} N is also on line {}{}; give each condition once",
+                    fmt_value(row.excitation_frequency_hz),
+                    fmt_value(row.excitation_amplitude_m),
+                    fmt_value(row.normal_force_mean_n),
+                    first.line,
+                    if same { " (with the same values)" } else { ", with different values" }
+                ),
+            ));
+        }
+    }
     Ok(rows)
 }

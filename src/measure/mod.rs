@@ -56,7 +56,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::engine::Sample;
-use crate::engine::model::limits;
+use crate::engine::model::{fmt_value, limits};
 use crate::error::Result;
 use crate::{io, text};
 use json::{Bound, Json, bad, kind};
@@ -245,7 +245,7 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
     let mut budget = io::MAX_SET_BYTES;
     let bytes =
         read_inside(&root, dir, "manifest.json", &manifest_path, "the manifest", io::MAX_MANIFEST_BYTES, &mut budget)?;
-    let root_value: Value = serde_json::from_slice(io::strip_bom(&bytes)).map_err(|e| {
+    let root_value: Value = io::parse_json(io::strip_bom(&bytes)).map_err(|e| {
         let line = (e.line() > 0).then_some(e.line() as u64);
         bad(&manifest_path, line, format!("not valid JSON: {}", text::excerpt(&e.to_string(), 160)))
     })?;
@@ -336,6 +336,31 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
         let force = manifest.number(obj, &ctx, "normal_force_n", Bound::within(0.0, limits::FORCE_MAX_N), "N")?;
         let free = time_origin(obj.get("time_origin"), &format!("{ctx}.time_origin"), &manifest_path)?;
         entries.push((file, frequency, amplitude, force, free || set_origin));
+    }
+
+    // One file is one record: listed twice, it would be one record counted
+    // twice, or one record of two conditions.
+    let mut resolved: Vec<PathBuf> = Vec::with_capacity(entries.len());
+    for (i, (file, frequency, _, force, _)) in entries.iter().enumerate() {
+        let io::Confined::Inside(path) = io::confine(&root, file) else { continue };
+        if let Some(j) = resolved.iter().position(|p| *p == path) {
+            let (other, other_frequency, _, other_force, _) = &entries[j];
+            return Err(bad(
+                &manifest_path,
+                None,
+                format!(
+                    "runs[{i}].file `{}` ({} Hz, {} N) is the same file as runs[{j}].file `{}` ({} Hz, {} N): \
+                     one record is one run; list each file once",
+                    crate::text::excerpt(file, 120),
+                    fmt_value(*frequency),
+                    fmt_value(*force),
+                    crate::text::excerpt(other, 120),
+                    fmt_value(*other_frequency),
+                    fmt_value(*other_force)
+                ),
+            ));
+        }
+        resolved.push(path);
     }
 
     let mut runs = Vec::with_capacity(entries.len());

@@ -225,7 +225,7 @@ pub fn read_accumulators(dir: &Path) -> Result<(AccumulatorFile, SweepResult)> {
     let bytes = crate::io::read_bounded(&path, crate::io::MAX_ACCUMULATOR_BYTES)
         .map_err(|e| refuse(None, format!("cannot read it: {e}")))?;
     // The format first, so an older or foreign file is named as such.
-    let value: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| {
+    let value: serde_json::Value = crate::io::parse_json(&bytes).map_err(|e| {
         refuse(
             (e.line() > 0).then_some(e.line() as u64),
             format!("not a complete accumulator file (truncated or edited?): {}", excerpt(&e.to_string(), 160)),

@@ -328,3 +328,80 @@ fn plot_outputs_stay_one_runs() {
     assert!(listing(&a).contains(&"fig9a.svg".to_string()));
     assert_eq!(listing(&s.0), ["a", "b", "diagnosis", "figs", "loose"], "no temporaries or locks are left");
 }
+
+/// Ambiguous input is refused by name: one file as two runs, one condition
+/// twice in a summary, a JSON key twice; a grid value given twice runs once
+/// and that is said.
+#[test]
+fn ambiguity_is_refused_or_said() {
+    let s = Scratch::new("ambiguity");
+    // One run file listed as two conditions, directly or through a link.
+    let two = |name: &str, second: &str| {
+        let dir = s.path(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("r.csv"), run_csv()).unwrap();
+        let entry = |file: &str, f: f64, n: f64| {
+            format!(
+                r#"{{ "file": "{file}", "excitation_frequency_hz": {f}, "excitation_amplitude_m": 0.0025, "normal_force_n": {n} }}"#
+            )
+        };
+        std::fs::write(
+            dir.join("manifest.json"),
+            format!(
+                r#"{{ "format": "stickslip-measurements/1", "rig": {RIG}, "runs": [ {}, {} ] }}"#,
+                entry("r.csv", 7.0, 16.39),
+                entry(second, 9.0, 4.0)
+            ),
+        )
+        .unwrap();
+        dir
+    };
+    measurement_refused(
+        &two("twice", "r.csv"),
+        &["manifest.json", "runs[1].file", "runs[0].file", "9 Hz, 4 N", "7 Hz, 16.39 N"],
+    );
+    let linked = two("linked", "alias.csv");
+    std::os::unix::fs::symlink(linked.join("r.csv"), linked.join("alias.csv")).unwrap();
+    measurement_refused(&linked, &["runs[1].file `alias.csv`", "same file"]);
+    // One condition twice in a summary, with different values or the same.
+    let row = "7,0.0025,16.39,0.0038,2.8e-8,45,350\n";
+    measurement_refused(
+        &summary_set(&s, "differ", &format!("{row}7,0.0025,16.39,0.0041,2.8e-8,45,350\n")),
+        &["s.csv:3", "also on line 2", "different values"],
+    );
+    measurement_refused(
+        &summary_set(&s, "same", &format!("{row}7,0.0025,10,0.004,2.8e-8,45,350\n{row}")),
+        &["s.csv:4", "also on line 2", "same values"],
+    );
+    // A JSON key given twice: the manifest's, and in accumulators.json even
+    // with the same value (the digest cannot see it).
+    let dir = s.path("keys");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("r.csv"), run_csv()).unwrap();
+    std::fs::write(
+        dir.join("manifest.json"),
+        manifest("r.csv").replace(r#""mass_kg": 1.028"#, r#""mass_kg": -5.0, "mass_kg": 1.028"#),
+    )
+    .unwrap();
+    measurement_refused(&dir, &["manifest.json:1", "`mass_kg` appears twice"]);
+    let (a, b) = crate::hostile::honest_shards(&s);
+    let text = std::fs::read_to_string(b.join("accumulators.json")).unwrap();
+    let twice = s.path("twice-key");
+    std::fs::create_dir_all(&twice).unwrap();
+    std::fs::write(twice.join("accumulators.json"), text.replacen(r#""seed":3"#, r#""seed":3,"seed":3"#, 1)).unwrap();
+    let err = merge_shards(&[a, twice]).unwrap_err().to_string();
+    assert!(err.contains("twice-key/accumulators.json") && err.contains("`seed` appears twice"), "{err}");
+    // Grid values given twice run once, and that is said.
+    let out = s.path("grid");
+    let o = run(&sweep_args(out.to_str().unwrap(), &["--frequencies", "7,7", "--no-plots", "--no-refine"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--frequencies gives 7 more than once"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(out.join("sweep.csv")).unwrap().lines().count(), 2, "one row for 7 Hz");
+    let o =
+        run(&sweep_args(out.to_str().unwrap(), &["--frequencies", "5:5:3", "--normal-forces", "4,4", "--no-plots"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--frequencies gives 5 more than once") && stderr(&o).contains("--normal-forces gives 4")
+    );
+    assert_eq!(std::fs::read_to_string(out.join("sweep.csv")).unwrap().lines().count(), 2, "one row for 5 Hz, 4 N");
+}
