@@ -218,16 +218,20 @@ pub(crate) fn emit_bytes(bytes: &[u8]) -> Result<()> {
     }
 }
 
-/// One line of the command's result on stdout (see [`emit_bytes`]).
+/// One line of the command's result on stdout (see [`emit_bytes`]), its
+/// control characters escaped (a path given on the command line may hold
+/// any).
 pub(crate) fn emit(line: &str) -> Result<()> {
-    emit_bytes(format!("{line}\n").as_bytes())
+    emit_bytes(format!("{}\n", crate::text::excerpt(line, usize::MAX)).as_bytes())
 }
 
 /// A line on stderr, whatever became of it: a closed stderr loses the line
-/// and nothing else (`eprintln!` would panic).
+/// and nothing else (`eprintln!` would panic). Control characters (a
+/// terminal escape from a flag's value, say) are written escaped, whatever
+/// the line quotes.
 pub(crate) fn note(line: &str) {
     use std::io::Write;
-    let _ = writeln!(std::io::stderr().lock(), "{line}");
+    let _ = writeln!(std::io::stderr().lock(), "{}", crate::text::excerpt(line, usize::MAX));
 }
 
 /// The man page: the top-level page with every visible subcommand's flags

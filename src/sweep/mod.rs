@@ -10,6 +10,7 @@ pub mod shard;
 
 use crate::engine::{Condition, Engine, Job, Model, Point, PointAccumulator, PointStats, Record, RunPlan};
 use crate::error::{Error, Result};
+use crate::text::excerpt;
 
 pub use output::{SWEEP_COLUMNS, write_accumulators, write_histograms_csv, write_output_set, write_sweep_csv};
 pub use refine::{RefineSettings, Refinement, not_refinable, refine_frequencies};
@@ -17,10 +18,11 @@ pub use shard::{ACCUMULATOR_FORMAT, AccumulatorFile, RunIdentity, Shard, merge_s
 
 /// Parses a grid flag: a comma list (`6,7,8`) or `START:STOP:COUNT`.
 pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
-    let bad = |message: String| Error::setting(flag, format!("`{text}`: {message}"));
+    let bad = |message: String| Error::setting(flag, format!("`{}`: {message}", excerpt(text, 60)));
     let number = |s: &str| -> Result<f64> {
-        let v: f64 = s.trim().parse().map_err(|_| bad(format!("`{}` is not a number", s.trim())))?;
-        if v.is_finite() { Ok(v) } else { Err(bad(format!("`{}` is not finite", s.trim()))) }
+        let shown = excerpt(s.trim(), 30);
+        let v: f64 = s.trim().parse().map_err(|_| bad(format!("`{shown}` is not a number")))?;
+        if v.is_finite() { Ok(v) } else { Err(bad(format!("`{shown}` is not finite"))) }
     };
     let values = if text.contains(':') {
         let parts: Vec<&str> = text.split(':').collect();
@@ -28,8 +30,10 @@ pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
             return Err(bad("expected START:STOP:COUNT".into()));
         }
         let (start, stop) = (number(parts[0])?, number(parts[1])?);
-        let count: usize =
-            parts[2].trim().parse().map_err(|_| bad(format!("COUNT `{}` is not a whole number", parts[2])))?;
+        let count: usize = parts[2]
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("COUNT `{}` is not a whole number", excerpt(parts[2], 30))))?;
         match count {
             0 => return Err(bad("COUNT must be at least 1".into())),
             1 if start != stop => return Err(bad("COUNT 1 needs START = STOP".into())),
@@ -177,5 +181,7 @@ mod tests {
         assert_eq!(parse_list("--frequencies", "5:15:3").unwrap(), vec![5.0, 10.0, 15.0]);
         assert!(parse_list("--frequencies", "5:15").unwrap_err().to_string().contains("--frequencies"));
         assert!(parse_list("--normal-forces", "4,x").unwrap_err().to_string().contains("`x`"));
+        let escaped = parse_list("--frequencies", "7\u{1b}[2J").unwrap_err().to_string();
+        assert!(!escaped.contains('\u{1b}') && escaped.contains("\\u{1b}[2J"), "{escaped}");
     }
 }

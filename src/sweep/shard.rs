@@ -49,7 +49,7 @@ impl Shard {
 
     /// Parses `K/N` (zero-based `K < N`).
     pub fn parse(text: &str) -> Result<Shard> {
-        let bad = |m: &str| Error::setting("--shard", format!("`{text}`: {m}"));
+        let bad = |m: &str| Error::setting("--shard", format!("`{}`: {m}", excerpt(text, 30)));
         let (k, n) = text.split_once('/').ok_or_else(|| bad("expected K/N, e.g. 0/4"))?;
         let index: u32 = k.trim().parse().map_err(|_| bad("K is not a whole number"))?;
         let count: u32 = n.trim().parse().map_err(|_| bad("N is not a whole number"))?;

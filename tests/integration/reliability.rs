@@ -405,3 +405,30 @@ fn ambiguity_is_refused_or_said() {
     );
     assert_eq!(std::fs::read_to_string(out.join("sweep.csv")).unwrap().lines().count(), 2, "one row for 5 Hz, 4 N");
 }
+
+/// No control character reaches the terminal raw: a flag's value, a path
+/// or a key holding a terminal escape is quoted escaped, on stderr and on
+/// stdout alike.
+#[test]
+fn control_characters_are_escaped_in_every_message() {
+    let s = Scratch::new("escapes");
+    let out = s.path("out");
+    let out_s = out.to_str().unwrap();
+    for (flag, value, names) in [
+        ("--frequencies", "7\u{1b}[2J", "--frequencies"),
+        ("--normal-forces", "4,\u{1b}]0;owned\u{7}", "--normal-forces"),
+        ("--shard", "1\u{1b}[31m/2", "--shard"),
+        ("--set", "friction.\u{1b}[31ma=1", "friction."),
+        ("--set", "friction.a=\u{1b}[31m", "friction.a"),
+        ("--config", "/nonexistent/\u{1b}[2J.toml", "/nonexistent/"),
+    ] {
+        let err = refused(&sweep_args(out_s, &[flag, value]), &[names]);
+        assert!(!err.contains('\u{1b}') && !err.contains('\u{7}'), "{flag} {value:?}: {err:?}");
+        assert!(err.contains("\\u{1b}") || err.contains("\\u001B"), "{flag}: the escape is shown escaped: {err:?}");
+    }
+    let odd = s.path("o\u{1b}[2J");
+    let o = run(&sweep_args(odd.to_str().unwrap(), &["--no-plots"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(!stdout.contains('\u{1b}') && stdout.contains("o\\u{1b}[2J"), "{stdout:?}");
+}
