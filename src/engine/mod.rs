@@ -411,9 +411,10 @@ impl Engine {
                     return Err(Error::NoGpu(format!(
                         "the only GPU adapter is the software {}, which runs the kernel on the CPU cores; pass \
                          --allow-software-gpu (allow_software_gpu=True in Python) to use it anyway, or --backend cpu \
-                         for the f64 reference (faster on the same cores); on a GPU node, the GPU's Vulkan driver \
-                         (ICD) is missing",
-                        ctx.describe()
+                         for the f64 reference (faster on the same cores){}",
+                        ctx.describe(),
+                        gpu::context::driver_hint()
+                            .unwrap_or_else(|| "; on a GPU node, the GPU's Vulkan driver (ICD) is missing".into())
                     )));
                 }
                 Ok(Engine::gpu(ctx, options))
@@ -428,8 +429,9 @@ impl Engine {
                     }
                     gpu::AdapterClass::Software => Ok(Engine::cpu(&format!(
                         "no hardware GPU; the only adapter is the software {}, which is slower than this \
-                         integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway)",
-                        ctx.describe()
+                         integrator on the same cores (--backend gpu --allow-software-gpu runs on it anyway){}",
+                        ctx.describe(),
+                        gpu::context::driver_hint().unwrap_or_default()
                     ))),
                 },
                 Err(e) => Ok(Engine::cpu(&format!("no GPU adapter ({e})"))),

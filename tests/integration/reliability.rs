@@ -432,3 +432,22 @@ fn control_characters_are_escaped_in_every_message() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(!stdout.contains('\u{1b}') && stdout.contains("o\\u{1b}[2J"), "{stdout:?}");
 }
+
+/// A machine with a GPU whose Vulkan driver did not load is told what to
+/// check (the ICD file, VK_ICD_FILENAMES, the loader, vulkaninfo); a
+/// machine without one (or with only a virtual display) is not.
+#[test]
+fn a_gpu_whose_driver_did_not_load_says_what_to_check() {
+    use stickslip::engine::gpu::context::driver_hint_in;
+    let s = Scratch::new("gpu-hint");
+    assert_eq!(driver_hint_in(&s.0), None);
+    s.write("sys/class/drm/card0/device/vendor", "0x1af4\n");
+    assert_eq!(driver_hint_in(&s.0), None, "a virtio display is not a GPU");
+    s.write("sys/class/drm/card1/device/vendor", "0x1002\n");
+    assert!(driver_hint_in(&s.0).unwrap().contains("an AMD GPU"));
+    s.write("proc/driver/nvidia/version", "NVRM version: NVIDIA UNIX x86_64 Kernel Module  550.54.14\n");
+    let hint = driver_hint_in(&s.0).unwrap();
+    for needle in ["NVIDIA", "550.54.14", "icd.d", "VK_ICD_FILENAMES", "libvulkan1", "vulkaninfo", "nvidia-smi"] {
+        assert!(hint.contains(needle), "the hint lacks `{needle}`: {hint}");
+    }
+}

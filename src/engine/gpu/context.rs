@@ -131,6 +131,44 @@ impl Kernels {
     }
 }
 
+/// When the machine has a GPU (an NVIDIA driver in `/proc/driver/nvidia`
+/// or `/dev/nvidia0`, or an AMD or Intel card in `/sys/class/drm`) but
+/// Vulkan offered no hardware adapter: what to check, as a clause to append
+/// to the message that says so. `None` on a machine without a GPU.
+pub fn driver_hint() -> Option<String> {
+    driver_hint_in(std::path::Path::new("/"))
+}
+
+/// [`driver_hint`] with `/proc`, `/dev` and `/sys` looked up under `root`.
+pub fn driver_hint_in(root: &std::path::Path) -> Option<String> {
+    let nvidia = std::fs::read_to_string(root.join("proc/driver/nvidia/version"))
+        .ok()
+        .and_then(|v| v.lines().next().map(|l| crate::text::excerpt(l.trim(), 120)))
+        .or_else(|| root.join("dev/nvidia0").exists().then(|| "/dev/nvidia0".to_string()));
+    let card = || {
+        std::fs::read_dir(root.join("sys/class/drm")).ok()?.flatten().find_map(|e| {
+            let vendor = std::fs::read_to_string(e.path().join("device/vendor")).ok()?;
+            match vendor.trim() {
+                "0x1002" => Some("an AMD GPU"),
+                "0x8086" => Some("an Intel GPU"),
+                "0x10de" => Some("an NVIDIA GPU"),
+                _ => None,
+            }
+        })
+    };
+    let present = match nvidia {
+        Some(driver) => format!("an NVIDIA GPU ({driver})"),
+        None => card()?.to_string(),
+    };
+    Some(format!(
+        "; but this machine has {present}: its Vulkan driver did not load. Check that its ICD file exists \
+         (/usr/share/vulkan/icd.d/ or /etc/vulkan/icd.d/, e.g. nvidia_icd.json) and names a library that loads, \
+         that VK_ICD_FILENAMES or VK_DRIVER_FILES, if set, point at it, that the Vulkan loader (libvulkan1) is \
+         recent enough for the driver (`nvidia-smi` shows the driver's version), and what `vulkaninfo --summary` \
+         lists"
+    ))
+}
+
 /// What kind of adapter a context runs on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AdapterClass {
@@ -174,11 +212,12 @@ impl GpuContext {
         adapters.retain(|a| a.get_info().backend != wgpu::Backend::Noop && (allow_software || rank(a) < 3));
         adapters.sort_by_key(|a| rank(a));
         let adapter = adapters.into_iter().next().ok_or_else(|| {
-            Error::NoGpu(if allow_software {
-                "no Vulkan, Metal or DX12 adapter found (install Mesa's lavapipe, package mesa-vulkan-drivers, for a software one)".into()
+            let found = if allow_software {
+                "no Vulkan, Metal or DX12 adapter found (install Mesa's lavapipe, package mesa-vulkan-drivers, for a software one)"
             } else {
-                "no hardware GPU adapter found".into()
-            })
+                "no hardware GPU adapter found"
+            };
+            Error::NoGpu(format!("{found}{}", driver_hint().unwrap_or_default()))
         })?;
         let adapter_info = adapter.get_info();
         let (device, queue) = adapter
