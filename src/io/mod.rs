@@ -242,21 +242,8 @@ pub mod owned {
     /// `plot`: the figures it draws, of a sweep and of a diagnosis, and,
     /// in a directory of their own (`--out`), the `plot.json` that names
     /// their kind and source.
-    pub const PLOT: &[&str] = &[
-        "plot.json",
-        "fig9a.png",
-        "fig9a.svg",
-        "fig9b.png",
-        "fig9b.svg",
-        "fig9c.png",
-        "fig9c.svg",
-        "fig8.png",
-        "fig8.svg",
-        "gap.png",
-        "gap.svg",
-        "comparison.png",
-        "comparison.svg",
-    ];
+    pub const PLOT: &[&str] =
+        &["plot.json", "fig*.png", "fig*.svg", "gap.png", "gap.svg", "comparison.png", "comparison.svg"];
 }
 
 fn matches_pattern(pattern: &str, name: &str) -> bool {

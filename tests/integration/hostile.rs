@@ -445,18 +445,24 @@ fn absurd_diagnosis_settings() {
     std::fs::write(set.join("r.csv"), slow).unwrap();
     std::fs::write(set.join("manifest.json"), manifest("r.csv")).unwrap();
     measurement_refused(&set, &["r.csv", "Nyquist"]);
+    write_summary_set(
+        &set,
+        "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,peak_mean_m,peak_var_m2,n_peaks\n\
+         7,0.0025,16.39,0.0038,2.8e-8,0\n",
+    );
+    measurement_refused(&set, &["s.csv:2", "n_peaks"]);
+}
+
+/// Makes `dir` a measurement set whose manifest names the summary table
+/// `s.csv`, holding `table` (its header and rows).
+pub(crate) fn write_summary_set(dir: &Path, table: &str) {
+    std::fs::create_dir_all(dir).unwrap();
     std::fs::write(
-        set.join("manifest.json"),
+        dir.join("manifest.json"),
         format!(r#"{{ "format": "stickslip-measurements/1", "rig": {RIG}, "summary": "s.csv" }}"#),
     )
     .unwrap();
-    std::fs::write(
-        set.join("s.csv"),
-        "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,peak_mean_m,peak_var_m2,n_peaks\n\
-         7,0.0025,16.39,0.0038,2.8e-8,0\n",
-    )
-    .unwrap();
-    measurement_refused(&set, &["s.csv:2", "n_peaks"]);
+    std::fs::write(dir.join("s.csv"), table).unwrap();
 }
 
 /// A small CPU sweep into `out`; a flag in `extra` replaces the default.

@@ -13,6 +13,7 @@ use stickslip::sweep::{SweepSettings, merge_shards, read_accumulators, run_sweep
 use crate::common;
 use crate::hostile::{
     RIG, Scratch, forged, listing, manifest, measurement_refused, refused, run, run_csv, snapshot, stderr, sweep_args,
+    write_summary_set,
 };
 
 /// A friction law strong enough to hold the block where its frictionless
@@ -132,20 +133,13 @@ fn widened_ranges_on_the_command_line() {
 /// A set with a summary table `rows` (after the header below).
 fn summary_set(s: &Scratch, name: &str, rows: &str) -> std::path::PathBuf {
     let dir = s.path(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("manifest.json"),
-        format!(r#"{{ "format": "stickslip-measurements/1", "rig": {RIG}, "summary": "s.csv" }}"#),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("s.csv"),
-        format!(
+    write_summary_set(
+        &dir,
+        &format!(
             "excitation_frequency_hz,excitation_amplitude_m,normal_force_mean_n,peak_mean_m,peak_var_m2,\
              phase_mean_deg,n_peaks\n{rows}"
         ),
-    )
-    .unwrap();
+    );
     dir
 }
 
