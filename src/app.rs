@@ -9,7 +9,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::budget::{Cost, Force};
-use crate::engine::{Condition, Engine, Model, Oscillator};
+use crate::engine::{BackendKind, Condition, Engine, Job, Model, Oscillator, Record, RunPlan};
 use crate::error::Result;
 use crate::io::{OutputSet, owned};
 use crate::sweep::{self, Grid, RefineSettings, Refinement, RunIdentity, Shard, SweepResult, SweepSettings};
@@ -61,7 +61,9 @@ impl SweepRequest {
     /// written: the run settings, every grid point's model, and the output
     /// directory `out` (`(directory, the flag or argument naming it)`; `None`
     /// writes nothing). Then refines the grid, takes this shard's points and
-    /// checks the job they make.
+    /// checks the job they make. The refinement's pilot is checked against
+    /// the cost budget before it runs (the run itself in
+    /// [`PreparedSweep::run`], once the backend is known).
     pub fn prepare(self, out: Option<(&Path, &str)>) -> Result<PreparedSweep> {
         let SweepRequest { model, grid, settings, refine, shard, force } = self;
         settings.validate()?;
@@ -72,6 +74,18 @@ impl SweepRequest {
             Some((dir, flag)) => Some(OutputSet::prepare(dir, flag, owned::SWEEP, &[])?),
             None => None,
         };
+        if refine.is_some() && sweep::not_refinable(&grid.frequencies_hz).is_none() {
+            pilot_cost(&model, &grid, settings.plan.warmup_cycles)?.check(
+                BackendKind::Cpu,
+                rayon::current_num_threads(),
+                force,
+                "sweep's refinement",
+                &format!(
+                    "ask for fewer warm-up cycles or grid points, or pass {}",
+                    force.spelled("--no-refine", "refine=False")
+                ),
+            )?;
+        }
         let started = Instant::now();
         let (grid, refinement) = sweep::refined_grid(&model, grid, settings.plan.warmup_cycles, refine)?;
         let refine_s = started.elapsed().as_secs_f64();
@@ -83,6 +97,27 @@ impl SweepRequest {
         }
         Ok(PreparedSweep { model, grid, refinement, refine_s, settings, shard, conditions, force, out })
     }
+}
+
+/// An upper estimate of the refinement's pilot: it runs on the CPU, noise
+/// free, one path per point with `warmup_cycles` and
+/// [`sweep::refine::PILOT_CYCLES`] periods, at up to twice the grid's
+/// frequencies (counted here as two realisations per point).
+fn pilot_cost(model: &Model, grid: &Grid, warmup_cycles: u32) -> Result<Cost> {
+    let mut pilot = model.clone();
+    pilot.friction.sigma = 0.0;
+    pilot.normal_force.sigma = 0.0;
+    let points = sweep::steady_points(&pilot, &grid.conditions());
+    let plan = RunPlan { warmup_cycles, measured_cycles: sweep::refine::PILOT_CYCLES };
+    Cost::of_job(&Job {
+        model: &pilot,
+        points: &points,
+        realisations: 2,
+        first_realisation: 0,
+        seed: 1,
+        plan,
+        record: Record::Sums,
+    })
 }
 
 impl PreparedSweep {
@@ -100,7 +135,11 @@ impl PreparedSweep {
                 rayon::current_num_threads(),
                 self.force,
                 "sweep",
-                "ask for fewer realisations, cycles or grid points, or a longer noise.interval_s",
+                &format!(
+                    "lower {}, {} or the grid, or raise noise.interval_s",
+                    self.force.spelled("--realisations", "realisations"),
+                    self.force.spelled("--cycles", "cycles")
+                ),
             )?;
         }
         let started = Instant::now();

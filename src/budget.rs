@@ -25,25 +25,31 @@ use crate::engine::{BackendKind, Job, Model, Oscillator, Record};
 use crate::error::{Error, Result};
 use crate::measure::MeasurementSet;
 
-/// Whether a run beyond the budget goes ahead, and how the front end that
-/// asked names the switch (a refusal says what to pass).
+/// Whether a run beyond the budget goes ahead, and which front end asked:
+/// a refusal names that front end's arguments (`--force` or `force=True`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Force {
     /// Run whatever the estimate.
     pub given: bool,
-    /// The switch as its front end spells it: `--force`, `force=True`.
-    pub name: &'static str,
+    /// Whether the request came from the command line (else from Python).
+    pub command_line: bool,
 }
 
 impl Force {
     /// The command line's `--force`.
     pub fn flag(given: bool) -> Force {
-        Force { given, name: "--force" }
+        Force { given, command_line: true }
     }
 
     /// The Python package's `force=True`.
     pub fn keyword(given: bool) -> Force {
-        Force { given, name: "force=True" }
+        Force { given, command_line: false }
+    }
+
+    /// An argument as the asking front end spells it: `flag` on the
+    /// command line, `keyword` in Python.
+    pub fn spelled<'a>(&self, flag: &'a str, keyword: &'a str) -> &'a str {
+        if self.command_line { flag } else { keyword }
     }
 }
 
@@ -173,7 +179,7 @@ impl Cost {
             "run size",
             format!(
                 "{what}: {problem}; {lower}, or pass {} to run it anyway (docs/formats.md, the cost budget)",
-                force.name
+                force.spelled("--force", "force=True")
             ),
         ))
     }

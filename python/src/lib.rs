@@ -215,6 +215,12 @@ fn grid_values(name: &str, values: &[f64], check: fn(f64) -> Option<String>) -> 
             return Err(value_error(format!("invalid {name}: `{v}`: {problem}")));
         }
     }
+    // A value given twice would be one grid point written twice.
+    for (i, v) in values.iter().enumerate() {
+        if values[..i].contains(v) {
+            return Err(value_error(format!("invalid {name}: `{v}` is given more than once; give each value once")));
+        }
+    }
     Ok(())
 }
 

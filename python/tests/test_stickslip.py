@@ -56,6 +56,8 @@ def test_bad_models_and_settings_raise_value_errors():
         stickslip.sweep(**{**TINY, "backend": "tpu"})
     with pytest.raises(ValueError, match="frequencies"):
         stickslip.sweep(**{**TINY, "frequencies": [-7.0], "backend": "cpu"})
+    with pytest.raises(ValueError, match="more than once"):
+        stickslip.sweep(**{**TINY, "frequencies": [7.0, 7.0], "backend": "cpu"})
     with pytest.raises(ValueError, match="realisations"):
         stickslip.sweep(**{**TINY, "realisations": 0, "backend": "cpu"})
 

@@ -155,7 +155,7 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     };
     super::check_budget(
         Cost::of_diagnosis(&set, &settings),
-        &engine,
+        engine.kind(),
         "diagnose",
         "lower --replicates or --realisations, or give fewer or shorter records",
     )?;

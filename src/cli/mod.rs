@@ -32,7 +32,7 @@ use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::engine::gpu::AdapterClass;
-use crate::engine::{BackendChoice, Engine, GpuOptions, Model};
+use crate::engine::{BackendChoice, BackendKind, Engine, GpuOptions, Model};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -265,10 +265,10 @@ fn man_page() -> Result<()> {
     emit_bytes(&out)
 }
 
-/// Refuses `cost` beyond the budget of `engine`'s backend unless `--force`
+/// Refuses `cost` beyond the budget of `backend` unless `--force`
 /// (see [`crate::budget`]).
-pub(crate) fn check_budget(cost: crate::budget::Cost, engine: &Engine, what: &str, lower: &str) -> Result<()> {
-    cost.check(engine.kind(), rayon::current_num_threads(), force(), what, lower)?;
+pub(crate) fn check_budget(cost: crate::budget::Cost, backend: BackendKind, what: &str, lower: &str) -> Result<()> {
+    cost.check(backend, rayon::current_num_threads(), force(), what, lower)?;
     Ok(())
 }
 

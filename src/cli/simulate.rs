@@ -125,7 +125,7 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     let engine = Engine::cpu("simulate runs on the reference");
     super::check_budget(
         Cost::of_job(&job)?,
-        &engine,
+        engine.kind(),
         "simulate",
         "lower --realisations, --duration or --sample-rate, or raise noise.interval_s",
     )?;

@@ -247,6 +247,13 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
         &sweep_args(out_s, &["--realisations", "100000", "--cycles", "40000", "--no-plots"]),
         &["estimated", "realisation-steps", "over the limit of 1e11", "--force"],
     );
+    refused(
+        &sweep_args(
+            out_s,
+            &["--warmup-cycles", "16000000", "--frequencies", "5:15:41", "--normal-forces", "4,8,12,16"],
+        ),
+        &["refinement", "--no-refine", "--force"],
+    );
     let figure8 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8");
     refused(
         &["diagnose", "--backend", "cpu", figure8.to_str().unwrap(), "--realisations", "1000000", "--out", out_s],
