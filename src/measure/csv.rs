@@ -179,15 +179,17 @@ const RUN_COLUMNS: [Column; 6] = [
 
 /// The physically plausible range and unit of each of [`RUN_COLUMNS`]
 /// (`docs/formats.md`): displacements within ±10 m, speeds within ±1e4 m/s,
-/// a normal force of 0 to 1e6 N (a contact cannot pull) and a friction force
-/// within ±1e8 N (the largest force times the largest friction coefficient).
+/// a normal force within ±1e6 N (a sample may dip below zero with the
+/// sensor's noise; the record's mean may not, [`read_run_file`]) and a
+/// friction force within ±1e8 N (the largest force times the largest
+/// friction coefficient).
 fn run_column_bound(j: usize) -> (Bound, &'static str) {
     let (x, v, n) = (limits::DISPLACEMENT_MAX_M, limits::SPEED_MAX_M_PER_S, limits::FORCE_MAX_N);
     let f = n * limits::FRICTION_COEFFICIENT_MAX;
     match j {
         0 => (Bound::Finite, "s"),
         2 => (Bound::within(-v, v), "m/s"),
-        3 => (Bound::within(0.0, n), "N"),
+        3 => (Bound::within(-n, n), "N"),
         4 => (Bound::within(-f, f), "N"),
         _ => (Bound::within(-x, x), "m"),
     }
@@ -256,6 +258,22 @@ pub(super) fn read_run_file(
         Ok(())
     })?;
 
+    // A contact cannot pull: a record whose measured normal force is
+    // negative on average has its sign reversed (or is not a normal force).
+    let mean_force = normal.iter().sum::<f64>() / normal.len().max(1) as f64;
+    if mean_force < 0.0 {
+        let first = normal.iter().position(|&v| v < 0.0).map_or(0, |i| lines[i]);
+        return Err(bad(
+            path,
+            Some(first),
+            format!(
+                "column `normal_force`: its mean over the record, {} N, is negative (the first negative value is on \
+                 this line): a contact cannot pull, so the sign convention is reversed or this is not the normal \
+                 force",
+                fmt_value(mean_force)
+            ),
+        ));
+    }
     let n = t_s.len();
     let period_s = 1.0 / frequency_hz;
     let needed = format!(
