@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::diagnose::Diagnosis;
-use crate::diagnose::observable::Observable;
+use crate::diagnose::observable::{Observable, Unit};
 use crate::error::{Error, Result};
 use crate::figure::{FONT, colour, decade_tick, legend_box, plot_error, render, tick};
 
@@ -43,6 +43,54 @@ impl ScoreRow {
         let (sim, z) = (self.fitted_simulated?, self.fitted_z?);
         let s = (self.measured - sim).abs() / z.abs();
         (z != 0.0 && s.is_finite()).then_some(s).or_else(|| self.spread())
+    }
+
+    /// What makes this row one no diagnosis writes, naming the column: a
+    /// condition outside the ranges a measurement set is read with, an
+    /// unknown observable, a number that is not finite, or a measured value
+    /// outside the range its unit allows in a measurement set (lengths within
+    /// ±10 m, squared lengths 0 to 100 m², angles within ±360°, squared
+    /// angles 0 to 360² °², counts not negative). `None` for a plausible row.
+    pub fn implausible(&self) -> Option<String> {
+        use crate::engine::model::limits;
+        let (f_lo, f_hi) = limits::FREQUENCY_HZ;
+        let f = self.excitation_frequency_hz;
+        if !(f_lo..=f_hi).contains(&f) {
+            return Some(format!("column `excitation_frequency_hz`: {f} Hz is outside {f_lo} to {f_hi} Hz"));
+        }
+        let n = self.normal_force_n;
+        if !(0.0..=limits::FORCE_MAX_N).contains(&n) {
+            return Some(format!("column `normal_force_n`: {n} N is outside 0 to {} N", limits::FORCE_MAX_N));
+        }
+        let Some(observable) = Observable::named(&self.observable) else {
+            return Some(format!(
+                "column `observable`: `{}` is not an observable a diagnosis scores",
+                crate::text::excerpt(&self.observable, crate::text::EXCERPT_CHARS)
+            ));
+        };
+        let numbers = [
+            ("measured", Some(self.measured)),
+            ("baseline_simulated", Some(self.baseline_simulated)),
+            ("baseline_z", Some(self.baseline_z)),
+            ("fitted_simulated", self.fitted_simulated),
+            ("fitted_z", self.fitted_z),
+        ];
+        if let Some((column, value)) = numbers.iter().find_map(|&(c, v)| v.filter(|v| !v.is_finite()).map(|v| (c, v))) {
+            return Some(format!("column `{column}`: {value} is not a finite number"));
+        }
+        let x = limits::DISPLACEMENT_MAX_M;
+        let (lo, hi, range) = match observable.unit() {
+            Unit::Metre => (-x, x, format!("within ±{x} m")),
+            Unit::SquareMetre => (0.0, x * x, format!("from 0 to {} m²", x * x)),
+            Unit::Degree => (-360.0, 360.0, "within ±360 degrees".to_string()),
+            Unit::SquareDegree => (0.0, 360.0 * 360.0, "from 0 to 360² degrees²".to_string()),
+            Unit::Count => (0.0, f64::INFINITY, "not negative".to_string()),
+            _ => return None,
+        };
+        let m = self.measured;
+        (!(lo..=hi).contains(&m)).then(|| {
+            format!("column `measured`: {m} is not a plausible {} (a measured one lies {range})", observable.name())
+        })
     }
 
     fn label(&self) -> String {
@@ -117,8 +165,11 @@ impl ChartData {
             )
         })?;
         let mut rows = Vec::new();
-        for (i, row) in csv::Reader::from_reader(bytes.as_slice()).deserialize().enumerate() {
-            rows.push(row.map_err(|e| refuse(Some(i as u64 + 2), e.to_string()))?);
+        for (i, row) in csv::Reader::from_reader(bytes.as_slice()).deserialize::<ScoreRow>().enumerate() {
+            let line = Some(i as u64 + 2);
+            let row = row.map_err(|e| refuse(line, e.to_string()))?;
+            row.implausible().map_or(Ok(()), |problem| Err(refuse(line, problem)))?;
+            rows.push(row);
         }
         let report_path = dir.join("report.json");
         let report: serde_json::Value = crate::io::read_bounded(&report_path, 256 << 20)

@@ -285,6 +285,44 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
+/// `plot` reads a diagnosis's `scores.csv` as strictly as a measurement set:
+/// a number that is not finite, a condition or a measured value outside the
+/// ranges a set is read with, or an unknown observable is refused by file,
+/// line and column, and no figure is drawn.
+#[test]
+fn implausible_scores_are_refused_by_plot() {
+    let s = Scratch::new("scores");
+    let header = "excitation_frequency_hz,normal_force_n,observable,heldout,measured,baseline_simulated,\
+                  baseline_z,fitted_simulated,fitted_z\n";
+    let good = "7,16.39,peak_mean_m,false,0.002,0.0021,-0.5,0.00201,-0.1\n";
+    let diagnosis = |name: &str, rows: &str| {
+        s.write(&format!("{name}/report.json"), r#"{"verdict": {"effect": "none"}}"#);
+        s.write(&format!("{name}/scores.csv"), format!("{header}{good}{rows}"));
+        s.path(name)
+    };
+    let plain = diagnosis("plain", "7,16.39,phase_mean_deg,true,-20.5,-21,0.4,,\n");
+    let figs = s.path("figs");
+    let o = run(&["plot", plain.to_str().unwrap(), "--out", figs.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(listing(&figs).contains(&"comparison.png".to_string()), "{:?}", listing(&figs));
+    let cases: [(&str, &[&str]); 7] = [
+        ("7,16.39,peak_mean_m,false,0.002,0.0021,inf,0.002,0.1", &["column `baseline_z`", "not a finite"]),
+        ("7,16.39,peak_mean_m,false,0.002,NaN,0.5,0.002,0.1", &["column `baseline_simulated`", "not a finite"]),
+        ("7,16.39,peak_var_m2,false,1e-8,1e-8,0.5,1e-8,-inf", &["column `fitted_z`", "not a finite"]),
+        ("7,16.39,peak_mean_m,false,1e10,0.002,1e12,0.002,1e12", &["column `measured`", "peak_mean_m"]),
+        ("7,16.39,phase_mean_deg,false,720,-21,0.4,,", &["column `measured`", "360"]),
+        ("1e300,16.39,peak_mean_m,false,0.002,0.0021,-0.5,0.002,0.1", &["column `excitation_frequency_hz`"]),
+        ("7,16.39,no_such_thing,false,0.002,0.0021,-0.5,0.002,0.1", &["column `observable`", "no_such_thing"]),
+    ];
+    for (i, (row, names)) in cases.iter().enumerate() {
+        let dir = diagnosis(&format!("bad{i}"), &format!("{row}\n"));
+        let out = s.path(&format!("figs{i}"));
+        let err = refused(&["plot", dir.to_str().unwrap(), "--out", out.to_str().unwrap()], names);
+        assert!(err.contains("scores.csv:3: "), "{row}: {err}");
+        assert!(!out.exists(), "{row}: a refused plot draws nothing");
+    }
+}
+
 /// `plot A --out B` writes only into a new or empty directory or one that
 /// holds figures of the same kind and source, never beside another run's
 /// set; redrawn in place, the whole set is swapped in with its data as it
