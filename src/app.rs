@@ -77,11 +77,11 @@ impl SweepRequest {
         if refine.is_some() && sweep::not_refinable(&grid.frequencies_hz).is_none() {
             pilot_cost(&model, &grid, settings.plan.warmup_cycles)?.check(
                 BackendKind::Cpu,
-                rayon::current_num_threads(),
+                crate::budget::cpu_threads(),
                 force,
                 "sweep's refinement",
                 &format!(
-                    "ask for fewer warm-up cycles or grid points, or pass {}",
+                    "ask for fewer warm-up cycles or grid points, or {} to keep the grid as given",
                     force.spelled("--no-refine", "refine=False")
                 ),
             )?;
@@ -132,7 +132,7 @@ impl PreparedSweep {
             let cost = Cost::of_job(&sweep::sweep_job(&self.model, &points, &self.settings))?;
             cost.check(
                 engine.kind(),
-                rayon::current_num_threads(),
+                crate::budget::cpu_threads(),
                 self.force,
                 "sweep",
                 &format!(

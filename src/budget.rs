@@ -1,5 +1,5 @@
-//! The cost budget: `sweep`, `simulate` and `diagnose` estimate their work
-//! before they start and refuse beyond a documented limit unless forced
+//! The cost budget: `sweep`, `simulate`, `diagnose` and
+//! `benchmark-diagnosis` estimate their work before they start and refuse beyond a documented limit unless forced
 //! (`--force` on the command line, `force=True` in Python; `docs/formats.md`,
 //! "The cost budget").
 //!
@@ -17,9 +17,11 @@
 //!
 //! A sweep point whose peaks leave its range runs twice (`docs/formats.md`);
 //! the estimate counts each point once. A diagnosis is estimated as
-//! [`DIAGNOSIS_PASSES`] times the simulation that scores one model.
+//! [`DIAGNOSIS_PASSES`] times the simulation that scores one model, and a
+//! benchmark as the diagnosis of each of its sets.
 
 use crate::diagnose::DiagnoseSettings;
+use crate::diagnose::benchmark::BenchmarkSettings;
 use crate::engine::model::fmt_value;
 use crate::engine::{BackendKind, Job, Model, Oscillator, Record};
 use crate::error::{Error, Result};
@@ -51,6 +53,12 @@ impl Force {
     pub fn spelled<'a>(&self, flag: &'a str, keyword: &'a str) -> &'a str {
         if self.command_line { flag } else { keyword }
     }
+}
+
+/// The threads the CPU reference runs on here (rayon's pool), for
+/// [`Cost::check`]'s time estimate.
+pub fn cpu_threads() -> usize {
+    rayon::current_num_threads()
 }
 
 /// Most realisation-steps per excitation period without `--force` (2^21:
@@ -125,19 +133,56 @@ impl Cost {
     /// (1/600 s without runs).
     pub fn of_diagnosis(set: &MeasurementSet, settings: &DiagnoseSettings) -> Cost {
         let interval_s = set.runs.first().map_or(1.0 / 600.0, |r| r.sample_interval_s());
+        let records = set.runs.iter().map(|r| (r.excitation_frequency_hz, r.duration_s()));
+        let rows = set.summary.iter().map(|row| (row.excitation_frequency_hz, row.n_peaks));
+        Cost::of_diagnosed(records, rows, interval_s, settings)
+    }
+
+    /// The estimated cost of a benchmark: every planned set's diagnosis
+    /// ([`Cost::of_diagnosis`] of the set it will hold: its conditions'
+    /// records, or for a summary-only set one row per condition over a
+    /// record's periods). Generating a set and scoring its truth take a few
+    /// passes more, against the thousand of its diagnosis.
+    pub fn of_benchmark(settings: &BenchmarkSettings) -> Result<Cost> {
+        let diagnose = settings.diagnose_settings();
+        let mut cost = Cost::NONE;
+        for set in settings.outlines()? {
+            let interval_s = 1.0 / set.sample_rate_hz;
+            let frequencies = set.conditions.iter().map(|c| c.excitation_frequency_hz);
+            let set_cost = if set.summary_only {
+                let rows = frequencies.map(|f| (f, Some(((set.duration_s * f) as u64).max(2))));
+                Cost::of_diagnosed(std::iter::empty(), rows, interval_s, &diagnose)
+            } else {
+                let runs = set.runs_per_condition as usize;
+                let records = frequencies.flat_map(|f| std::iter::repeat_n((f, set.duration_s), runs));
+                Cost::of_diagnosed(records, std::iter::empty(), interval_s, &diagnose)
+            };
+            cost = cost.plus(set_cost);
+        }
+        Ok(cost)
+    }
+
+    /// [`DIAGNOSIS_PASSES`] scoring passes over `records` (frequency, Hz, and
+    /// length, s) and summary `rows` (frequency, Hz, and `n_peaks`), with
+    /// the noise held over `interval_s` (s).
+    fn of_diagnosed(
+        records: impl Iterator<Item = (f64, f64)>,
+        rows: impl Iterator<Item = (f64, Option<u64>)>,
+        interval_s: f64,
+        settings: &DiagnoseSettings,
+    ) -> Cost {
         let warmup = f64::from(settings.warmup_cycles);
         let steps = f64::from(Model::default().solver.steps_per_period);
-        let runs = set.runs.iter().map(|r| {
-            let f = r.excitation_frequency_hz;
+        let records = records.map(|(f, duration_s)| {
             let per_period = REPLICATE_STEPS_PER_PERIOD.min(steps) + 1.0 / (interval_s * f);
-            Cost::of(f64::from(settings.replicates), warmup + (r.duration_s() * f).ceil() + 1.0, per_period)
+            Cost::of(f64::from(settings.replicates), warmup + (duration_s * f).ceil() + 1.0, per_period)
         });
-        let rows = set.summary.iter().map(|row| {
-            let per_period = steps + 1.0 / (interval_s * row.excitation_frequency_hz);
-            let periods = warmup + row.n_peaks.unwrap_or(350) as f64;
+        let rows = rows.map(|(f, n_peaks)| {
+            let per_period = steps + 1.0 / (interval_s * f);
+            let periods = warmup + n_peaks.unwrap_or(350) as f64;
             Cost::of(f64::from(settings.ensemble_realisations), periods, per_period)
         });
-        let pass = runs.chain(rows).fold(Cost::NONE, Cost::plus);
+        let pass = records.chain(rows).fold(Cost::NONE, Cost::plus);
         Cost { steps: DIAGNOSIS_PASSES * pass.steps, ..pass }
     }
 

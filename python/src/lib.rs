@@ -19,11 +19,13 @@ use pyo3::prelude::*;
 use serde_json::{Value, json};
 
 use stickslip::app::SweepRequest;
-use stickslip::budget::Force;
+use stickslip::budget::{self, Cost, Force};
 use stickslip::diagnose::report::{RunInfo, write_diagnosis_with};
 use stickslip::diagnose::{DiagnoseSettings, diagnose_set};
 use stickslip::engine::reduce::HISTOGRAM_BINS;
-use stickslip::engine::{BackendChoice, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan};
+use stickslip::engine::{
+    BackendChoice, BackendKind, Condition, Engine, GpuOptions, Job, Model, Oscillator, Point, Record, RunPlan,
+};
 use stickslip::io::{self, OutputSet, owned};
 use stickslip::measure::{MIN_PERIODS, RunEntry, read_measurement_set, write_manifest, write_run_file};
 use stickslip::sweep::{self, Grid, RefineSettings, Shard, SweepResult, SweepSettings};
@@ -231,7 +233,7 @@ fn grid_values(name: &str, values: &[f64], check: fn(f64) -> Option<String>) -> 
     model_toml, frequencies_hz, normal_forces_n, realisations=64, warmup_cycles=100, cycles=100, seed=1,
     backend="auto", allow_software_gpu=false, refine=true, refine_max=RefineSettings::default().max_added,
     steps_per_dispatch=stickslip::engine::gpu::DEFAULT_STEPS_PER_DISPATCH, out=None,
-    fig8_frequency_hz=Some(7.0), progress=false
+    fig8_frequency_hz=Some(7.0), progress=false, force=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run_sweep(
@@ -251,6 +253,7 @@ fn run_sweep(
     out: Option<PathBuf>,
     fig8_frequency_hz: Option<f64>,
     progress: bool,
+    force: bool,
 ) -> PyResult<(String, Vec<u8>)> {
     use stickslip::engine::model::{excitation_frequency_problem, normal_force_problem};
     let model = Model::from_toml_str(model_toml, "model", &[]).map_err(py_err)?;
@@ -271,7 +274,7 @@ fn run_sweep(
     }
     let settings = SweepSettings { realisations, plan: RunPlan { warmup_cycles, measured_cycles: cycles }, seed };
     let refine = refine.then_some(RefineSettings { max_added: refine_max, ..Default::default() });
-    let request = SweepRequest { model, grid, settings, refine, shard: Shard::WHOLE, force: Force::keyword(false) };
+    let request = SweepRequest { model, grid, settings, refine, shard: Shard::WHOLE, force: Force::keyword(force) };
     let prepared = py.detach(|| request.prepare(out.as_deref().map(|dir| (dir, "out")))).map_err(py_err)?;
     let added_hz = prepared.refinement.as_ref().map_or_else(Vec::new, |r| r.added_hz.clone());
     let backend = backend.to_string();
@@ -334,7 +337,7 @@ fn read_sweep(py: Python<'_>, dir: PathBuf) -> PyResult<(String, Vec<u8>)> {
 #[pyfunction]
 #[pyo3(signature = (
     model_toml, frequency_hz=7.0, normal_force_n=16.39, realisations=3, duration_s=50.0, sample_rate_hz=600.0,
-    warmup_cycles=100, seed=1, out=None
+    warmup_cycles=100, seed=1, out=None, force=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run_simulate(
@@ -348,6 +351,7 @@ fn run_simulate(
     warmup_cycles: u32,
     seed: u64,
     out: Option<PathBuf>,
+    force: bool,
 ) -> PyResult<(usize, Vec<u8>)> {
     let model = Model::from_toml_str(model_toml, "model", &[]).map_err(py_err)?;
     let condition = Condition { excitation_frequency_hz: frequency_hz, normal_force_n };
@@ -383,6 +387,18 @@ fn run_simulate(
         record: Record::Samples { interval_s, duration_s, at_noise_boundaries: false },
     };
     job.validate().map_err(py_err)?;
+    // Records come from the f64 reference on every backend, so its budget applies.
+    Cost::of_job(&job)
+        .and_then(|cost| {
+            cost.check(
+                BackendKind::Cpu,
+                budget::cpu_threads(),
+                Force::keyword(force),
+                "simulate",
+                "lower realisations, duration or sample_rate, or raise noise.interval_s",
+            )
+        })
+        .map_err(py_err)?;
     let prepared = match &out {
         Some(dir) => Some(OutputSet::prepare(dir, "out", owned::SIMULATION, &[]).map_err(py_err)?),
         None => None,
@@ -432,7 +448,8 @@ fn run_simulate(
 /// `out`, also writes the report, the model files and the charts there.
 #[pyfunction]
 #[pyo3(signature = (
-    dir, out=None, backend="auto", allow_software_gpu=false, seed=20_251_122, replicates=8, realisations=64, progress=true
+    dir, out=None, backend="auto", allow_software_gpu=false, seed=20_251_122, replicates=8, realisations=64, progress=true,
+    force=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run_diagnose(
@@ -445,6 +462,7 @@ fn run_diagnose(
     replicates: u32,
     realisations: u32,
     progress: bool,
+    force: bool,
 ) -> PyResult<(String, String, String, String)> {
     if !(2..=1000).contains(&replicates) {
         return Err(value_error(format!(
@@ -472,6 +490,15 @@ fn run_diagnose(
         }
         let settings =
             DiagnoseSettings { seed, replicates, ensemble_realisations: realisations, ..DiagnoseSettings::default() };
+        Cost::of_diagnosis(&set, &settings)
+            .check(
+                engine.kind(),
+                budget::cpu_threads(),
+                Force::keyword(force),
+                "diagnose",
+                "lower replicates or realisations, or give fewer or shorter records",
+            )
+            .map_err(py_err)?;
         let started = Instant::now();
         let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| {
             if progress {

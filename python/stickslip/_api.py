@@ -299,6 +299,7 @@ def sweep(
     fig8_frequency: float = 7.0,
     progress: bool = False,
     as_xarray: Optional[bool] = None,
+    force: bool = False,
 ):
     """Runs a frequency x normal-force grid, as ``stickslip sweep`` does.
 
@@ -321,6 +322,10 @@ def sweep(
     without xarray (or with ``as_xarray=False``) a ``pandas.DataFrame`` of the
     ``sweep.csv`` rows. The run's backend, adapter, seed and timings are in
     ``attrs``.
+
+    A sweep whose estimated work is beyond the cost budget (``docs/formats.md``,
+    as the command line's) raises ``ValueError`` before anything runs, saying
+    the estimate and the limit; ``force=True`` runs it anyway, as ``--force``.
     """
     toml_text, _ = _resolve(model, overrides)
     payload, hist = _native.run_sweep(
@@ -338,6 +343,7 @@ def sweep(
         out=None if out is None else os.fspath(out),
         fig8_frequency_hz=float(fig8_frequency) if plots else None,
         progress=progress,
+        force=bool(force),
     )
     attrs = {"model_toml": toml_text, "source": "stickslip.sweep"}
     if out is not None:
@@ -455,13 +461,16 @@ def simulate(
     model: ModelSpec = None,
     overrides: Overrides = None,
     out: Optional[PathLike] = None,
+    force: bool = False,
 ) -> Records:
     """Time-series records of one condition, as ``stickslip simulate`` writes
     them: ``duration`` s sampled at ``sample_rate`` Hz after
     ``warmup_cycles`` periods, one record per realisation. Records always
     come from the exact f64 reference (the GPU kernel does not sample
     records). With ``out``, the run files and ``manifest.json`` are written
-    there as well, a measurement set :func:`diagnose` can read."""
+    there as well, a measurement set :func:`diagnose` can read. Work beyond
+    the cost budget raises ``ValueError`` unless ``force=True``, as in
+    :func:`sweep`."""
     toml_text, _ = _resolve(model, overrides)
     n, buffer = _native.run_simulate(
         toml_text,
@@ -473,6 +482,7 @@ def simulate(
         warmup_cycles=int(warmup_cycles),
         seed=int(seed),
         out=None if out is None else os.fspath(out),
+        force=bool(force),
     )
     array = np.frombuffer(buffer, dtype="<f8").reshape(int(realisations), n, 5).copy()
     return Records(array, float(frequency), float(normal_force), float(sample_rate), int(seed))
@@ -542,6 +552,7 @@ def diagnose(
     replicates: int = 8,
     realisations: int = 64,
     progress: bool = True,
+    force: bool = False,
 ) -> Diagnosis:
     """Diagnoses the gap between a measurement set (a directory with
     ``manifest.json``) and the model, as ``stickslip diagnose`` does: where,
@@ -549,7 +560,9 @@ def diagnose(
     ``report.html``, the charts and the two model files are written there.
     A diagnosis takes from seconds to minutes: each step is printed to stderr
     as it starts (``progress=False`` silences it). ``backend`` and
-    ``allow_software_gpu`` are those of :func:`sweep`."""
+    ``allow_software_gpu`` are those of :func:`sweep`, and so is ``force``:
+    a diagnosis estimated beyond the cost budget raises ``ValueError`` unless
+    ``force=True``."""
     report, baseline, fitted, description = _native.run_diagnose(
         os.fspath(path),
         out=None if out is None else os.fspath(out),
@@ -559,6 +572,7 @@ def diagnose(
         replicates=int(replicates),
         realisations=int(realisations),
         progress=progress,
+        force=bool(force),
     )
     paths: Dict[str, str] = {}
     if out is not None:

@@ -62,6 +62,36 @@ def test_bad_models_and_settings_raise_value_errors():
         stickslip.sweep(**{**TINY, "realisations": 0, "backend": "cpu"})
 
 
+def test_work_beyond_the_budget_raises_unless_forced(tmp_path):
+    # A noise interval of 1e-9 s is 1.4e8 noise intervals per period at 7 Hz:
+    # refused before anything runs or is written, naming Python's force=True.
+    tiny_noise = {"noise.interval_s": 1e-9}
+    started = time.monotonic()
+    small = dict(frequencies=[7.0], normal_forces=[10.0], realisations=2, warmup_cycles=1, cycles=2, backend="cpu")
+    with pytest.raises(ValueError, match=r"per period.*force=True") as refused:
+        stickslip.sweep(**small, refine=False, overrides=tiny_noise, out=tmp_path / "s")
+    assert "--force" not in str(refused.value) and "--realisations" not in str(refused.value)
+    with pytest.raises(ValueError, match=r"refinement.*refine=False.*force=True"):
+        stickslip.sweep(
+            **{**small, "warmup_cycles": 16_000_000, "frequencies": "5:15:41", "normal_forces": "4,8,12,16"}
+        )
+    with pytest.raises(ValueError, match=r"simulate.*per period.*force=True"):
+        stickslip.simulate(7.0, 16.39, realisations=1, duration=2.0, warmup_cycles=1, overrides=tiny_noise,
+                           out=tmp_path / "r")
+    with pytest.raises(ValueError, match=r"diagnose.*estimated.*force=True"):
+        stickslip.diagnose(FIGURE8, out=tmp_path / "d", backend="cpu", realisations=1_000_000, progress=False)
+    assert time.monotonic() - started < 20, "refusals come before any work"
+    assert list(tmp_path.iterdir()) == [], "a refused run writes nothing"
+    # force=True runs it: one measured period of one realisation at 100 Hz
+    # with 1e7 noise intervals in each of its two periods (a second or two).
+    forced = dict(frequencies=[100.0], normal_forces=[10.0], realisations=1, warmup_cycles=1, cycles=1,
+                  backend="cpu", refine=False, overrides=tiny_noise)
+    with pytest.raises(ValueError, match="per period"):
+        stickslip.sweep(**forced)
+    ds = stickslip.sweep(**forced, force=True, as_xarray=False)
+    assert len(ds) == 1 and ds["peaks"].iloc[0] == 1
+
+
 # -- sweeps -------------------------------------------------------------------
 
 

@@ -193,6 +193,37 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
 }
 
 pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
+    let backend = args.backend;
+    let settings = benchmark_settings(args)?;
+    let planned: Vec<usize> = settings.plan().into_iter().map(|(i, _)| i).collect();
+    if let Some(i) = settings.sets.iter().find(|i| !planned.contains(i)) {
+        let all = BenchmarkSettings { sets: Vec::new(), ..settings.clone() }.plan().len();
+        anyhow::bail!("invalid --sets: {i}; this plan has sets 0 to {}", all.saturating_sub(1));
+    }
+    let engine = open_engine(backend, GpuOptions::default())?;
+    super::check_budget(
+        Cost::of_benchmark(&settings)?,
+        engine.kind(),
+        "benchmark-diagnosis",
+        "ask for fewer sets (--nulls, --pairs, --phase-only, --effects, --forms, --levels or --sets), fewer \
+         --replicates, or fewer or shorter records (--runs-per-condition, --duration, --frequency-ratios, \
+         --load-shares)",
+    )?;
+    let sets = planned.len();
+    let progress = Progress::bar("benchmark-diagnosis");
+    let mut done = 0;
+    progress.position(0, sets as u64);
+    let (_, text) = run_benchmark_sets(&settings, &engine, &mut |line| {
+        progress.println(line);
+        done += 1;
+        progress.position(done, sets as u64);
+    })?;
+    progress.finish();
+    emit_bytes(text.as_bytes())
+}
+
+/// The benchmark `args` ask for, every flag checked.
+fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
     let effects = args
         .effects
         .iter()
@@ -241,8 +272,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
     if args.load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
     }
-    let backend = args.backend;
-    let settings = BenchmarkSettings {
+    Ok(BenchmarkSettings {
         out: args.out,
         nulls: args.nulls,
         pairs: args.pairs,
@@ -272,22 +302,34 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
                 },
             },
         },
-    };
-    let planned: Vec<usize> = settings.plan().into_iter().map(|(i, _)| i).collect();
-    if let Some(i) = settings.sets.iter().find(|i| !planned.contains(i)) {
-        let all = BenchmarkSettings { sets: Vec::new(), ..settings.clone() }.plan().len();
-        anyhow::bail!("invalid --sets: {i}; this plan has sets 0 to {}", all.saturating_sub(1));
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::super::{Cli, Command};
+    use super::*;
+    use crate::budget::Force;
+    use crate::engine::BackendKind;
+
+    fn settings(args: &[&str]) -> BenchmarkSettings {
+        let cli = Cli::try_parse_from([&["stickslip", "benchmark-diagnosis"], args].concat()).unwrap();
+        let Command::BenchmarkDiagnosis(args) = cli.command else { unreachable!() };
+        benchmark_settings(args).unwrap()
     }
-    let engine = open_engine(backend, GpuOptions::default())?;
-    let sets = planned.len();
-    let progress = Progress::bar("benchmark-diagnosis");
-    let mut done = 0;
-    progress.position(0, sets as u64);
-    let (_, text) = run_benchmark_sets(&settings, &engine, &mut |line| {
-        progress.println(line);
-        done += 1;
-        progress.position(done, sets as u64);
-    })?;
-    progress.finish();
-    emit_bytes(text.as_bytes())
+
+    /// The benchmark as the command line runs it by default passes the
+    /// budget on a two-core machine's CPU reference; records fifty times
+    /// as long and many do not.
+    #[test]
+    fn the_default_benchmark_is_within_the_budget() {
+        let check = |cost: Cost| cost.check(BackendKind::Cpu, 2, Force::flag(false), "benchmark-diagnosis", "");
+        let default = Cost::of_benchmark(&settings(&[])).unwrap();
+        check(default).unwrap();
+        let long = Cost::of_benchmark(&settings(&["--duration", "600", "--runs-per-condition", "4"])).unwrap();
+        assert!(long.steps > 50.0 * default.steps, "{long:?} vs {default:?}");
+        assert!(check(long).unwrap_err().to_string().contains("--force"));
+    }
 }

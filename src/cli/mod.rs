@@ -59,7 +59,7 @@ struct Global {
     /// kernel on the CPU cores; without it such an adapter is refused.
     #[arg(long, global = true)]
     allow_software_gpu: bool,
-    /// Run a sweep, simulation or diagnosis whose estimated work is beyond the cost budget
+    /// Run a sweep, simulation, diagnosis or benchmark whose estimated work is beyond the cost budget
     /// (docs/formats.md); without it such a run is refused before it starts.
     #[arg(long, global = true)]
     force: bool,
@@ -268,7 +268,7 @@ fn man_page() -> Result<()> {
 /// Refuses `cost` beyond the budget of `backend` unless `--force`
 /// (see [`crate::budget`]).
 pub(crate) fn check_budget(cost: crate::budget::Cost, backend: BackendKind, what: &str, lower: &str) -> Result<()> {
-    cost.check(backend, rayon::current_num_threads(), force(), what, lower)?;
+    cost.check(backend, crate::budget::cpu_threads(), force(), what, lower)?;
     Ok(())
 }
 

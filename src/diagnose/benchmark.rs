@@ -109,6 +109,64 @@ impl BenchmarkSettings {
             .filter(|(i, _)| self.sets.is_empty() || self.sets.contains(i))
             .collect()
     }
+
+    /// The seed of set `index`'s truth and data.
+    fn set_seed(&self, index: usize) -> u64 {
+        self.seed.wrapping_mul(1_000_003).wrapping_add(index as u64)
+    }
+
+    /// The settings each set is diagnosed with.
+    pub fn diagnose_settings(&self) -> DiagnoseSettings {
+        DiagnoseSettings { seed: self.seed ^ 0xD1A6, replicates: self.replicates.max(2), ..DiagnoseSettings::default() }
+    }
+
+    /// What each planned set will hold, without simulating anything (its
+    /// truth is drawn, not run): for the cost budget.
+    pub fn outlines(&self) -> Result<Vec<SetOutline>> {
+        let shape = self.shape;
+        self.plan()
+            .into_iter()
+            .map(|(i, planned)| {
+                let seed = self.set_seed(i);
+                Ok(match &self.generator {
+                    Generator::Engine => SetOutline {
+                        conditions: random_truth(seed, &planned.hidden, &self.frequency_ratios, &self.load_shares)?.1,
+                        runs_per_condition: shape.runs_per_condition,
+                        duration_s: shape.duration_s,
+                        sample_rate_hz: shape.sample_rate_hz,
+                        summary_only: planned.phase_only,
+                    },
+                    Generator::Independent { loads_n, origins } => {
+                        let hidden: Vec<independent::HiddenForm> =
+                            planned.hidden.iter().map(|h| (h.effect, h.form.saturating_sub(1), h.level == 1)).collect();
+                        let record = origins.shape(i, shape.runs_per_condition, shape.duration_s);
+                        SetOutline {
+                            conditions: independent::random_truth(seed, &hidden, loads_n, &self.frequency_ratios)?.1,
+                            runs_per_condition: record.runs_per_condition,
+                            duration_s: record.duration_s,
+                            sample_rate_hz: record.sample_rate_hz,
+                            summary_only: false,
+                        }
+                    }
+                })
+            })
+            .collect()
+    }
+}
+
+/// What one planned set of a benchmark holds ([`BenchmarkSettings::outlines`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetOutline {
+    pub conditions: Vec<Condition>,
+    /// Records per condition (none when `summary_only`).
+    pub runs_per_condition: u32,
+    /// Length of each record, s; a summary-only set's rows cover as many
+    /// periods as such a record would.
+    pub duration_s: f64,
+    /// Sampling rate of the records, Hz.
+    pub sample_rate_hz: f64,
+    /// A summary-only (phase) set: one row per condition, no records.
+    pub summary_only: bool,
 }
 
 /// One diagnosed set.
@@ -330,16 +388,12 @@ pub fn run_benchmark(
     line: &mut dyn FnMut(&str),
 ) -> Result<(Vec<BenchmarkRow>, String)> {
     let plan = settings.plan();
-    let diagnose_settings = DiagnoseSettings {
-        seed: settings.seed ^ 0xD1A6,
-        replicates: settings.replicates.max(2),
-        ..DiagnoseSettings::default()
-    };
+    let diagnose_settings = settings.diagnose_settings();
     let shape = settings.shape;
     let mut rows = Vec::new();
     let started = Instant::now();
     for &(i, ref planned) in &plan {
-        let seed = settings.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
+        let seed = settings.set_seed(i);
         let dir = settings.out.join(format!("set-{i:03}"));
         // The truth beside (not inside) the data, for whoever checks a verdict.
         create_dir(&dir)?;

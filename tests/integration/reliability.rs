@@ -285,6 +285,32 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
+/// `benchmark-diagnosis` goes through the budget too: a benchmark of long,
+/// many records is refused before any set is generated, and nothing is
+/// written.
+#[test]
+fn a_benchmark_beyond_the_budget_is_refused() {
+    let s = Scratch::new("benchmark-budget");
+    let out = s.path("out");
+    let started = std::time::Instant::now();
+    refused(
+        &[
+            "benchmark-diagnosis",
+            "--backend",
+            "cpu",
+            "--out",
+            out.to_str().unwrap(),
+            "--duration",
+            "600",
+            "--runs-per-condition",
+            "20",
+        ],
+        &["benchmark-diagnosis", "estimated", "realisation-steps", "--runs-per-condition", "--force"],
+    );
+    assert!(started.elapsed() < std::time::Duration::from_secs(20), "the refusal comes before any work");
+    assert_eq!(listing(&s.0), Vec::<String>::new(), "a refused benchmark writes nothing");
+}
+
 /// `plot` reads a diagnosis's `scores.csv` as strictly as a measurement set:
 /// a number that is not finite, a condition or a measured value outside the
 /// ranges a set is read with, or an unknown observable is refused by file,
