@@ -138,14 +138,17 @@ impl Cost {
         Cost::of_diagnosed(records, rows, interval_s, settings)
     }
 
-    /// The estimated cost of a benchmark: every planned set's diagnosis
-    /// ([`Cost::of_diagnosis`] of the set it will hold: its conditions'
-    /// records, or for a summary-only set one row per condition over a
-    /// record's periods). Generating a set and scoring its truth take a few
-    /// passes more, against the thousand of its diagnosis.
+    /// The estimated cost of a benchmark's largest set: each planned set's
+    /// diagnosis ([`Cost::of_diagnosis`] of the set it will hold: its
+    /// conditions' records, or for a summary-only set one row per condition
+    /// over a record's periods), the largest of them. A benchmark is a batch
+    /// of diagnoses, each its own run with its own line of progress: the
+    /// budget bounds each one, as it bounds a `diagnose`, and the number of
+    /// sets is what the user asked for. Generating a set and scoring its
+    /// truth take a few passes more, against the thousand of its diagnosis.
     pub fn of_benchmark(settings: &BenchmarkSettings) -> Result<Cost> {
         let diagnose = settings.diagnose_settings();
-        let mut cost = Cost::NONE;
+        let mut largest = Cost::NONE;
         for set in settings.outlines()? {
             let interval_s = 1.0 / set.sample_rate_hz;
             let frequencies = set.conditions.iter().map(|c| c.excitation_frequency_hz);
@@ -157,9 +160,15 @@ impl Cost {
                 let records = frequencies.flat_map(|f| std::iter::repeat_n((f, set.duration_s), runs));
                 Cost::of_diagnosed(records, std::iter::empty(), interval_s, &diagnose)
             };
-            cost = cost.plus(set_cost);
+            // NaN is the largest: it is over every limit.
+            let steps = if set_cost.steps.is_nan() || largest.steps.is_nan() {
+                f64::NAN
+            } else {
+                largest.steps.max(set_cost.steps)
+            };
+            largest = Cost { steps, steps_per_period: largest.steps_per_period.max(set_cost.steps_per_period) };
         }
-        Ok(cost)
+        Ok(largest)
     }
 
     /// [`DIAGNOSIS_PASSES`] scoring passes over `records` (frequency, Hz, and

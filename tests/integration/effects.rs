@@ -157,13 +157,10 @@ fn paths(m: &Model, realisations: u32) -> (Vec<PathResult>, Vec<PathResult>) {
     )
 }
 
-/// Whether two GPU ensembles agree as this adapter can promise. The kernel
-/// is compiled with the model's effect parameters as constants, so a model
-/// with an effect at zero strength runs another compiled kernel than the
-/// baseline: lavapipe gives the same bits, a hardware GPU's compiler may
-/// contract and reorder f32 arithmetic differently (on an NVIDIA H100 the
-/// paths differed by at most 8.4e-7 relative, a few f32 units in the last
-/// place grown over the record). Hardware GPUs are held to 1e-5 relative.
+/// Whether two GPU ensembles agree as this adapter can promise: the kernel
+/// bakes the effect parameters in, so a zero-strength effect runs another
+/// compiled kernel. Lavapipe gives the same bits; a hardware compiler may
+/// round f32 differently (8.4e-7 relative at most on an H100), so 1e-5.
 fn gpu_paths_agree(a: &[PathResult], b: &[PathResult]) -> bool {
     let software = common::gpu().adapter().is_none_or(|(class, _)| class == AdapterClass::Software);
     if software {
