@@ -85,18 +85,11 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
 /// replicates' noise.
 fn every_fold_no_worse(refitted: &(UnitLosses, UnitLosses), folds: &[Vec<usize>], weights: &Weights<'_>) -> bool {
     folds.iter().all(|fold| {
-        let (mut before, mut after, mut n) = (0.0, 0.0, 0.0);
-        for (&u, &w) in weights.units.iter().zip(weights.w) {
-            if w == 0.0 || !fold.contains(&u) {
-                continue;
-            }
-            if let (Some(&(b, _)), Some(&(a, k))) = (refitted.0.get(&u), refitted.1.get(&u)) {
-                before += w * b;
-                after += w * a;
-                n += w * k as f64;
-            }
-        }
-        n == 0.0 || (after - before) / n <= weights.noise(n)
+        let (units, w): (Vec<usize>, Vec<f64>) =
+            weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
+        let at_fold = Weights { units: &units, w: &w, null: weights.null };
+        let ((before, n), (after, _)) = (at_fold.gap(&refitted.0), at_fold.gap(&refitted.1));
+        n == 0.0 || after - before <= at_fold.noise(n)
     })
 }
 
