@@ -78,12 +78,12 @@ impl ScoreRow {
         if let Some((column, value)) = numbers.iter().find_map(|&(c, v)| v.filter(|v| !v.is_finite()).map(|v| (c, v))) {
             return Some(format!("column `{column}`: {value} is not a finite number"));
         }
-        let x = limits::DISPLACEMENT_MAX_M;
+        let (x, p) = (limits::DISPLACEMENT_MAX_M, limits::PHASE_MAX_DEG);
         let (lo, hi, range) = match observable.unit() {
             Unit::Metre => (-x, x, format!("within ±{x} m")),
             Unit::SquareMetre => (0.0, x * x, format!("from 0 to {} m²", x * x)),
-            Unit::Degree => (-360.0, 360.0, "within ±360 degrees".to_string()),
-            Unit::SquareDegree => (0.0, 360.0 * 360.0, "from 0 to 360² degrees²".to_string()),
+            Unit::Degree => (-p, p, format!("within ±{p} degrees")),
+            Unit::SquareDegree => (0.0, p * p, format!("from 0 to {p}² degrees²")),
             Unit::Count => (0.0, f64::INFINITY, "not negative".to_string()),
             _ => return None,
         };

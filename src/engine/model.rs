@@ -44,6 +44,9 @@ pub mod limits {
     /// and the least bound on a simulated one
     /// ([`crate::engine::plausible_displacement_m`]), m.
     pub const DISPLACEMENT_MAX_M: f64 = 10.0;
+    /// Largest phase a measurement or a score may hold, in either sense
+    /// (a summary's phase mean; its variance up to the square), degrees.
+    pub const PHASE_MAX_DEG: f64 = 360.0;
     /// Largest speed of the block a measurement may hold (`v`), m/s.
     pub const SPEED_MAX_M_PER_S: f64 = 1e4;
     /// Stiffness `k = m (2π f0)²` the ranges above allow, N/m.

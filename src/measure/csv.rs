@@ -462,9 +462,9 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
             }
             _ => {}
         }
-        let displacement = limits::DISPLACEMENT_MAX_M;
+        let (displacement, phase) = (limits::DISPLACEMENT_MAX_M, limits::PHASE_MAX_DEG);
         let peak_mean_m = check(4, Bound::within(0.0, displacement), "m")?;
-        let phase_mean_deg = check(7, Bound::Range { lo: -360.0, hi: 360.0, lo_open: true }, "degrees")?;
+        let phase_mean_deg = check(7, Bound::Range { lo: -phase, hi: phase, lo_open: true }, "degrees")?;
         if peak_mean_m.is_none() && phase_mean_deg.is_none() {
             return Err(bad(
                 path,
@@ -483,7 +483,7 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
             peak_var_m2: check(5, Bound::within(0.0, displacement * displacement), "m²")?,
             n_peaks,
             phase_mean_deg,
-            phase_var_deg2: check(8, Bound::within(0.0, 360.0 * 360.0), "degrees²")?,
+            phase_var_deg2: check(8, Bound::within(0.0, phase * phase), "degrees²")?,
             line,
         });
         Ok(())

@@ -19,7 +19,7 @@
 //!    the noise. The leading contender is then refitted fold by fold from
 //!    scratch on each fold's own units, friction law included
 //!    ([`refit_folds`]), and must close a share beyond the noise that way
-//!    too (a further effect: most of what the ones before it left).
+//!    too, and predict no withheld fold worse than the model before it.
 //!    [`verdict::judge`] says which leaders are named and how sure that is.
 //! 4. The named family's best fit on the full data is polished on every
 //!    replicate ([`fit::polish`]) and becomes the model the next round
@@ -236,9 +236,8 @@ pub(crate) fn select(
         if rounds.is_empty() {
             first_round = candidates_of(&families, &pooled, &current, data, null);
         }
-        // The leader, where it closes a share beyond the noise; a further
-        // effect must close most of what is left.
-        let Some(top) = pooled.leader.filter(|&i| rounds.is_empty() || pooled.shares[i] >= cv::MOST) else { break };
+        // The leader, where it closes a share beyond the noise.
+        let Some(top) = pooled.leader else { break };
         let family = &families[top];
         progress(&format!("refitting {} without each fold", family.effect));
         let Some(refits) = refit_folds(family, &predictions[top].2, &current_folds, slope, &views, &search, engine)?
@@ -258,7 +257,7 @@ pub(crate) fn select(
                 point.share(&joint.1, &joint.0).0
             );
         }
-        if !beyond || (!rounds.is_empty() && share < cv::MOST) {
+        if !beyond {
             break;
         }
         let folds: Vec<FoldResult> = (0..views.len())
@@ -503,15 +502,13 @@ fn round(
         families.push((Family { effect, best: trial, form, parameters, pool, refined: false }, starts));
     }
     families.sort_by(|a, b| a.0.best.objective.total_cmp(&b.0.best.objective));
-    // The first round searches every form of the closest family and the
-    // best form of the next; a further round, where the question is only
-    // whether anything explains most of what is left, the best form of the
-    // closest.
-    let refined = if named.is_empty() { REFINED_FAMILIES } else { 1 };
-    for (rank, (family, starts)) in families.iter_mut().take(refined).enumerate() {
+    // Every round searches every form of the closest family and the best
+    // form of the next: a further effect is judged as the first is, so it
+    // is fitted as closely.
+    for (rank, (family, starts)) in families.iter_mut().take(REFINED_FAMILIES).enumerate() {
         progress(&format!("searching {} in full", family.effect));
         let mut starts = std::mem::take(starts);
-        if rank > 0 || !named.is_empty() {
+        if rank > 0 {
             // Only the form whose coarse fit came closest.
             let best = (0..starts.len())
                 .min_by(|&a, &b| {
