@@ -28,9 +28,8 @@ use crate::diagnose::data::{Data, Folds};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 
-/// Most of a gap: at least half of it. Two or more named effects must
-/// close this share of the baseline's gap together; a named model that
-/// closes less of it has its confidence scaled down in proportion.
+/// Most of a gap: at least half of it. A named model that closes less of
+/// the baseline's gap has its confidence scaled down in proportion.
 pub(crate) const MOST: f64 = 0.5;
 
 /// Bootstrap resamples of the contest.
