@@ -40,6 +40,7 @@
 //! kernel writes those itself.
 
 mod period;
+mod simd;
 mod step;
 #[cfg(test)]
 mod tests;

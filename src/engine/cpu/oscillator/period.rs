@@ -2,6 +2,7 @@
 //! together, grid step by grid step, and the samples a record takes on the
 //! way.
 
+use super::simd;
 use super::*;
 
 /// Realisations of one oscillator stepped together, grid step by grid step.
@@ -64,6 +65,27 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
         Mode::Slip(s) => f64::from(s),
         Mode::Stick => 0.0,
     });
+    if !MEMORY && !lanes[0].history {
+        // The baseline's step as vector code: the same arithmetic.
+        let state = simd::SlipLanes {
+            x_m: std::array::from_fn(|l| lanes[l].x_m),
+            v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
+            sign: signs,
+            friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
+            normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
+            cos: std::array::from_fn(|l| trigs[l].cos),
+            sin: std::array::from_fn(|l| trigs[l].sin),
+        };
+        let step = simd::slip_step(&state, &lanes[0].slip_law(), h, turn);
+        for l in 0..N {
+            trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
+                lanes[l].commit_slip_lane(&step, l, measuring)
+            } else {
+                lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring)
+            };
+        }
+        return;
+    }
     let steps: [Option<SlipStep>; N] = std::array::from_fn(|l| {
         let p = &lanes[l];
         (signs[l] != 0.0).then(|| p.rk4_slip_with::<MEMORY>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))

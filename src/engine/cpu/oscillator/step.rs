@@ -375,6 +375,42 @@ impl Path<'_> {
         }
     }
 
+    /// [`Path::commit_slip`] of lane `l` of a vector step ([`simd`]),
+    /// without a friction memory (its RK4 adds 0 to it).
+    #[inline(always)]
+    pub(super) fn commit_slip_lane<const N: usize>(
+        &mut self,
+        step: &simd::SlippedLanes<N>,
+        l: usize,
+        measuring: bool,
+    ) -> Trig {
+        if measuring {
+            self.period_cos_integral += step.cos_integral[l];
+            self.period_sin_integral += step.sin_integral[l];
+        }
+        self.x_m = step.x_m[l];
+        self.v_m_per_s = step.v_m_per_s[l];
+        // As the scalar step's `m0 + h/6 · 0` (which turns −0 into +0).
+        self.memory += 0.0;
+        self.period_max_x_m = self.period_max_x_m.max(step.x_m[l]);
+        Trig { cos: step.end_cos[l], sin: step.end_sin[l] }
+    }
+
+    /// The baseline law and the rig as the vector step takes them.
+    pub(super) fn slip_law(&self) -> simd::SlipLaw {
+        let o = self.osc;
+        simd::SlipLaw {
+            a_offset: self.law_a + o.effects.friction_offset,
+            b: self.law_b,
+            c_s_per_m: o.friction_c_s_per_m,
+            d_s2_per_m2: self.law_d,
+            stiffness_n_per_m: o.stiffness_n_per_m,
+            base_amplitude_m: o.base_amplitude_m,
+            damping_n_s_per_m: o.damping_n_s_per_m,
+            inv_mass: self.inv_mass,
+        }
+    }
+
     /// Commits a slip step over `h_s` seconds that ends still under way:
     /// the state, the period's largest x, and the phase integrals when
     /// `measuring`. Returns the base's trig at its end.
