@@ -10,6 +10,7 @@
 //! of threads.
 
 pub mod effects;
+mod noise;
 pub mod oscillator;
 
 use rayon::prelude::*;
@@ -17,7 +18,7 @@ use rayon::prelude::*;
 use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, Sample};
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::schedule::{first_sampled_interval, record_cycles, samples_at_noise_boundaries};
-use crate::engine::{Backend, BackendKind, Job, Output, Record};
+use crate::engine::{Backend, BackendKind, Job, Output, Record, rng};
 use crate::error::{Error, Result};
 use oscillator::{LANE_WIDTHS, LANES, Path, Sampler, phase_of, run_period};
 
@@ -205,7 +206,17 @@ pub(crate) fn simulate_paths(
     initial: InitialState,
     mut samplers: Option<&mut [Sampler]>,
 ) -> Vec<PathResult> {
-    let mut lanes: Vec<Path<'_>> = realisations.iter().map(|&r| Path::new(osc, seed, r, initial)).collect();
+    // The intervals the run draws (the last boundary's included).
+    let intervals = osc.noise_intervals_in(u64::from(plan.warmup_cycles + plan.measured_cycles)) + 1;
+    let mut lanes: Vec<Path<'_>> = realisations
+        .iter()
+        .map(|&r| {
+            let mut path = Path::new(osc, seed, r, initial);
+            let table = u64::try_from(intervals).ok().and_then(|n| noise::pair_a_table(rng::seed_key(seed), r, n));
+            path.pair_a_table = noise::PathPairs(table);
+            path
+        })
+        .collect();
     let mut results: Vec<PathResult> = realisations
         .iter()
         .map(|_| PathResult {

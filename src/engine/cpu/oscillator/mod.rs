@@ -49,7 +49,7 @@ mod tests;
 pub(crate) use period::HALF_LANES;
 pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
-use crate::engine::cpu::effects;
+use crate::engine::cpu::{effects, noise};
 use crate::engine::effects::{
     AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, Memory, STICTION_DECAY_M,
     StictionForm, drift_factor,
@@ -164,6 +164,10 @@ pub(crate) struct Path<'a> {
     osc: &'a Oscillator,
     key: [u32; 2],
     realisation: u32,
+    /// The main stream's pair A of this realisation's intervals, drawn
+    /// once for every path of it ([`noise`]); where it ends (or with
+    /// none), [`Path::draw_noise`] draws them itself.
+    pub(crate) pair_a_table: noise::PathPairs,
     /// Displacement x, m.
     pub(crate) x_m: f64,
     /// Velocity v, m/s.
@@ -237,6 +241,7 @@ impl<'a> Path<'a> {
             osc,
             key: rng::seed_key(seed),
             realisation,
+            pair_a_table: noise::PathPairs::default(),
             x_m: initial.x_m,
             v_m_per_s: initial.v_m_per_s,
             mode: Mode::Stick,
@@ -287,19 +292,22 @@ impl<'a> Path<'a> {
     fn draw_noise(&mut self) {
         let o = self.osc;
         let e = &o.effects;
-        let main = rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
-        let (white, xi_n) = rng::pair_a(main);
-        let friction_block = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
-            rng::noise_block(
-                self.key,
-                self.realisation,
-                rng::STREAM_MAIN,
-                self.interval / u64::from(e.colour_hold_intervals),
-            )
-        } else {
-            main
+        let block = |interval: u64| rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, interval);
+        let main = || block(self.interval);
+        let (white, xi_n) = match self.pair_a_table.get(self.interval) {
+            Some(pair) => pair,
+            None => rng::pair_a(main()),
         };
-        let z = if friction_block == main { white } else { rng::pair_a(friction_block).0 };
+        // The block the friction's value comes from (its interval's, or
+        // the first of its hold): Philox is one-to-one on counters, so
+        // the blocks are the same exactly when their intervals are.
+        let friction_interval = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
+            self.interval / u64::from(e.colour_hold_intervals)
+        } else {
+            self.interval
+        };
+        let friction_block = || block(friction_interval);
+        let z = if friction_interval == self.interval { white } else { rng::pair_a(friction_block()).0 };
         let colour = || rng::noise_block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
         let first = self.interval == 0;
         let ar1 = |state: f64, rho: f64, innovation: f64| {
@@ -338,7 +346,7 @@ impl<'a> Path<'a> {
         let xi_mu = if e.non_gaussian_strength == 0.0 {
             g
         } else {
-            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block).0)
+            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block()).0)
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
@@ -348,7 +356,7 @@ impl<'a> Path<'a> {
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
             StictionForm::Noisy if e.stiction_excess != 0.0 => {
-                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main).1).max(0.0)
+                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main()).1).max(0.0)
             }
             StictionForm::Dwell if self.mode == Mode::Stick => {
                 effects::dwell_excess(e.stiction_excess, t_s - self.stick_since_s, e.stiction_dwell_s)
