@@ -27,9 +27,9 @@ pub(crate) const LANE_WIDTHS: [usize; 2] = [LANES, HALF_LANES];
 /// trig in `trigs`. With a set of lanes of one of the [`LANE_WIDTHS`], the
 /// slip step is taken for every slipping lane first, as if none met an
 /// event, and kept where the lane still slips at the step's end; every other
-/// lane takes [`Path::advance_segment`] from the step's start (a slipping
-/// one repeats that same step first), so the answers are those of one path
-/// at a time, bit for bit.
+/// lane takes [`Path::advance_segment_past`] from the step's start (a
+/// slipping one told where that same step ended, so it takes it no second
+/// time), so the answers are those of one path at a time, bit for bit.
 fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
     let memory = lanes[0].memory_form != Memory::None;
     match lanes.len() {
@@ -81,7 +81,8 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
             trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
                 lanes[l].commit_slip_lane(&step, l, measuring)
             } else {
-                lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring)
+                let past_zero = (signs[l] != 0.0).then_some(step.v_m_per_s[l]);
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
             };
         }
         return;
@@ -93,7 +94,10 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
     for l in 0..N {
         trigs[l] = match &steps[l] {
             Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
-            _ => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
+            Some(step) => {
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(step.v_m_per_s))
+            }
+            None => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
         };
     }
 }
