@@ -148,6 +148,9 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
     }
 }
 
+/// Most samples a record reserves room for before it is taken.
+const MAX_RESERVED_SAMPLES: f64 = 1e7;
+
 /// Realisations (at most [`LANES`], stepped together) sampled like a
 /// measured record: `seconds` of samples every `sample_interval_s`, starting
 /// after `warmup_cycles` periods, with times measured from the end of the
@@ -170,14 +173,21 @@ pub(crate) fn sample_records(
     let start_s = f64::from(warmup_cycles) * osc.period_s;
     let cycles = record_cycles(osc, seconds);
     let aligned = samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries);
+    // Room for every sample the cycles take (a few more than are kept), so
+    // the records are not copied as they grow (up to a bound: a larger
+    // record grows as before).
+    let expected = (f64::from(cycles) * osc.period_s / sample_interval_s).ceil();
+    let room = if (0.0..=MAX_RESERVED_SAMPLES).contains(&expected) { expected as usize + 2 } else { 0 };
     let mut samplers: Vec<Sampler> = realisations
         .iter()
         .map(|_| {
-            if aligned {
+            let mut sampler = if aligned {
                 Sampler::at_noise_boundaries(first_sampled_interval(osc, warmup_cycles))
             } else {
                 Sampler::new(sample_interval_s, start_s)
-            }
+            };
+            sampler.samples.reserve(room);
+            sampler
         })
         .collect();
     let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
