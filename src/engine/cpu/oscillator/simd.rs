@@ -220,3 +220,70 @@ fn slip_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64
         sin_integral: sin_integral.0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every compiled copy of the step gives the same bits (the one the
+    /// processor runs is checked against the scalar path elsewhere), with
+    /// lanes slipping either way, past a velocity zero and stuck.
+    #[test]
+    fn every_copy_of_the_step_gives_the_same_bits() {
+        let law = SlipLaw {
+            a_offset: 0.35,
+            b: 0.1,
+            c_s_per_m: 40.0,
+            d_s2_per_m2: 0.02,
+            stiffness_n_per_m: 2.0e4,
+            base_amplitude_m: 1e-3,
+            damping_n_s_per_m: 3.0,
+            inv_mass: 1.0 / 1.6,
+        };
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let mut lanes = SlipLanes::<8> {
+                x_m: [0.0; 8],
+                v_m_per_s: [0.0; 8],
+                sign: [0.0; 8],
+                friction_noise: [0.0; 8],
+                normal_force_n: [0.0; 8],
+                cos: [0.0; 8],
+                sin: [0.0; 8],
+            };
+            for l in 0..8 {
+                let angle = std::f64::consts::TAU * uniform();
+                lanes.x_m[l] = 2e-3 * (uniform() - 0.5);
+                lanes.v_m_per_s[l] = 0.1 * (uniform() - 0.5);
+                lanes.sign[l] = [-1.0, 0.0, 1.0][l % 3];
+                lanes.friction_noise[l] = 0.1 * (uniform() - 0.5);
+                lanes.normal_force_n[l] = 16.0 * uniform();
+                (lanes.cos[l], lanes.sin[l]) = (angle.cos(), angle.sin());
+            }
+            let h_s = 2e-3 * uniform();
+            let half = Trig { cos: (0.5 * 70.0 * h_s).cos(), sin: (0.5 * 70.0 * h_s).sin() };
+            let bits = |s: SlippedLanes<8>| {
+                [s.x_m, s.v_m_per_s, s.end_cos, s.end_sin, s.cos_integral, s.sin_integral].map(|a| a.map(f64::to_bits))
+            };
+            let portable = bits(slip_step_lanes(&lanes, &law, h_s, half));
+            assert_eq!(bits(slip_step(&lanes, &law, h_s, half)), portable);
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the processor has AVX2, checked just above.
+                    assert_eq!(bits(unsafe { slip_step_avx2(&lanes, &law, h_s, half) }), portable);
+                }
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the processor has AVX-512F, checked just above.
+                    assert_eq!(bits(unsafe { slip_step_avx512(&lanes, &law, h_s, half) }), portable);
+                }
+            }
+        }
+    }
+}
