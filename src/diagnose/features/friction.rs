@@ -16,7 +16,9 @@ fn stribeck_grid() -> [f64; STRIBECK_RATES] {
     std::array::from_fn(|i| 0.3 * 10f64.powf(i as f64 * 0.4))
 }
 
-/// Friction-coefficient features (see [`FrictionFeatures`]).
+crate::vector::widest_vectors! {
+/// Friction-coefficient features (see [`FrictionFeatures`]), with the
+/// widest vectors there are (the Stribeck rates' sums side by side).
 pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Option<FrictionFeatures> {
     let n = v.len().min(force.len()).min(normal.len());
     let (v, force, normal) = (&v[..n], &force[..n], &normal[..n]);
@@ -198,6 +200,7 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
         low_speed_mu_mean,
         stiction_excess,
     })
+}
 }
 
 /// The ratio (q97.5 − q2.5) / (q75 − q25) of a Gaussian: 3.919 93 / 1.348 98.
