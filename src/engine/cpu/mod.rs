@@ -59,6 +59,7 @@ impl Backend for CpuBackend {
         let total = job.work();
         let per_path = job.plan.total_cycles();
         let chunk = paths_per_chunk(total_paths);
+        let shared = shares_draws(job, &oscillators);
         let mut output = Output::default();
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
@@ -75,6 +76,7 @@ impl Backend for CpuBackend {
                             interval_s,
                             at_noise_boundaries,
                             job.points[p].initial,
+                            shared,
                         )
                     })
                     .collect();
@@ -96,7 +98,8 @@ impl Backend for CpuBackend {
             let paths: Vec<PathResult> = lane_groups(job, start, end, lane_width(end - start))
                 .into_par_iter()
                 .flat_map_iter(|(p, realisations)| {
-                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, job.points[p].initial, None)
+                    let initial = job.points[p].initial;
+                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, initial, shared, None)
                 })
                 .collect();
             for (i, path) in (start..end).zip(&paths) {
@@ -119,6 +122,34 @@ impl Backend for CpuBackend {
         Ok(output)
     }
 }
+
+/// Whether the job's paths share their main-stream draws through
+/// [`noise`]'s tables: where its points integrate the same realisations
+/// (a sweep: each table is read once per point), or where its tables are
+/// small (at most [`SHARED_JOB_BYTES`]: a diagnosis's replicates, which
+/// its next trial integrates again). A single point's large ensemble, read
+/// once, draws as it goes: tables would only add their memory traffic.
+fn shares_draws(job: &Job<'_>, oscillators: &[Oscillator]) -> bool {
+    let intervals = oscillators
+        .iter()
+        .map(|o| {
+            let cycles = match job.record {
+                Record::Samples { duration_s, .. } => {
+                    u64::from(job.plan.warmup_cycles) + u64::from(record_cycles(o, duration_s))
+                }
+                _ => job.plan.total_cycles(),
+            };
+            o.noise_intervals_in(cycles) + 1
+        })
+        .max()
+        .unwrap_or(0);
+    let bytes = intervals.saturating_mul(u128::from(job.realisations)) * 16;
+    job.points.len() > 1 || bytes <= SHARED_JOB_BYTES as u128
+}
+
+/// Largest tables in all a job of one point shares, bytes (a diagnosis's
+/// eight replicates of 50 s records take 4 MB).
+const SHARED_JOB_BYTES: usize = noise::BUDGET_BYTES / 16;
 
 fn sample_is_finite(s: &Sample) -> bool {
     [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n].iter().all(|v| v.is_finite())
@@ -169,6 +200,7 @@ pub(crate) fn sample_records(
     sample_interval_s: f64,
     at_noise_boundaries: bool,
     initial: InitialState,
+    shared: bool,
 ) -> Vec<Vec<Sample>> {
     let start_s = f64::from(warmup_cycles) * osc.period_s;
     let cycles = record_cycles(osc, seconds);
@@ -191,7 +223,7 @@ pub(crate) fn sample_records(
         })
         .collect();
     let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
-    simulate_paths(osc, seed, realisations, plan, initial, Some(&mut samplers));
+    simulate_paths(osc, seed, realisations, plan, initial, shared, Some(&mut samplers));
     samplers
         .into_iter()
         .map(|sampler| {
@@ -207,13 +239,17 @@ pub(crate) fn sample_records(
 
 /// Runs realisations `realisations` (at most [`LANES`]) of `osc`, stepped
 /// together, and returns each one's per-period peaks and phases; with
-/// `samplers` (one per realisation), samples each.
+/// `samplers` (one per realisation), samples each. With `shared`, each
+/// realisation's main-stream draws come from a shared table ([`noise`]),
+/// made now unless held; without, from one if it is held. The answers are
+/// the same either way.
 pub(crate) fn simulate_paths(
     osc: &Oscillator,
     seed: u64,
     realisations: &[u32],
     plan: RunPlan,
     initial: InitialState,
+    shared: bool,
     mut samplers: Option<&mut [Sampler]>,
 ) -> Vec<PathResult> {
     // The intervals the run draws (the last boundary's included).
@@ -222,7 +258,8 @@ pub(crate) fn simulate_paths(
         .iter()
         .map(|&r| {
             let mut path = Path::new(osc, seed, r, initial);
-            let table = u64::try_from(intervals).ok().and_then(|n| noise::pair_a_table(rng::seed_key(seed), r, n));
+            let table =
+                u64::try_from(intervals).ok().and_then(|n| noise::pair_a_table(rng::seed_key(seed), r, n, shared));
             path.pair_a_table = noise::PathPairs(table);
             path
         })
@@ -361,10 +398,10 @@ mod tests {
                 let osc = Oscillator::new(&model, condition).expect("an oscillator");
                 let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
                 let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
-                let together = simulate_paths(&osc, 9, &realisations, plan, initial, None);
+                let together = simulate_paths(&osc, 9, &realisations, plan, initial, true, None);
                 let mut stuck = 0;
                 for (r, path) in realisations.iter().zip(&together) {
-                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, None).remove(0);
+                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, false, None).remove(0);
                     let what = format!("{overrides:?} at {hz} Hz, realisation {r}");
                     assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
                     assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
@@ -374,9 +411,9 @@ mod tests {
                 if hz == 12.0 && overrides.is_empty() {
                     assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
                 }
-                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial);
+                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial, true);
                 for (r, record) in realisations.iter().zip(&records) {
-                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial).remove(0);
+                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial, false).remove(0);
                     assert_eq!(record.len(), 600);
                     let flat = |s: &[Sample]| -> Vec<u64> {
                         s.iter()

@@ -13,9 +13,8 @@
 //! nothing changes but the time.
 //!
 //! The tables are process-wide, keyed by (seed key, realisation), and held
-//! within [`BUDGET_BYTES`]: the least recently used ones make room for new
-//! ones; a table that would not fit alone is not kept (its paths draw as
-//! before).
+//! within [`BUDGET_BYTES`] ([`pair_a_table`] says which make room); a path
+//! without one draws as before.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -64,9 +63,16 @@ static TABLES: Mutex<Option<Tables>> = Mutex::new(None);
 const BUDGET_INTERVALS: usize = BUDGET_BYTES / std::mem::size_of::<(f64, f64)>();
 
 /// Pair A of realisation `realisation` under Philox key `key` for at least
-/// the intervals `0..intervals`, drawn now unless a table as long is held;
-/// `None` where `intervals` alone exceeds the budget.
-pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64) -> Option<PairTable> {
+/// the intervals `0..intervals`: a table as long if one is held, else (with
+/// `make`, and room for it) one drawn now; `None` otherwise (the path draws
+/// as it goes).
+///
+/// Room is made by dropping tables of other seeds, least recently used
+/// first; this seed's tables stay. A run reads its tables in turn, over and
+/// over (a sweep's points, a diagnosis's trials): where they do not all
+/// fit, dropping the least recently used would drop each one just before
+/// it is read again, and none would ever be read twice.
+pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64, make: bool) -> Option<PairTable> {
     let wanted = usize::try_from(intervals).ok().filter(|&n| n <= BUDGET_INTERVALS)?;
     {
         let mut guard = TABLES.lock().unwrap_or_else(|e| e.into_inner());
@@ -78,6 +84,9 @@ pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64) -> O
         {
             *used = tick;
             return Some(table.clone());
+        }
+        if !make || tables.seed_held(key, realisation) + wanted > BUDGET_INTERVALS {
+            return None;
         }
     }
     // Drawn outside the lock, so that other threads' paths go on; two
@@ -91,7 +100,11 @@ pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64) -> O
         tables.held -= old.len();
     }
     while tables.held + wanted > BUDGET_INTERVALS {
-        let Some((&oldest, _)) = tables.by_path.iter().min_by_key(|(_, (_, used))| *used) else { break };
+        let oldest = tables.by_path.iter().filter(|((k, _), _)| *k != key).min_by_key(|(_, (_, used))| *used);
+        let Some((&oldest, _)) = oldest else {
+            // Filled by this seed's tables meanwhile: this one is used, not kept.
+            return Some(table);
+        };
         let (old, _) = tables.by_path.remove(&oldest).expect("a held table");
         tables.held -= old.len();
     }
@@ -100,6 +113,14 @@ pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64) -> O
     let tick = tables.tick;
     tables.by_path.insert((key, realisation), (table.clone(), tick));
     Some(table)
+}
+
+impl Tables {
+    /// Intervals held in tables of seed key `key`, but for realisation
+    /// `realisation`'s (which a longer one would replace).
+    fn seed_held(&self, key: [u32; 2], realisation: u32) -> usize {
+        self.by_path.iter().filter(|((k, r), _)| *k == key && *r != realisation).map(|(_, (t, _))| t.len()).sum()
+    }
 }
 
 #[cfg(test)]
@@ -111,14 +132,17 @@ mod tests {
     #[test]
     fn tables_hold_the_draws() {
         let key = rng::seed_key(0x007A_B1E5);
-        let short = pair_a_table(key, 3, 5).expect("a table");
-        let long = pair_a_table(key, 3, 40).expect("a table");
+        let short = pair_a_table(key, 3, 5, true).expect("a table");
+        let long = pair_a_table(key, 3, 40, true).expect("a table");
         assert_eq!(long.len(), 40);
         for (i, &(white, xi_n)) in long.iter().enumerate() {
             let drawn = rng::pair_a(rng::noise_block(key, 3, rng::STREAM_MAIN, i as u64));
             assert_eq!((white.to_bits(), xi_n.to_bits()), (drawn.0.to_bits(), drawn.1.to_bits()));
         }
         assert_eq!(&long[..5], &short[..]);
-        assert!(pair_a_table(key, 3, BUDGET_INTERVALS as u64 + 1).is_none());
+        assert!(pair_a_table(key, 3, BUDGET_INTERVALS as u64 + 1, true).is_none());
+        // A held table serves a request that would not make one.
+        assert_eq!(pair_a_table(key, 3, 30, false).expect("the held table").len(), 40);
+        assert!(pair_a_table(key, 4, 30, false).is_none());
     }
 }

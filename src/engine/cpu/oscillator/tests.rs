@@ -244,7 +244,7 @@ fn paths_reading_the_noise_table_are_those_drawing_it() {
         let condition = crate::engine::Condition { excitation_frequency_hz: 12.0, normal_force_n: 16.39 };
         let osc = Oscillator::new(&model, condition).unwrap();
         let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
-        let table = noise::pair_a_table(rng::seed_key(4), 2, osc.noise_intervals_in(20) as u64 + 1);
+        let table = noise::pair_a_table(rng::seed_key(4), 2, osc.noise_intervals_in(20) as u64 + 1, true);
         let mut read = Path::new(&osc, 4, 2, initial);
         read.pair_a_table = noise::PathPairs(table);
         let mut drawn = Path::new(&osc, 4, 2, initial);
