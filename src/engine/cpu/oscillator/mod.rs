@@ -290,11 +290,23 @@ impl<'a> Path<'a> {
     /// and the normal force's; pair B and the colour stream are drawn only
     /// by the effects that use them.
     fn draw_noise(&mut self) {
+        self.draw_noise_with(None);
+    }
+
+    /// Whether [`Path::draw_noise`] draws the current interval's pair A
+    /// itself (no table holds it).
+    fn draws_pair_a(&self) -> bool {
+        self.pair_a_table.get(self.interval).is_none()
+    }
+
+    /// [`Path::draw_noise`] with the current interval's pair A drawn
+    /// already (`Some`: the same values as its own draw).
+    fn draw_noise_with(&mut self, pair_a: Option<(f64, f64)>) {
         let o = self.osc;
         let e = &o.effects;
         let block = |interval: u64| rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, interval);
         let main = || block(self.interval);
-        let (white, xi_n) = match self.pair_a_table.get(self.interval) {
+        let (white, xi_n) = match pair_a.or_else(|| self.pair_a_table.get(self.interval)) {
             Some(pair) => pair,
             None => rng::pair_a(main()),
         };

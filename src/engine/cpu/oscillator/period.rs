@@ -14,6 +14,9 @@ use super::*;
 /// the last).
 pub(crate) const LANES: usize = 8;
 
+// A group's lanes draw their noise side by side (`rng::pair_a_side_by_side`).
+const _: () = assert!(LANES <= rng::SIDE_BY_SIDE);
+
 /// The smaller set of lanes stepped together: a diagnosis's search runs 4
 /// replicates per condition.
 pub(crate) const HALF_LANES: usize = LANES / 2;
@@ -158,7 +161,18 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
                 path.interval_phase = (next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
                 path.interval += 1;
                 path.next_boundary += o.noise_interval_fixed;
-                path.draw_noise();
+            }
+            // Lanes without a table draw their pairs side by side.
+            let mut pairs = [None; LANES];
+            if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
+                let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
+                let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
+                for (pair, drawn) in pairs.iter_mut().zip(drawn) {
+                    *pair = Some(drawn);
+                }
+            }
+            for (path, pair) in lanes.iter_mut().zip(pairs) {
+                path.draw_noise_with(pair);
             }
             // A sampler aligned with the noise samples at each boundary.
             sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);
