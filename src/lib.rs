@@ -28,5 +28,6 @@ pub mod io;
 pub mod measure;
 pub mod sweep;
 pub mod text;
+mod vector;
 
 pub use error::{Error, Result};

@@ -10,6 +10,7 @@
 //! of threads.
 
 pub mod effects;
+mod noise;
 pub mod oscillator;
 
 use rayon::prelude::*;
@@ -17,7 +18,7 @@ use rayon::prelude::*;
 use crate::engine::oscillator::{InitialState, Oscillator, PathResult, RunPlan, Sample};
 use crate::engine::reduce::PointAccumulator;
 use crate::engine::schedule::{first_sampled_interval, record_cycles, samples_at_noise_boundaries};
-use crate::engine::{Backend, BackendKind, Job, Output, Record};
+use crate::engine::{Backend, BackendKind, Job, Output, Record, rng};
 use crate::error::{Error, Result};
 use oscillator::{LANE_WIDTHS, LANES, Path, Sampler, phase_of, run_period};
 
@@ -58,6 +59,7 @@ impl Backend for CpuBackend {
         let total = job.work();
         let per_path = job.plan.total_cycles();
         let chunk = paths_per_chunk(total_paths);
+        let shared = shares_draws(job, &oscillators);
         let mut output = Output::default();
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
@@ -74,6 +76,7 @@ impl Backend for CpuBackend {
                             interval_s,
                             at_noise_boundaries,
                             job.points[p].initial,
+                            shared,
                         )
                     })
                     .collect();
@@ -95,7 +98,8 @@ impl Backend for CpuBackend {
             let paths: Vec<PathResult> = lane_groups(job, start, end, lane_width(end - start))
                 .into_par_iter()
                 .flat_map_iter(|(p, realisations)| {
-                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, job.points[p].initial, None)
+                    let initial = job.points[p].initial;
+                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, initial, shared, None)
                 })
                 .collect();
             for (i, path) in (start..end).zip(&paths) {
@@ -118,6 +122,34 @@ impl Backend for CpuBackend {
         Ok(output)
     }
 }
+
+/// Whether the job's paths share their main-stream draws through
+/// [`noise`]'s tables: where its points integrate the same realisations
+/// (a sweep: each table is read once per point), or where its tables are
+/// small (at most [`SHARED_JOB_BYTES`]: a diagnosis's replicates, which
+/// its next trial integrates again). A single point's large ensemble, read
+/// once, draws as it goes: tables would only add their memory traffic.
+fn shares_draws(job: &Job<'_>, oscillators: &[Oscillator]) -> bool {
+    let intervals = oscillators
+        .iter()
+        .map(|o| {
+            let cycles = match job.record {
+                Record::Samples { duration_s, .. } => {
+                    u64::from(job.plan.warmup_cycles) + u64::from(record_cycles(o, duration_s))
+                }
+                _ => job.plan.total_cycles(),
+            };
+            o.noise_intervals_in(cycles) + 1
+        })
+        .max()
+        .unwrap_or(0);
+    let bytes = intervals.saturating_mul(u128::from(job.realisations)) * 16;
+    job.points.len() > 1 || bytes <= SHARED_JOB_BYTES as u128
+}
+
+/// Largest tables in all a job of one point shares, bytes (a diagnosis's
+/// eight replicates of 50 s records take 4 MB).
+const SHARED_JOB_BYTES: usize = noise::BUDGET_BYTES / 16;
 
 fn sample_is_finite(s: &Sample) -> bool {
     [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n].iter().all(|v| v.is_finite())
@@ -147,6 +179,9 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
     }
 }
 
+/// Most samples a record reserves room for before it is taken.
+const MAX_RESERVED_SAMPLES: f64 = 1e7;
+
 /// Realisations (at most [`LANES`], stepped together) sampled like a
 /// measured record: `seconds` of samples every `sample_interval_s`, starting
 /// after `warmup_cycles` periods, with times measured from the end of the
@@ -165,22 +200,30 @@ pub(crate) fn sample_records(
     sample_interval_s: f64,
     at_noise_boundaries: bool,
     initial: InitialState,
+    shared: bool,
 ) -> Vec<Vec<Sample>> {
     let start_s = f64::from(warmup_cycles) * osc.period_s;
     let cycles = record_cycles(osc, seconds);
     let aligned = samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries);
+    // Room for every sample the cycles take (a few more than are kept), so
+    // the records are not copied as they grow (up to a bound: a larger
+    // record grows as before).
+    let expected = (f64::from(cycles) * osc.period_s / sample_interval_s).ceil();
+    let room = if (0.0..=MAX_RESERVED_SAMPLES).contains(&expected) { expected as usize + 2 } else { 0 };
     let mut samplers: Vec<Sampler> = realisations
         .iter()
         .map(|_| {
-            if aligned {
+            let mut sampler = if aligned {
                 Sampler::at_noise_boundaries(first_sampled_interval(osc, warmup_cycles))
             } else {
                 Sampler::new(sample_interval_s, start_s)
-            }
+            };
+            sampler.samples.reserve(room);
+            sampler
         })
         .collect();
     let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
-    simulate_paths(osc, seed, realisations, plan, initial, Some(&mut samplers));
+    simulate_paths(osc, seed, realisations, plan, initial, shared, Some(&mut samplers));
     samplers
         .into_iter()
         .map(|sampler| {
@@ -196,16 +239,31 @@ pub(crate) fn sample_records(
 
 /// Runs realisations `realisations` (at most [`LANES`]) of `osc`, stepped
 /// together, and returns each one's per-period peaks and phases; with
-/// `samplers` (one per realisation), samples each.
+/// `samplers` (one per realisation), samples each. With `shared`, each
+/// realisation's main-stream draws come from a shared table ([`noise`]),
+/// made now unless held; without, from one if it is held. The answers are
+/// the same either way.
 pub(crate) fn simulate_paths(
     osc: &Oscillator,
     seed: u64,
     realisations: &[u32],
     plan: RunPlan,
     initial: InitialState,
+    shared: bool,
     mut samplers: Option<&mut [Sampler]>,
 ) -> Vec<PathResult> {
-    let mut lanes: Vec<Path<'_>> = realisations.iter().map(|&r| Path::new(osc, seed, r, initial)).collect();
+    // The intervals the run draws (the last boundary's included).
+    let intervals = osc.noise_intervals_in(u64::from(plan.warmup_cycles + plan.measured_cycles)) + 1;
+    let mut lanes: Vec<Path<'_>> = realisations
+        .iter()
+        .map(|&r| {
+            let mut path = Path::new(osc, seed, r, initial);
+            let table =
+                u64::try_from(intervals).ok().and_then(|n| noise::pair_a_table(rng::seed_key(seed), r, n, shared));
+            path.pair_a_table = noise::PathPairs(table);
+            path
+        })
+        .collect();
     let mut results: Vec<PathResult> = realisations
         .iter()
         .map(|_| PathResult {
@@ -340,10 +398,10 @@ mod tests {
                 let osc = Oscillator::new(&model, condition).expect("an oscillator");
                 let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
                 let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
-                let together = simulate_paths(&osc, 9, &realisations, plan, initial, None);
+                let together = simulate_paths(&osc, 9, &realisations, plan, initial, true, None);
                 let mut stuck = 0;
                 for (r, path) in realisations.iter().zip(&together) {
-                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, None).remove(0);
+                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, false, None).remove(0);
                     let what = format!("{overrides:?} at {hz} Hz, realisation {r}");
                     assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
                     assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
@@ -353,9 +411,9 @@ mod tests {
                 if hz == 12.0 && overrides.is_empty() {
                     assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
                 }
-                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial);
+                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial, true);
                 for (r, record) in realisations.iter().zip(&records) {
-                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial).remove(0);
+                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial, false).remove(0);
                     assert_eq!(record.len(), 600);
                     let flat = |s: &[Sample]| -> Vec<u64> {
                         s.iter()

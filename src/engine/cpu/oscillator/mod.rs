@@ -17,7 +17,8 @@
 //! - `step.rs`: the slip ODE's RK4 step, velocity zeros, breakaway from
 //!   stick, and a segment between two grid times;
 //! - `period.rs`: a period of up to `LANES` paths stepped together, and the
-//!   output samples of records.
+//!   output samples of records;
+//! - `simd.rs`: the baseline's slip step of all lanes as vector code.
 //!
 //! `shaders/oscillator.wgsl` is the same algorithm in f32; the functions
 //! carry the kernel's names and come in its order, file after file. The two
@@ -33,13 +34,14 @@
 //! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
-//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all, then events one lane at a time (`run_period`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
+//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all (the baseline's as vector code, `simd`), then events one lane at a time (`run_period`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
 //!
 //! Output samples (records) between noise boundaries split steps on the CPU
 //! only; records sampled at the noise boundaries split none, and the GPU
 //! kernel writes those itself.
 
 mod period;
+mod simd;
 mod step;
 #[cfg(test)]
 mod tests;
@@ -48,7 +50,7 @@ mod tests;
 pub(crate) use period::HALF_LANES;
 pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
-use crate::engine::cpu::effects;
+use crate::engine::cpu::{effects, noise};
 use crate::engine::effects::{
     AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, Memory, STICTION_DECAY_M,
     StictionForm, drift_factor,
@@ -163,6 +165,10 @@ pub(crate) struct Path<'a> {
     osc: &'a Oscillator,
     key: [u32; 2],
     realisation: u32,
+    /// The main stream's pair A of this realisation's intervals, drawn
+    /// once for every path of it ([`noise`]); where it ends (or with
+    /// none), [`Path::draw_noise`] draws them itself.
+    pub(crate) pair_a_table: noise::PathPairs,
     /// Displacement x, m.
     pub(crate) x_m: f64,
     /// Velocity v, m/s.
@@ -236,6 +242,7 @@ impl<'a> Path<'a> {
             osc,
             key: rng::seed_key(seed),
             realisation,
+            pair_a_table: noise::PathPairs::default(),
             x_m: initial.x_m,
             v_m_per_s: initial.v_m_per_s,
             mode: Mode::Stick,
@@ -284,21 +291,36 @@ impl<'a> Path<'a> {
     /// and the normal force's; pair B and the colour stream are drawn only
     /// by the effects that use them.
     fn draw_noise(&mut self) {
+        self.draw_noise_with(None);
+    }
+
+    /// Whether [`Path::draw_noise`] draws the current interval's pair A
+    /// itself (no table holds it).
+    fn draws_pair_a(&self) -> bool {
+        self.pair_a_table.get(self.interval).is_none()
+    }
+
+    /// [`Path::draw_noise`] with the current interval's pair A drawn
+    /// already (`Some`: the same values as its own draw).
+    fn draw_noise_with(&mut self, pair_a: Option<(f64, f64)>) {
         let o = self.osc;
         let e = &o.effects;
-        let main = rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, self.interval);
-        let (white, xi_n) = rng::pair_a(main);
-        let friction_block = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
-            rng::noise_block(
-                self.key,
-                self.realisation,
-                rng::STREAM_MAIN,
-                self.interval / u64::from(e.colour_hold_intervals),
-            )
-        } else {
-            main
+        let block = |interval: u64| rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, interval);
+        let main = || block(self.interval);
+        let (white, xi_n) = match pair_a.or_else(|| self.pair_a_table.get(self.interval)) {
+            Some(pair) => pair,
+            None => rng::pair_a(main()),
         };
-        let z = if friction_block == main { white } else { rng::pair_a(friction_block).0 };
+        // The block the friction's value comes from (its interval's, or
+        // the first of its hold): Philox is one-to-one on counters, so
+        // the blocks are the same exactly when their intervals are.
+        let friction_interval = if e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1 {
+            self.interval / u64::from(e.colour_hold_intervals)
+        } else {
+            self.interval
+        };
+        let friction_block = || block(friction_interval);
+        let z = if friction_interval == self.interval { white } else { rng::pair_a(friction_block()).0 };
         let colour = || rng::noise_block(self.key, self.realisation, rng::STREAM_COLOUR, self.interval);
         let first = self.interval == 0;
         let ar1 = |state: f64, rho: f64, innovation: f64| {
@@ -337,7 +359,7 @@ impl<'a> Path<'a> {
         let xi_mu = if e.non_gaussian_strength == 0.0 {
             g
         } else {
-            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block).0)
+            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block()).0)
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
@@ -347,7 +369,7 @@ impl<'a> Path<'a> {
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
             StictionForm::Noisy if e.stiction_excess != 0.0 => {
-                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main).1).max(0.0)
+                e.stiction_excess * (1.0 + 0.5 * rng::pair_b(main()).1).max(0.0)
             }
             StictionForm::Dwell if self.mode == Mode::Stick => {
                 effects::dwell_excess(e.stiction_excess, t_s - self.stick_since_s, e.stiction_dwell_s)

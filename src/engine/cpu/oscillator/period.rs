@@ -2,6 +2,7 @@
 //! together, grid step by grid step, and the samples a record takes on the
 //! way.
 
+use super::simd;
 use super::*;
 
 /// Realisations of one oscillator stepped together, grid step by grid step.
@@ -12,6 +13,9 @@ use super::*;
 /// the reference was latency-bound: each stage's division and sums wait on
 /// the last).
 pub(crate) const LANES: usize = 8;
+
+// A group's lanes draw their noise side by side (`rng::pair_a_side_by_side`).
+const _: () = assert!(LANES <= rng::SIDE_BY_SIDE);
 
 /// The smaller set of lanes stepped together: a diagnosis's search runs 4
 /// replicates per condition.
@@ -26,9 +30,9 @@ pub(crate) const LANE_WIDTHS: [usize; 2] = [LANES, HALF_LANES];
 /// trig in `trigs`. With a set of lanes of one of the [`LANE_WIDTHS`], the
 /// slip step is taken for every slipping lane first, as if none met an
 /// event, and kept where the lane still slips at the step's end; every other
-/// lane takes [`Path::advance_segment`] from the step's start (a slipping
-/// one repeats that same step first), so the answers are those of one path
-/// at a time, bit for bit.
+/// lane takes [`Path::advance_segment_past`] from the step's start (a
+/// slipping one told where that same step ended, so it takes it no second
+/// time), so the answers are those of one path at a time, bit for bit.
 fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
     let memory = lanes[0].memory_form != Memory::None;
     match lanes.len() {
@@ -64,6 +68,28 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
         Mode::Slip(s) => f64::from(s),
         Mode::Stick => 0.0,
     });
+    if !MEMORY && !lanes[0].history {
+        // The baseline's step as vector code: the same arithmetic.
+        let state = simd::SlipLanes {
+            x_m: std::array::from_fn(|l| lanes[l].x_m),
+            v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
+            sign: signs,
+            friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
+            normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
+            cos: std::array::from_fn(|l| trigs[l].cos),
+            sin: std::array::from_fn(|l| trigs[l].sin),
+        };
+        let step = simd::slip_step(&state, &lanes[0].slip_law(), h, turn);
+        for l in 0..N {
+            trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
+                lanes[l].commit_slip_lane(&step, l, measuring)
+            } else {
+                let past_zero = (signs[l] != 0.0).then_some(step.v_m_per_s[l]);
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
+            };
+        }
+        return;
+    }
     let steps: [Option<SlipStep>; N] = std::array::from_fn(|l| {
         let p = &lanes[l];
         (signs[l] != 0.0).then(|| p.rk4_slip_with::<MEMORY>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))
@@ -71,7 +97,10 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
     for l in 0..N {
         trigs[l] = match &steps[l] {
             Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
-            _ => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
+            Some(step) => {
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(step.v_m_per_s))
+            }
+            None => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
         };
     }
 }
@@ -132,7 +161,18 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
                 path.interval_phase = (next_boundary & 0xFFFF_FFFF) as f64 / FIXED_ONE;
                 path.interval += 1;
                 path.next_boundary += o.noise_interval_fixed;
-                path.draw_noise();
+            }
+            // Lanes without a table draw their pairs side by side.
+            let mut pairs = [None; LANES];
+            if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
+                let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
+                let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
+                for (pair, drawn) in pairs.iter_mut().zip(drawn) {
+                    *pair = Some(drawn);
+                }
+            }
+            for (path, pair) in lanes.iter_mut().zip(pairs) {
+                path.draw_noise_with(pair);
             }
             // A sampler aligned with the noise samples at each boundary.
             sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);

@@ -100,12 +100,21 @@ impl Path<'_> {
     /// The step length `h* ∈ (0, h]` at which the RK4 map's velocity reaches
     /// zero, given that `sign · v` is ≤ 0 after the full step `h`, and the
     /// RK4 step to it when it was taken on the way (not for `h* = h`).
-    fn locate_velocity_zero(&self, start: Trig, h_s: f64, sign: f64) -> (f64, Option<SlipStep>) {
+    /// `full_step_v` is the full step's end velocity (m/s) where the caller
+    /// has taken that very step.
+    fn locate_velocity_zero(
+        &self,
+        start: Trig,
+        h_s: f64,
+        sign: f64,
+        full_step_v: Option<f64>,
+    ) -> (f64, Option<SlipStep>) {
         let w = self.osc.omega_rad_per_s;
         let step_to = |h: f64| self.rk4_slip(start, self.x_m, self.v_m_per_s, h, Trig::turn(0.5 * w * h), sign);
         let g = |step: &SlipStep| sign * step.v_m_per_s;
         let (mut lo, mut g_lo) = (0.0, sign * self.v_m_per_s);
-        let (mut hi, mut g_hi) = (h_s, g(&step_to(h_s)));
+        let g_full = full_step_v.map_or_else(|| g(&step_to(h_s)), |v| sign * v);
+        let (mut hi, mut g_hi) = (h_s, g_full);
         let mut hi_step = None;
         if g_lo <= 0.0 {
             // Slip starting from rest: the first of h/2, h/4, …, 2⁻⁶⁰ h at
@@ -272,17 +281,40 @@ impl Path<'_> {
     /// (computed once for equal steps). Returns the base's trig at `t_b`.
     pub(super) fn advance_segment(
         &mut self,
+        t_a: f64,
+        t_b: f64,
+        start: Trig,
+        regular: Option<Trig>,
+        measuring: bool,
+    ) -> Trig {
+        self.advance_segment_past(t_a, t_b, start, regular, measuring, None)
+    }
+
+    /// [`Path::advance_segment`] of a slipping path whose slip step over
+    /// the whole segment (with `regular`) is known to end at velocity
+    /// `full_step_v` (m/s) with `sign · v ≤ 0`, past a velocity zero (a
+    /// vector step's, [`simd`]), or of any path with `None`. The step is
+    /// the one this would take first, so it is not taken again, and where
+    /// its half-turn is the one [`Path::locate_velocity_zero`] takes, the
+    /// search starts from its velocity instead of a step of its own: the
+    /// same steps, bit for bit, taken once.
+    pub(super) fn advance_segment_past(
+        &mut self,
         mut t_a: f64,
         t_b: f64,
         mut start: Trig,
         regular: Option<Trig>,
         measuring: bool,
+        full_step_v: Option<f64>,
     ) -> Trig {
         let w = self.osc.omega_rad_per_s;
         let period_start_s = self.period as f64 * self.osc.period_s;
         let mut events = 0;
         let mut whole = regular;
+        let mut full_step_v = full_step_v;
         while t_a < t_b {
+            // Only the first pass takes the segment's first step whole.
+            let known_v = full_step_v.take();
             match self.mode {
                 Mode::Stick => {
                     let until =
@@ -319,11 +351,20 @@ impl Path<'_> {
                     let sign = f64::from(s);
                     let h = t_b - t_a;
                     let half = whole.unwrap_or_else(|| Trig::turn(0.5 * w * h));
-                    let step = self.rk4_slip(start, self.x_m, self.v_m_per_s, h, half, sign);
-                    if sign * step.v_m_per_s > 0.0 {
-                        return self.commit_slip(h, &step, measuring);
-                    }
-                    let (h_zero, to_zero) = self.locate_velocity_zero(start, h, sign);
+                    let full_v = match known_v {
+                        Some(v) => v,
+                        None => {
+                            let step = self.rk4_slip(start, self.x_m, self.v_m_per_s, h, half, sign);
+                            if sign * step.v_m_per_s > 0.0 {
+                                return self.commit_slip(h, &step, measuring);
+                            }
+                            step.v_m_per_s
+                        }
+                    };
+                    let searched_half = Trig::turn(0.5 * w * h);
+                    let same_step = searched_half.cos.to_bits() == half.cos.to_bits()
+                        && searched_half.sin.to_bits() == half.sin.to_bits();
+                    let (h_zero, to_zero) = self.locate_velocity_zero(start, h, sign, same_step.then_some(full_v));
                     let to_zero = to_zero.unwrap_or_else(|| {
                         self.rk4_slip(start, self.x_m, self.v_m_per_s, h_zero, Trig::turn(0.5 * w * h_zero), sign)
                     });
@@ -372,6 +413,42 @@ impl Path<'_> {
                 let sign = f64::from(s);
                 -sign * self.friction_force_n(sign * self.v_m_per_s, self.v_m_per_s, self.x_m, self.memory)
             }
+        }
+    }
+
+    /// [`Path::commit_slip`] of lane `l` of a vector step ([`simd`]),
+    /// without a friction memory (its RK4 adds 0 to it).
+    #[inline(always)]
+    pub(super) fn commit_slip_lane<const N: usize>(
+        &mut self,
+        step: &simd::SlippedLanes<N>,
+        l: usize,
+        measuring: bool,
+    ) -> Trig {
+        if measuring {
+            self.period_cos_integral += step.cos_integral[l];
+            self.period_sin_integral += step.sin_integral[l];
+        }
+        self.x_m = step.x_m[l];
+        self.v_m_per_s = step.v_m_per_s[l];
+        // As the scalar step's `m0 + h/6 · 0` (which turns −0 into +0).
+        self.memory += 0.0;
+        self.period_max_x_m = self.period_max_x_m.max(step.x_m[l]);
+        Trig { cos: step.end_cos[l], sin: step.end_sin[l] }
+    }
+
+    /// The baseline law and the rig as the vector step takes them.
+    pub(super) fn slip_law(&self) -> simd::SlipLaw {
+        let o = self.osc;
+        simd::SlipLaw {
+            a_offset: self.law_a + o.effects.friction_offset,
+            b: self.law_b,
+            c_s_per_m: o.friction_c_s_per_m,
+            d_s2_per_m2: self.law_d,
+            stiffness_n_per_m: o.stiffness_n_per_m,
+            base_amplitude_m: o.base_amplitude_m,
+            damping_n_s_per_m: o.damping_n_s_per_m,
+            inv_mass: self.inv_mass,
         }
     }
 

@@ -219,3 +219,42 @@ fn rotation_by_half_steps_matches_the_functions() {
     let exact = Trig::at(w * (t + h));
     assert!((end.cos - exact.cos).abs() < 1e-15 && (end.sin - exact.sin).abs() < 1e-15, "{end:?} {exact:?}");
 }
+
+/// A path that reads the main stream's pair A from a shared table is the
+/// path that draws it, bit for bit: without effects, and with every effect
+/// that draws more of the main stream (a friction value held over several
+/// intervals, a second value for non-Gaussian friction, noisy stiction) or
+/// the colour stream.
+#[test]
+fn paths_reading_the_noise_table_are_those_drawing_it() {
+    let cases: [&[&str]; 4] = [
+        &[],
+        &["coloured_friction_noise.form=\"hold\"", "coloured_friction_noise.correlation_time_s=0.01"],
+        &["non_gaussian_friction.strength=0.5", "non_gaussian_friction.form=\"mixture\""],
+        &[
+            "stiction.form=\"noisy\"",
+            "stiction.excess=0.2",
+            "coloured_friction_noise.form=\"two_scale\"",
+            "coloured_friction_noise.correlation_time_s=0.01",
+        ],
+    ];
+    for overrides in cases {
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        let model = crate::engine::Model::paper_rig(&overrides).unwrap();
+        let condition = crate::engine::Condition { excitation_frequency_hz: 12.0, normal_force_n: 16.39 };
+        let osc = Oscillator::new(&model, condition).unwrap();
+        let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
+        let table = noise::pair_a_table(rng::seed_key(4), 2, osc.noise_intervals_in(20) as u64 + 1, true);
+        let mut read = Path::new(&osc, 4, 2, initial);
+        read.pair_a_table = noise::PathPairs(table);
+        let mut drawn = Path::new(&osc, 4, 2, initial);
+        for _ in 0..20 {
+            run_period(std::slice::from_mut(&mut read), true, None);
+            run_period(std::slice::from_mut(&mut drawn), true, None);
+            let state = |p: &Path<'_>| {
+                [p.x_m, p.v_m_per_s, p.friction_noise, p.normal_force_n, p.period_cos_integral].map(f64::to_bits)
+            };
+            assert_eq!(state(&read), state(&drawn), "{overrides:?}");
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! The slip step of [`LANES`](super::LANES) realisations at once as vector
+//! code: the baseline's RK4 step (no friction memory, no history) laid out
+//! as structure of arrays, one array element per lane, so that each
+//! operation is one vector instruction over the lanes instead of a scalar
+//! one per lane.
+//!
+//! Each lane's arithmetic is [`Path::rk4_slip_with`](super::Path) and
+//! [`Path::add_slip_phase`](super::Path)'s, operation for operation and in
+//! the same order (no fused multiply-add: IEEE arithmetic on a vector's
+//! element rounds as on a scalar), so the answers are the scalar path's,
+//! bit for bit. Stuck lanes are stepped too (with sign 0; their results
+//! are discarded), so the code has no branch per lane: a condition is a
+//! select.
+//!
+//! The kernel is compiled three times — for the baseline target (SSE2's
+//! two f64 a register), for AVX2 (four) and for AVX-512 (eight) — and the
+//! widest the processor has is chosen at run time.
+
+use super::Trig;
+
+/// The per-lane state a slip step starts from, one element per lane.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SlipLanes<const N: usize> {
+    /// Displacement x, m.
+    pub(super) x_m: [f64; N],
+    /// Velocity v, m/s.
+    pub(super) v_m_per_s: [f64; N],
+    /// Slip direction ±1, or 0 for a stuck lane (stepped and discarded), –.
+    pub(super) sign: [f64; N],
+    /// Friction coefficient's random part in the current interval, –.
+    pub(super) friction_noise: [f64; N],
+    /// Normal force in the current interval, N.
+    pub(super) normal_force_n: [f64; N],
+    /// `cos Ωt` and `sin Ωt` of the base at the step's start, –.
+    pub(super) cos: [f64; N],
+    pub(super) sin: [f64; N],
+}
+
+/// The baseline law and the rig, the same for every lane (they are the
+/// oscillator's).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SlipLaw {
+    /// The law's `a` plus the effects' friction offset, –.
+    pub(super) a_offset: f64,
+    /// The law's `b`, –.
+    pub(super) b: f64,
+    /// The Stribeck rate `c`, s/m.
+    pub(super) c_s_per_m: f64,
+    /// The law's `d`, s²/m².
+    pub(super) d_s2_per_m2: f64,
+    /// Spring stiffness, N/m.
+    pub(super) stiffness_n_per_m: f64,
+    /// Base amplitude, m.
+    pub(super) base_amplitude_m: f64,
+    /// Damping, N·s/m.
+    pub(super) damping_n_s_per_m: f64,
+    /// 1 / m, 1/kg.
+    pub(super) inv_mass: f64,
+}
+
+/// A slip step's results, one element per lane.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SlippedLanes<const N: usize> {
+    /// Displacement at the step's end, m.
+    pub(super) x_m: [f64; N],
+    /// Velocity at the step's end, m/s.
+    pub(super) v_m_per_s: [f64; N],
+    /// `cos Ωt` and `sin Ωt` of the base at the step's end, –.
+    pub(super) end_cos: [f64; N],
+    pub(super) end_sin: [f64; N],
+    /// The step's RK4 quadrature of `x cos(Ωt)` and `x sin(Ωt)`, m·s.
+    pub(super) cos_integral: [f64; N],
+    pub(super) sin_integral: [f64; N],
+}
+
+/// One RK4 slip step of every lane over `h_s` seconds, `half` the rotation
+/// by `Ωh/2`, with the widest vector unit there is.
+pub(super) fn slip_step<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor has AVX-512F, checked just above.
+            return unsafe { slip_step_avx512(lanes, law, h_s, half) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { slip_step_avx2(lanes, law, h_s, half) };
+        }
+    }
+    slip_step_lanes(lanes, law, h_s, half)
+}
+
+/// [`slip_step_lanes`] compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn slip_step_avx512<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
+    slip_step_lanes(lanes, law, h_s, half)
+}
+
+/// [`slip_step_lanes`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn slip_step_avx2<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
+    slip_step_lanes(lanes, law, h_s, half)
+}
+
+/// Lanes of f64, one operation for all: a vector where the target has one.
+#[derive(Clone, Copy)]
+struct V<const N: usize>([f64; N]);
+
+impl<const N: usize> V<N> {
+    #[inline(always)]
+    fn splat(value: f64) -> Self {
+        V([value; N])
+    }
+
+    #[inline(always)]
+    fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
+        V(std::array::from_fn(|l| f(self.0[l], other.0[l])))
+    }
+}
+
+impl<const N: usize> std::ops::Add for V<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, other: Self) -> Self {
+        self.zip(other, |a, b| a + b)
+    }
+}
+
+impl<const N: usize> std::ops::Sub for V<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, other: Self) -> Self {
+        self.zip(other, |a, b| a - b)
+    }
+}
+
+impl<const N: usize> std::ops::Mul for V<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, other: Self) -> Self {
+        self.zip(other, |a, b| a * b)
+    }
+}
+
+impl<const N: usize> std::ops::Div for V<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self.zip(other, |a, b| a / b)
+    }
+}
+
+/// The acceleration (m/s²) of `Path::slip_rates` without a memory or a
+/// history, per lane: slipping in direction `sign` with the base at
+/// `cos_omega_t`, at `x_m` (m) and `v_m_per_s` (m/s).
+#[inline(always)]
+fn acceleration<const N: usize>(
+    law: &SlipLaw,
+    lanes: &SlipLanes<N>,
+    cos_omega_t: V<N>,
+    x_m: V<N>,
+    v_m_per_s: V<N>,
+) -> V<N> {
+    let sign = V(lanes.sign);
+    let speed = sign * v_m_per_s;
+    // `stribeck_factor`: both branches, then the one the speed's sign picks.
+    let c = V::splat(law.c_s_per_m);
+    let one = V::splat(1.0);
+    let under_way = one / (one + c * speed);
+    let past_zero = one - c * speed;
+    let stribeck = V(std::array::from_fn(|l| if speed.0[l] >= 0.0 { under_way.0[l] } else { past_zero.0[l] }));
+    // `steady_law`, clipped at 0 (`friction_coefficient`), times N.
+    let law_mean =
+        V::splat(law.a_offset) + V::splat(law.b) * stribeck + V::splat(law.d_s2_per_m2) * v_m_per_s * v_m_per_s;
+    let mu = (law_mean + V(lanes.friction_noise)).zip(V::splat(0.0), f64::max);
+    let friction_n = mu * V(lanes.normal_force_n);
+    // `spring_force`.
+    let spring = V::splat(law.stiffness_n_per_m) * (V::splat(law.base_amplitude_m) * cos_omega_t - x_m);
+    (spring - V::splat(law.damping_n_s_per_m) * v_m_per_s - sign * friction_n) * V::splat(law.inv_mass)
+}
+
+/// The step itself, inlined into each target's copy.
+#[inline(always)]
+fn slip_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
+    let (half_cos, half_sin) = (V::splat(half.cos), V::splat(half.sin));
+    // `Trig::rotated`, twice.
+    let rotate = |cos: V<N>, sin: V<N>| (cos * half_cos - sin * half_sin, sin * half_cos + cos * half_sin);
+    let (start_cos, start_sin) = (V(lanes.cos), V(lanes.sin));
+    let (mid_cos, mid_sin) = rotate(start_cos, start_sin);
+    let (end_cos, end_sin) = rotate(mid_cos, mid_sin);
+    let (x, v) = (V(lanes.x_m), V(lanes.v_m_per_s));
+    let (h, hh) = (V::splat(h_s), V::splat(0.5 * h_s));
+    let two = V::splat(2.0);
+    let k1x = v;
+    let k1v = acceleration(law, lanes, start_cos, x, v);
+    let k2x = v + hh * k1v;
+    let x2 = x + hh * k1x;
+    let k2v = acceleration(law, lanes, mid_cos, x2, k2x);
+    let k3x = v + hh * k2v;
+    let x3 = x + hh * k2x;
+    let k3v = acceleration(law, lanes, mid_cos, x3, k3x);
+    let k4x = v + h * k3v;
+    let x4 = x + h * k3x;
+    let k4v = acceleration(law, lanes, end_cos, x4, k4x);
+    let sixth = V::splat(h_s / 6.0);
+    let x_end = x + sixth * (k1x + two * k2x + two * k3x + k4x);
+    let v_end = v + sixth * (k1v + two * k2v + two * k3v + k4v);
+    // `Path::add_slip_phase`'s increments.
+    let middle = two * (x2 + x3);
+    let cos_integral = sixth * (x * start_cos + middle * mid_cos + x4 * end_cos);
+    let sin_integral = sixth * (x * start_sin + middle * mid_sin + x4 * end_sin);
+    SlippedLanes {
+        x_m: x_end.0,
+        v_m_per_s: v_end.0,
+        end_cos: end_cos.0,
+        end_sin: end_sin.0,
+        cos_integral: cos_integral.0,
+        sin_integral: sin_integral.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every compiled copy of the step gives the same bits (the one the
+    /// processor runs is checked against the scalar path elsewhere), with
+    /// lanes slipping either way, past a velocity zero and stuck.
+    #[test]
+    fn every_copy_of_the_step_gives_the_same_bits() {
+        let law = SlipLaw {
+            a_offset: 0.35,
+            b: 0.1,
+            c_s_per_m: 40.0,
+            d_s2_per_m2: 0.02,
+            stiffness_n_per_m: 2.0e4,
+            base_amplitude_m: 1e-3,
+            damping_n_s_per_m: 3.0,
+            inv_mass: 1.0 / 1.6,
+        };
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let mut lanes = SlipLanes::<8> {
+                x_m: [0.0; 8],
+                v_m_per_s: [0.0; 8],
+                sign: [0.0; 8],
+                friction_noise: [0.0; 8],
+                normal_force_n: [0.0; 8],
+                cos: [0.0; 8],
+                sin: [0.0; 8],
+            };
+            for l in 0..8 {
+                let angle = std::f64::consts::TAU * uniform();
+                lanes.x_m[l] = 2e-3 * (uniform() - 0.5);
+                lanes.v_m_per_s[l] = 0.1 * (uniform() - 0.5);
+                lanes.sign[l] = [-1.0, 0.0, 1.0][l % 3];
+                lanes.friction_noise[l] = 0.1 * (uniform() - 0.5);
+                lanes.normal_force_n[l] = 16.0 * uniform();
+                (lanes.cos[l], lanes.sin[l]) = (angle.cos(), angle.sin());
+            }
+            let h_s = 2e-3 * uniform();
+            let half = Trig { cos: (0.5 * 70.0 * h_s).cos(), sin: (0.5 * 70.0 * h_s).sin() };
+            let bits = |s: SlippedLanes<8>| {
+                [s.x_m, s.v_m_per_s, s.end_cos, s.end_sin, s.cos_integral, s.sin_integral].map(|a| a.map(f64::to_bits))
+            };
+            let portable = bits(slip_step_lanes(&lanes, &law, h_s, half));
+            assert_eq!(bits(slip_step(&lanes, &law, h_s, half)), portable);
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the processor has AVX2, checked just above.
+                    assert_eq!(bits(unsafe { slip_step_avx2(&lanes, &law, h_s, half) }), portable);
+                }
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the processor has AVX-512F, checked just above.
+                    assert_eq!(bits(unsafe { slip_step_avx512(&lanes, &law, h_s, half) }), portable);
+                }
+            }
+        }
+    }
+}
