@@ -14,10 +14,10 @@
 //! A family is named for what it explains, not for matching a shape: no
 //! effect need close most of the gap alone, because on a real rig no
 //! candidate's form is the effect's exact shape, and what the form leaves
-//! is reported as its form misfit. Two effects seen together are judged
+//! is reported as its form misfit. (Two effects seen together are judged
 //! alike: the second closes part of what the first left, as the first did
-//! of the baseline's gap. That misfit is what makes a verdict
-//! less sure, since a rival family with another shape might explain the
+//! of the baseline's gap.) Form misfit is what makes a verdict less sure,
+//! since a rival family with another shape might explain the
 //! rest: the confidence is the share of bootstrap resamples of the
 //! conditions that give the same verdict, scaled by [`form_factor`]: the
 //! share of the gap the named effects close, and each one's margin over
