@@ -92,8 +92,12 @@ fn contact_age_term(age_s: f32, reference_age_s: f32, cutoff_age_s: f32) -> f32 
     return effects.hysteresis_strength * log((max(age_s, 0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s));
 }
 
+// A `random_walk`'s factor is its expectation, 1: each path adds its walk.
 fn drift_factor(t_s: f32) -> f32 {
     let rate = effects.drift_rate_per_s;
+    if (effects.drift_form == DRIFT_FORM_RANDOM_WALK) {
+        return 1.0;
+    }
     if (effects.drift_form == DRIFT_FORM_SATURATING) {
         return 1.0 + rate * DRIFT_SATURATION_S * (1.0 - exp(-t_s / DRIFT_SATURATION_S));
     }

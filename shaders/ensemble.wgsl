@@ -120,6 +120,8 @@ struct PathState {
     memory: f32,
     stick_since_s: f32,
     ageing_excess: f32,
+    // The `random_walk` drift's walk W (N0 is times 1 + W), –.
+    drift_walk: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -172,7 +174,7 @@ fn store_path(n: u32) {
         path.next_boundary_whole, path.next_boundary_frac, path.friction_noise,
         path.normal_force_n, path.stick_time_s, path.slip_start_x_m, path.colour_state,
         path.interval_phase, path.stiction_excess, path.colour_state_1, path.colour_state_2,
-        path.memory, path.stick_since_s, path.ageing_excess);
+        path.memory, path.stick_since_s, path.ageing_excess, path.drift_walk);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -198,6 +200,7 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
     path.stick_since_s = 0.0;
     path.memory = 0.0;
     path.ageing_excess = 0.0;
+    path.drift_walk = 0.0;
     draw_noise();
     if (path.v_m_per_s > 0.0) {
         path.mode = 1;
@@ -226,7 +229,7 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
     path = Path(s.x_m, s.v_m_per_s, s.mode, s.period, s.interval, s.next_boundary_whole,
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
         s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, s.colour_state_1,
-        s.colour_state_2, s.memory, s.stick_since_s, s.ageing_excess, 0.0, 0.0, 0.0, 0.0);
+        s.colour_state_2, s.memory, s.stick_since_s, s.ageing_excess, s.drift_walk, 0.0, 0.0, 0.0, 0.0);
     sample_row = n * params.sample_slots;
     interval_at_dispatch = s.interval;
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u), 0u, 0u);

@@ -36,6 +36,8 @@ struct Path {
     stick_since_s: f32,
     // The static coefficient's contact-age term of `ageing`, –.
     ageing_excess: f32,
+    // The `random_walk` drift's walk W (N0 is times 1 + W), –.
+    drift_walk: f32,
     period_max_x_m: f32,
     period_stick_s: f32,
     // ∫ x cos(Ωt) dt and ∫ x sin(Ωt) dt over the period so far (phase_of).
@@ -149,7 +151,11 @@ fn draw_noise() {
     }
     path.friction_noise = params.friction_sigma * xi_mu;
     let t_s = f32(path.interval) * effects.noise_interval_s;
-    let mean_n = point.normal_force_mean_n * drift_factor(t_s);
+    if (effects.drift_form == DRIFT_FORM_RANDOM_WALK && path.interval != 0u) {
+        let step = pair_a(noise_block(key, realisation, STREAM_DRIFT, path.interval)).x;
+        path.drift_walk += sqrt(effects.drift_rate_per_s * effects.noise_interval_s) * step;
+    }
+    let mean_n = point.normal_force_mean_n * (drift_factor(t_s) + path.drift_walk);
     let harmonic_part_n = harmonics_n(path.interval_phase, path.x_m / params.base_amplitude_m);
     path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonic_part_n, 0.0);
     path.stiction_excess = effects.stiction_excess;

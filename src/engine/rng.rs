@@ -18,6 +18,9 @@ pub const STREAM_COLOUR: u32 = 1;
 /// Noise stream of the measurement noise a diagnosis adds to simulated
 /// records (keyed by sample index, not interval).
 pub const STREAM_SENSOR: u32 = 2;
+/// Noise stream of the normal force's `random_walk` drift: one increment
+/// per noise interval.
+pub const STREAM_DRIFT: u32 = 3;
 
 /// Philox4x32's round multipliers.
 pub const PHILOX_M0: u32 = 0xD251_1F53;

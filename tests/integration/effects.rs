@@ -5,7 +5,7 @@
 //! load-scaled law have a test of their own).
 
 use stickslip::engine::gpu::AdapterClass;
-use stickslip::engine::{Condition, InitialState, Model, Oscillator, PathResult, RunPlan, Sample};
+use stickslip::engine::{Condition, InitialState, Job, Model, Oscillator, PathResult, Point, Record, RunPlan, Sample};
 
 use crate::common;
 
@@ -13,7 +13,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 38] = [
+const ZERO: [&[&str]; 39] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -64,12 +64,13 @@ const ZERO: [&[&str]; 38] = [
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"saturating\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"wander\""],
     &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"quadratic\""],
+    &["normal_force_drift.rate_per_s=0.0", "normal_force_drift.form=\"random_walk\""],
 ];
 
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 39] = [
+const ON: [&[&str]; 40] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -142,6 +143,7 @@ const ON: [&[&str]; 39] = [
         "normal_force_drift.curvature_per_s2=-4e-4",
         "normal_force_drift.form=\"quadratic\"",
     ],
+    &["normal_force_drift.rate_per_s=1e-3", "normal_force_drift.form=\"random_walk\""],
 ];
 
 fn model(sets: &[&str]) -> Model {
@@ -761,6 +763,10 @@ fn the_new_forms_parameters_are_refused_by_name() {
             ["load_dependent_friction.form=\"scaled\"", "load_dependent_friction.strength=nan"],
             "load_dependent_friction.strength",
         ),
+        (
+            ["normal_force_drift.form=\"random_walk\"", "normal_force_drift.rate_per_s=-1e-3"],
+            "normal_force_drift.rate_per_s",
+        ),
     ] {
         let overrides: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         let err = Model::paper_rig(&overrides).expect_err(key).to_string();
@@ -796,4 +802,47 @@ fn a_drift_with_a_mean_window_gives_its_nominal_force_there() {
     assert!((windowed / 10.0 - 1.0).abs() < 2e-3, "mean force {windowed} N over the window");
     let unwindowed = mean_force(&with(""));
     assert!((unwindowed / (10.0 * (1.0 + 0.02 * 11.0)) - 1.0).abs() < 2e-3, "{unwindowed} N");
+}
+
+/// A `random_walk` drift: N/N0 − 1 is a walk of its own in each
+/// realisation, from 0, with variance r t. Over 48 realisations the sample
+/// variance of W at 10 s, and of its increment from 5 s to 10 s, stands
+/// within [0.5, 1.7] of r t (a χ²₄₇/47 leaves that range with probability
+/// under 0.001 each way; a walk with twice or half the variance, or one
+/// shared by the realisations, leaves it with probability above 0.99).
+#[test]
+fn a_random_walk_drift_wanders_with_its_variance_per_second() {
+    let r = 2e-3;
+    let m = model(&[
+        "normal_force.sigma=0.0",
+        "normal_force_drift.rate_per_s=2e-3",
+        "normal_force_drift.form=\"random_walk\"",
+    ]);
+    let points = [Point::steady(&m, COND)];
+    let plan = RunPlan { warmup_cycles: 0, measured_cycles: 0 };
+    let realisations = 48;
+    let job =
+        Job { model: &m, points: &points, realisations, first_realisation: 0, seed: 31, plan, record: Record::Sums };
+    let records = common::cpu().records(&job, 0.05, 10.0).expect("the records run");
+    let walk_at = |r: &[Sample], t: f64| {
+        let s = r.iter().min_by(|a, b| (a.t_s - t).abs().total_cmp(&(b.t_s - t).abs())).expect("a sample");
+        (s.normal_force_n / COND.normal_force_n - 1.0, s.t_s)
+    };
+    let variance = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64
+    };
+    let (mut end, mut increment, mut t_end, mut t_mid) = (Vec::new(), Vec::new(), 0.0, 0.0);
+    for record in &records {
+        assert!(walk_at(record, 0.0).0.abs() < 0.02, "the walk starts at 0");
+        let ((w_end, te), (w_mid, tm)) = (walk_at(record, 10.0), walk_at(record, 5.0));
+        (t_end, t_mid) = (te, tm);
+        end.push(w_end);
+        increment.push(w_end - w_mid);
+    }
+    let (end_ratio, increment_ratio) = (variance(&end) / (r * t_end), variance(&increment) / (r * (t_end - t_mid)));
+    assert!((0.5..1.7).contains(&end_ratio), "Var W({t_end} s) / r t = {end_ratio}");
+    assert!((0.5..1.7).contains(&increment_ratio), "Var of the increment / r Δt = {increment_ratio}");
+    let mean_end = end.iter().sum::<f64>() / end.len() as f64;
+    assert!(mean_end.abs() < 4.0 * (r * t_end / f64::from(realisations)).sqrt(), "mean W = {mean_end}");
 }

@@ -291,9 +291,18 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
         curvature_per_s2: curvature,
         mean_over_s: None,
     };
-    // Linear and quadratic forms only: the saturating and wandering
-    // drifts are the benchmark's withheld forms (the quadratic bends
-    // as both do, without either's shape).
+    // A random walk's record slope b has variance 1.2 r / T over a record
+    // of T seconds (r the walk's variance per second), whenever the record
+    // starts: r ≈ (5/6) mean(T b²) over the fitting records (a unit's
+    // mean slope over n records has 1/n of one's variance).
+    let diffusion = ctx.mean_over_fitting_runs(|duration_s, runs, m| {
+        m.get(&Observable::NormalForceDriftPerS).map(|b| 5.0 / 6.0 * duration_s * runs as f64 * b * b)
+    });
+    let diffusion = diffusion.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(1e-5).clamp(1e-8, 0.05);
+    // Linear, quadratic and random-walk forms: the saturating and wandering
+    // drifts are the benchmark's withheld forms (the quadratic bends as
+    // both do, without either's shape); a random walk is a drift whose
+    // course no deterministic form predicts from run to run.
     vec![
         Variant {
             effect,
@@ -315,6 +324,16 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
                 m.effects.normal_force_drift = Some(drift(DriftForm::Quadratic, p[0], p[1]));
+                m
+            }),
+        },
+        Variant {
+            effect,
+            form: SearchedForm::DriftRandomWalk,
+            params: vec![Param::log("rate_per_s", diffusion, 2.0, 1e-8, 0.05)],
+            apply: Box::new(move |m, p| {
+                let mut m = m.clone();
+                m.effects.normal_force_drift = Some(drift(DriftForm::RandomWalk, p[0], 0.0));
                 m
             }),
         },

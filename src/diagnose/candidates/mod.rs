@@ -124,6 +124,8 @@ pub enum SearchedForm {
     DriftLinear,
     /// A quadratic drift of the normal force.
     DriftQuadratic,
+    /// A normal force that wanders as a random walk, its own in every run.
+    DriftRandomWalk,
 }
 
 impl SearchedForm {
@@ -148,6 +150,7 @@ impl SearchedForm {
             SearchedForm::Power => "power",
             SearchedForm::Adhesion => "adhesion",
             SearchedForm::Scaled => "scaled",
+            SearchedForm::DriftRandomWalk => "random_walk",
         }
     }
 }
@@ -242,6 +245,27 @@ impl<'a> Context<'a> {
             })
             .collect();
         if middles.is_empty() { 0.0 } else { mean(&middles) }
+    }
+
+    /// Mean over the fitting units of `value(mean record length, s; number
+    /// of records; the unit's measured observables, means over its
+    /// records)`, where it gives one.
+    fn mean_over_fitting_runs(
+        &self,
+        value: impl Fn(f64, usize, &BTreeMap<Observable, f64>) -> Option<f64>,
+    ) -> Option<f64> {
+        let v: Vec<f64> = self
+            .data
+            .units
+            .iter()
+            .zip(&self.data.measured)
+            .filter(|(u, _)| !u.heldout && !u.runs.is_empty())
+            .filter_map(|(u, m)| {
+                let durations: Vec<f64> = u.runs.iter().map(|&r| self.data.set.runs[r].duration_s()).collect();
+                value(mean(&durations), durations.len(), m)
+            })
+            .collect();
+        (!v.is_empty()).then(|| mean(&v))
     }
 
     /// Mean over the fitting units of a measured observable.

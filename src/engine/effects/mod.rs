@@ -318,6 +318,14 @@ impl Effects {
         }
         if let Some(d) = &self.normal_force_drift {
             check("normal_force_drift.rate_per_s", d.rate_per_s, true, "must be finite")?;
+            if d.form == DriftForm::RandomWalk {
+                check(
+                    "normal_force_drift.rate_per_s",
+                    d.rate_per_s,
+                    d.rate_per_s >= 0.0,
+                    "a random walk's variance per second must be >= 0 (1/s)",
+                )?;
+            }
             check("normal_force_drift.curvature_per_s2", d.curvature_per_s2, true, "must be finite")?;
             if let Some([start, end]) = d.mean_over_s {
                 check("normal_force_drift.mean_over_s[0]", start, start >= 0.0, "must be >= 0 s")?;

@@ -358,10 +358,14 @@ pub struct NormalForceDrift {
     /// N0 × `linear` (1 + r t); `quadratic` (max(0, 1 + r t + q t²): wear
     /// that slows, heating that comes and goes; never below zero);
     /// `saturating` (1 + r·20 s·(1 − e^(−t/20 s))); `wander`
-    /// (1 + r·15 s·sin(t/15 s)).
+    /// (1 + r·15 s·sin(t/15 s)); `random_walk` (1 + W(t), W a random walk
+    /// of its own in each realisation, from 0 at the run's start, with
+    /// variance r t: preload that wanders with wear and temperature, its
+    /// course different in every run).
     #[serde(default)]
     pub form: DriftForm,
-    /// Initial relative rate r, 1/s.
+    /// Initial relative rate r, 1/s; of `random_walk`, the walk's variance
+    /// per second (its diffusion, ≥ 0), 1/s.
     pub rate_per_s: f64,
     /// Relative curvature q of the `quadratic` form, 1/s² (unused by the
     /// others).
@@ -409,9 +413,11 @@ impl NormalForceDrift {
 /// quadratic form's). The kernel's `drift_factor` (`effects.wgsl`) is the
 /// same in f32; it is here, not with the other effects' arithmetic in
 /// `engine/cpu/effects.rs`, because the model scales N0 by its mean
-/// ([`NormalForceDrift::nominal_scale`]).
+/// ([`NormalForceDrift::nominal_scale`]). A `random_walk`'s factor is its
+/// expectation, 1: each realisation adds its own walk.
 pub fn drift_factor(form: DriftForm, rate: f64, curvature: f64, t: f64) -> f64 {
     match form {
+        DriftForm::RandomWalk => 1.0,
         DriftForm::Quadratic => (1.0 + (rate + curvature * t) * t).max(0.0),
         DriftForm::Saturating => 1.0 + rate * DRIFT_SATURATION_S * (1.0 - (-t / DRIFT_SATURATION_S).exp()),
         DriftForm::Wander => 1.0 + rate * DRIFT_WANDER_S * (t / DRIFT_WANDER_S).sin(),
@@ -427,10 +433,12 @@ pub enum DriftForm {
     Saturating = 1,
     Wander = 2,
     Quadratic = 3,
+    RandomWalk = 4,
 }
 
 impl Form for DriftForm {
-    const ALL: &'static [Self] = &[DriftForm::Linear, DriftForm::Saturating, DriftForm::Wander, DriftForm::Quadratic];
+    const ALL: &'static [Self] =
+        &[DriftForm::Linear, DriftForm::Saturating, DriftForm::Wander, DriftForm::Quadratic, DriftForm::RandomWalk];
 
     fn code(self) -> u32 {
         self as u32

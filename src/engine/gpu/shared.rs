@@ -248,6 +248,8 @@ pub struct PathState {
     pub stick_since_s: f32,
     /// The static coefficient's contact-age term of hysteresis `ageing`, –.
     pub ageing_excess: f32,
+    /// The `random_walk` drift's walk W (N0 is times 1 + W), –.
+    pub drift_walk: f32,
 }
 
 /// Uniform of `check.wgsl` (struct `CheckParams`).

@@ -52,8 +52,8 @@ pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
 use crate::engine::cpu::{effects, noise};
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, EffectParams, HarmonicForm, HysteresisForm, Memory, STICTION_DECAY_M,
-    StictionForm, drift_factor,
+    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DriftForm, EffectParams, HarmonicForm, HysteresisForm, Memory,
+    STICTION_DECAY_M, StictionForm, drift_factor,
 };
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
@@ -203,6 +203,9 @@ pub(crate) struct Path<'a> {
     /// When the current stick began, s from the run's start (stiction
     /// `dwell`, hysteresis `ageing`).
     stick_since_s: f64,
+    /// The `random_walk` drift's walk W at the current interval (N0 is
+    /// times 1 + W), –; 0 for every other form.
+    drift_walk: f64,
     /// Whether sliding friction depends on more than the current velocity
     /// and interval (hysteresis, or a stiction excess carried into the
     /// slip), or has an adhesion force: whether it takes more than the
@@ -258,6 +261,7 @@ impl<'a> Path<'a> {
             memory: 0.0,
             ageing_excess: 0.0,
             stick_since_s: 0.0,
+            drift_walk: 0.0,
             history,
             memory_form,
             law_a: osc.friction_a * e.friction_scale,
@@ -363,8 +367,12 @@ impl<'a> Path<'a> {
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
-        let mean_n =
-            o.normal_force_mean_n * drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s);
+        if e.drift_form == DriftForm::RandomWalk && !first {
+            let step = rng::pair_a(rng::noise_block(self.key, self.realisation, rng::STREAM_DRIFT, self.interval)).0;
+            self.drift_walk += (e.drift_rate_per_s * o.noise_interval_s).sqrt() * step;
+        }
+        let mean_n = o.normal_force_mean_n
+            * (drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s) + self.drift_walk);
         let harmonics_n = harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m);
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
