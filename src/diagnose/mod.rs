@@ -274,6 +274,9 @@ fn misfit_hint(o: Observable) -> &'static str {
         O::NormalForceDriftNPerS | O::NormalForceDriftPerS | O::NormalForceCurvaturePerS2 | O::PeakTrendPerS => {
             "a slow change over the record (normal_force_drift, or wear)"
         }
+        O::NormalForceWander => {
+            "a normal force that wanders slowly over the record (normal_force_drift random_walk, or wear)"
+        }
         O::PeakCount => "the record's length or the excitation frequency (a peak per period)",
     }
 }

@@ -25,6 +25,7 @@ pub enum Observable {
     NormalForceDriftNPerS,
     NormalForceDriftPerS,
     NormalForceCurvaturePerS2,
+    NormalForceWander,
     FrictionSlipSamples,
     FrictionMuMean,
     FrictionResidualStd,
@@ -135,7 +136,7 @@ impl Observable {
     }
 
     /// Every observable, in the order of a record's features.
-    pub const ALL: [Observable; 29] = [
+    pub const ALL: [Observable; 30] = [
         Observable::PeakCount,
         Observable::PeakMeanM,
         Observable::PeakVarM2,
@@ -153,6 +154,7 @@ impl Observable {
         Observable::NormalForceDriftNPerS,
         Observable::NormalForceDriftPerS,
         Observable::NormalForceCurvaturePerS2,
+        Observable::NormalForceWander,
         Observable::FrictionSlipSamples,
         Observable::FrictionMuMean,
         Observable::FrictionResidualStd,
@@ -187,6 +189,7 @@ impl Observable {
             Observable::NormalForceDriftNPerS => "normal_force_drift_n_per_s",
             Observable::NormalForceDriftPerS => "normal_force_drift_per_s",
             Observable::NormalForceCurvaturePerS2 => "normal_force_curvature_per_s2",
+            Observable::NormalForceWander => "normal_force_wander",
             Observable::FrictionSlipSamples => "friction_slip_samples",
             Observable::FrictionMuMean => "friction_mu_mean",
             Observable::FrictionResidualStd => "friction_residual_std",
@@ -219,6 +222,7 @@ impl Observable {
             O::NormalForceDriftNPerS => Unit::NewtonPerSecond,
             O::NormalForceDriftPerS | O::PeakTrendPerS => Unit::PerSecond,
             O::NormalForceCurvaturePerS2 => Unit::PerSecondSquared,
+            O::NormalForceWander => Unit::Dimensionless,
             O::PeakCount | O::FrictionSlipSamples => Unit::Count,
             O::PeakSkewness
             | O::FrictionMuMean
@@ -256,6 +260,7 @@ impl Observable {
             O::NormalForceDriftNPerS => "normal force's drift",
             O::NormalForceDriftPerS => "normal force's relative drift",
             O::NormalForceCurvaturePerS2 => "normal force's drift curvature",
+            O::NormalForceWander => "normal force's slow wander",
             O::FrictionSlipSamples => "slipping samples",
             O::FrictionMuMean => "mean friction coefficient while slipping",
             O::FrictionResidualStd => "spread of the friction coefficient's random part",
@@ -323,7 +328,8 @@ impl Observable {
             | Observable::NormalForceResidualVarN2
             | Observable::NormalForceDriftNPerS
             | Observable::NormalForceDriftPerS
-            | Observable::NormalForceCurvaturePerS2 => MotionPhase::NormalForce,
+            | Observable::NormalForceCurvaturePerS2
+            | Observable::NormalForceWander => MotionPhase::NormalForce,
             Observable::FrictionHysteresis => MotionPhase::SlipBranches,
             Observable::FrictionBreakawayMean | Observable::FrictionStictionExcess => MotionPhase::Breakaway,
             Observable::FrictionLowSpeedMuMean => MotionPhase::LowSpeedSlip,

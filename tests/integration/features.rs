@@ -355,3 +355,33 @@ fn simulated_default_model_run() {
     assert!(stick > 0.0 && stick < 1.0, "{stick}");
     eprintln!("{features:#?}");
 }
+
+/// The slow wander (a log): about 0 for white noise around harmonics and a
+/// bent drift (the fit takes both out), far above it for a random walk of
+/// the same white noise's size over the record (a 1 s mean of 45 s of walk
+/// wanders about 0.1 N, against 0.33/sqrt(RATE_HZ) N of white noise).
+#[test]
+fn a_wandering_normal_force_stands_out_of_white_noise() {
+    let mut rng = Rng(29);
+    let t = times(5.0, 50.0);
+    let white: Vec<f64> = t
+        .iter()
+        .map(|t| 16.0 * (1.0 + 0.01 * t - 2e-4 * t * t) + 0.3 * (TAU * F_HZ * t).cos() + 0.33 * rng.gaussian())
+        .collect();
+    let wander = |n: Vec<f64>| run_features(&run_with_force(t.clone(), n)).normal_force.unwrap().wander.unwrap();
+    let w = wander(white);
+    // Under white noise the estimate is the log of a variance of 45 window
+    // means: sd about sqrt(2/44) ≈ 0.21.
+    assert!((-0.9..0.6).contains(&w), "white: {w}");
+    let mut walk = 0.0;
+    let step = (2e-4 / RATE_HZ).sqrt();
+    let walked: Vec<f64> = t
+        .iter()
+        .map(|_| {
+            walk += step * rng.gaussian();
+            16.0 * (1.0 + walk) + 0.33 * rng.gaussian()
+        })
+        .collect();
+    let w = wander(walked);
+    assert!(w > 20f64.ln(), "random walk: {w}");
+}

@@ -207,9 +207,12 @@ pub(crate) fn signature(effect: Effect) -> &'static [Observable] {
             &[Observable::FrictionStictionExcess, Observable::FrictionBreakawayMean, Observable::StickFraction]
         }
         Effect::LoadDependentFriction => &[Observable::FrictionMuMean, Observable::PeakMeanM, Observable::PhaseMeanDeg],
-        Effect::NormalForceDrift => {
-            &[Observable::NormalForceDriftPerS, Observable::NormalForceCurvaturePerS2, Observable::PeakTrendPerS]
-        }
+        Effect::NormalForceDrift => &[
+            Observable::NormalForceDriftPerS,
+            Observable::NormalForceCurvaturePerS2,
+            Observable::NormalForceWander,
+            Observable::PeakTrendPerS,
+        ],
     }
 }
 

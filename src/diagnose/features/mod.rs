@@ -154,7 +154,19 @@ pub struct NormalForceFeatures {
     /// (Legendre P2) term, divided by the mean, 1/s² (`None` for a zero
     /// mean).
     pub curvature_per_s2: Option<f64>,
+    /// How far the residual wanders slowly: the natural log of the variance
+    /// of its means over [`WANDER_WINDOW_S`] windows, times the samples in
+    /// a window, over its variance, –. About 0 (ln of the samples a noise
+    /// value is held for) where what the fit leaves is white; above it
+    /// where the normal force wanders beyond the slow polynomial (a
+    /// random-walk drift). A ratio of variances, compared in logs: a
+    /// wander's ratio scatters in proportion to its size. `None` for fewer
+    /// than four windows.
+    pub wander: Option<f64>,
 }
+
+/// Window of [`NormalForceFeatures::wander`]'s means, s.
+pub const WANDER_WINDOW_S: f64 = 1.0;
 
 /// Features of the friction coefficient `μ = |F| / N` while slipping.
 ///
@@ -294,6 +306,7 @@ impl RunFeatures {
             (Observable::NormalForceDriftNPerS, n.and_then(|n| n.drift_n_per_s)),
             (Observable::NormalForceDriftPerS, n.and_then(|n| n.drift_per_s)),
             (Observable::NormalForceCurvaturePerS2, n.and_then(|n| n.curvature_per_s2)),
+            (Observable::NormalForceWander, n.and_then(|n| n.wander)),
             (Observable::FrictionSlipSamples, f.map(|f| f.slip_samples as f64)),
             (Observable::FrictionMuMean, f.map(|f| f.mu_mean)),
             (Observable::FrictionResidualStd, f.map(|f| f.residual_std)),

@@ -2,7 +2,10 @@
 //! the share of time at rest.
 
 use super::stats::{Design, moments, shape, slope};
-use super::{HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, SLOW_DEGREE, STICK_SPEED_FRACTION};
+use super::{
+    HARMONIC_RATE_LIMIT, HARMONICS, NormalForceFeatures, PeakFeatures, SLOW_DEGREE, STICK_SPEED_FRACTION,
+    WANDER_WINDOW_S,
+};
 use crate::engine::reduce::circular_mean_var;
 use crate::measure::{self, Run};
 
@@ -197,7 +200,7 @@ pub(super) fn normal_force_features(
     let fit = design.and_then(|d| Some((d, d.design.solve(|i| force[i] - mean)?)));
     let mut harmonic_amplitude_n = [None; HARMONICS];
     let mut harmonic_phase_rad = [None; HARMONICS];
-    let (mut residual_var_n2, mut drift_n_per_s, mut curvature_n_per_s2) = (None, None, None);
+    let (mut residual_var_n2, mut drift_n_per_s, mut curvature_n_per_s2, mut wander) = (None, None, None, None);
     if let Some((d, (coef, ssr))) = fit {
         let (p, span) = (coef.len(), d.span_s);
         for (j, &k) in d.fitted.iter().enumerate() {
@@ -211,6 +214,8 @@ pub(super) fn normal_force_features(
         // is 6 / span² per unit of its coefficient.
         drift_n_per_s = Some(2.0 * coef[1] / span);
         curvature_n_per_s2 = Some(6.0 * coef[2] / (span * span));
+        wander =
+            residual_var_n2.and_then(|v| wander_of(&run.t_s[..n], |i| force[i] - mean - d.design.fitted(i, &coef), v));
     }
     let relative = |v: Option<f64>| v.filter(|_| mean != 0.0).map(|d| d / mean);
     let drift_per_s = relative(drift_n_per_s);
@@ -224,7 +229,40 @@ pub(super) fn normal_force_features(
         drift_n_per_s,
         drift_per_s,
         curvature_per_s2,
+        wander,
     })
+}
+
+/// [`NormalForceFeatures::wander`] of the residual `residual(i)` at times
+/// `t` (s), whose variance is `var` (N²): the log of the variance of its
+/// means over consecutive [`WANDER_WINDOW_S`] windows times the mean
+/// samples per window, over `var`.
+fn wander_of(t: &[f64], residual: impl Fn(usize) -> f64, var: f64) -> Option<f64> {
+    let (t0, n) = (*t.first()?, t.len());
+    let mut means = Vec::new();
+    let (mut sum, mut count, mut window) = (0.0, 0usize, 0u64);
+    for (i, &ti) in t.iter().enumerate() {
+        let w = ((ti - t0) / WANDER_WINDOW_S).max(0.0) as u64;
+        if w != window && count > 0 {
+            means.push(sum / count as f64);
+            (sum, count) = (0.0, 0);
+        }
+        window = w;
+        sum += residual(i);
+        count += 1;
+    }
+    // The last window counts only when it is whole (about).
+    let per_window = n as f64 / ((t[n - 1] - t0) / WANDER_WINDOW_S).max(1e-12);
+    if count as f64 >= 0.9 * per_window {
+        means.push(sum / count as f64);
+    }
+    if means.len() < 4 || !(var > 0.0) {
+        return None;
+    }
+    let m = means.iter().sum::<f64>() / means.len() as f64;
+    let spread = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (means.len() - 1) as f64;
+    let ratio = spread * per_window.min(n as f64) / var;
+    (ratio > 0.0).then(|| ratio.ln())
 }
 
 /// `P0(s) … P_{k−1}(s)` into `out` (k = `out.len()`), by Bonnet's recursion.

@@ -143,6 +143,11 @@ impl Design {
         self.n
     }
 
+    /// Row `i` times `coef`: the fitted value at row `i`.
+    pub(super) fn fitted(&self, i: usize, coef: &[f64]) -> f64 {
+        self.rows[i * self.p..(i + 1) * self.p].iter().zip(coef).map(|(a, c)| a * c).sum()
+    }
+
     /// The coefficients against `y` and the residual sum of squares, as
     /// [`least_squares`] returns them.
     pub(super) fn solve(&self, y: impl Fn(usize) -> f64) -> Option<(Vec<f64>, f64)> {
