@@ -256,7 +256,7 @@ fn wander_of(t: &[f64], residual: impl Fn(usize) -> f64, var: f64) -> Option<f64
     if count as f64 >= 0.9 * per_window {
         means.push(sum / count as f64);
     }
-    if means.len() < 4 || !(var > 0.0) {
+    if means.len() < 4 || var.is_nan() || var <= 0.0 {
         return None;
     }
     let m = means.iter().sum::<f64>() / means.len() as f64;
