@@ -217,6 +217,8 @@ impl ChartData {
 
 /// Rows of the gap chart.
 const GAP_ROWS: usize = 12;
+/// The gap chart's |z| axis ends at 10^this at most, –.
+const GAP_AXIS_DECADES: f64 = 12.0;
 /// Conditions of the comparison chart.
 const MAX_COMPARISON_CONDITIONS: usize = 24;
 /// The chart's width, px.
@@ -250,7 +252,10 @@ where
         .flat_map(|r| [r.baseline_z.abs(), r.fitted_z.map_or(0.0, f64::abs)])
         .filter(|z| z.is_finite())
         .fold(3.0, f64::max);
-    let hi = 10f64.powf((z_max * 1.5).log10().ceil());
+    // The axis ends at a whole decade above the worst |z|, and no further
+    // than 10^GAP_AXIS_DECADES: a larger |z| (a score file may hold up to
+    // 1e308) is drawn to the axis' end rather than overflowing it.
+    let hi = 10f64.powf((z_max * 1.5).log10().ceil().min(GAP_AXIS_DECADES));
     let mut chart = ChartBuilder::on(&root)
         .caption(format!("|z| of the worst observables: calibrated baseline vs fitted ({})", d.verdict), (FONT, 18))
         .margin(12)
@@ -456,4 +461,36 @@ pub(crate) fn write_gap_chart(dir: &Path, d: &Diagnosis) -> Result<Vec<PathBuf>>
     let mut files = write_charts(dir, &data)?;
     files.push(dir.join("scores.csv"));
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A score file may hold any finite z; one near f64's largest drew an
+    /// axis that overflowed to infinity (and never finished). The chart
+    /// ends its axis at 10^GAP_AXIS_DECADES and draws such a bar to it.
+    #[test]
+    fn a_vast_z_is_drawn_to_the_axis_end() {
+        let row = |observable: &str, z: f64| ScoreRow {
+            excitation_frequency_hz: 7.0,
+            normal_force_n: 10.0,
+            observable: observable.to_string(),
+            heldout: false,
+            measured: 0.5,
+            baseline_simulated: 0.4,
+            baseline_z: z,
+            fitted_simulated: Some(0.45),
+            fitted_z: Some(-z),
+        };
+        let d = ChartData {
+            verdict: "none".into(),
+            rows: vec![row("peak_mean_m", 1e308), row("peak_var_m2", -1e308), row("phase_mean_deg", 2.0)],
+        };
+        let dir = std::env::temp_dir().join(format!("stickslip-vast-z-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a temporary directory");
+        let files = write_charts(&dir, &d).expect("the charts are drawn");
+        assert!(files.iter().all(|f| f.exists()), "{files:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
