@@ -209,6 +209,12 @@ pub fn create_dir(dir: &Path) -> Result<()> {
 
 /// The files each command's output set may hold (`*` matches any text). A
 /// directory holding anything else is not replaced.
+/// The file every output set carries, written before anything else: a
+/// destination that holds files is replaced only when it has it (a set
+/// stickslip wrote), never because its files merely look like one (a
+/// measurement set named like `simulate`'s own).
+pub const OUTPUT_STAMP: &str = ".stickslip-output";
+
 pub mod owned {
     /// `sweep` and `merge`.
     pub const SWEEP: &[&str] = &[
@@ -437,8 +443,13 @@ impl OutputSet {
         std::fs::create_dir(&staging).map_err(|e| bad(format!("cannot write in `{}`: {e}", shown(&parent))))?;
         set.staging = staging.clone();
         let record = set.record.as_mut().expect("set above");
-        record.staging = staging;
+        record.staging = staging.clone();
         pending().push(record.clone());
+        std::fs::write(
+            staging.join(OUTPUT_STAMP),
+            format!("an output set of stickslip {}\n", env!("CARGO_PKG_VERSION")),
+        )
+        .map_err(|e| bad(format!("cannot write in `{}`: {e}", shown(&staging))))?;
         Ok(set)
     }
 
@@ -497,12 +508,19 @@ impl OutputSet {
                 return Err(Error::setting(&self.flag, format!("`{}`: cannot list it: {e}", shown(&self.dest))));
             }
         };
+        let mut outputs = None;
         for entry in entries {
             let entry = entry
                 .map_err(|e| Error::setting(&self.flag, format!("`{}`: cannot list it: {e}", shown(&self.dest))))?;
             let name = entry.file_name().to_string_lossy().into_owned();
             let regular = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
             let temporary = name.starts_with('.') && name.contains(".tmp");
+            if regular && name == OUTPUT_STAMP {
+                continue;
+            }
+            if regular && !temporary {
+                outputs.get_or_insert(name.clone());
+            }
             if !(regular && (temporary || self.owned.iter().any(|p| matches_pattern(p, &name)))) {
                 return Err(Error::setting(
                     &self.flag,
@@ -514,6 +532,17 @@ impl OutputSet {
                     ),
                 ));
             }
+        }
+        if let Some(name) = outputs.filter(|_| !self.target.join(OUTPUT_STAMP).is_file()) {
+            return Err(Error::setting(
+                &self.flag,
+                format!(
+                    "`{}` holds `{}` but no `{OUTPUT_STAMP}`: stickslip did not write it as an output set, and \
+                     replaces only its own (choose a new or empty directory, or remove it yourself)",
+                    shown(&self.dest),
+                    excerpt(&name, 80)
+                ),
+            ));
         }
         Ok(())
     }

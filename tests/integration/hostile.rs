@@ -535,7 +535,7 @@ fn atomic_output_sets_and_concurrent_runs() {
     assert!(listing(&out).iter().any(|n| n == "fig8.png"));
     let o = run(&sweep_args(out_s, &["--no-plots", "--seed", "2"]));
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(listing(&out), ["accumulators.json", "histograms.csv", "sweep.csv", "sweep.json"]);
+    assert_eq!(listing(&out), [".stickslip-output", "accumulators.json", "histograms.csv", "sweep.csv", "sweep.json"]);
     assert_eq!(listing(&s.0), ["out"], "no temporaries or locks are left beside the set");
     let previous = snapshot(&out);
 
@@ -716,4 +716,36 @@ fn messages_and_exit_codes() {
     );
     let err = refused(&["sweep", "--config", "/etc/passwd", "--out", "/nonexistent/x"], &["/etc/passwd", "line 1"]);
     assert!(!err.contains("root:"), "the file's content is not quoted: {err}");
+}
+
+/// A measurement set whose files are named as `simulate` names its own (a
+/// manifest and `run-*.csv`) is a user's data, not an output set stickslip
+/// wrote: `simulate --out` into it is refused and nothing changes; its own
+/// previous set (stamped) is replaced whole.
+#[test]
+fn a_users_set_named_like_an_output_is_never_replaced() {
+    let s = Scratch::new("users-set");
+    s.write("lab/manifest.json", "{\"description\": \"precious lab data\"}");
+    s.write("lab/run-07.0hz-16n.csv", "t,x\n0,0\n");
+    let lab = s.path("lab");
+    let before = snapshot(&lab);
+    let args = |out: &str| -> Vec<String> {
+        ["simulate", "--realisations", "1", "--duration", "2", "--warmup-cycles", "1", "--out", out]
+            .iter()
+            .map(|a| a.to_string())
+            .collect()
+    };
+    let lab_args = args(lab.to_str().unwrap());
+    refused(&lab_args.iter().map(String::as_str).collect::<Vec<_>>(), &["--out", ".stickslip-output", "manifest.json"]);
+    assert_eq!(snapshot(&lab), before, "the user's set is untouched");
+    let own = s.path("own");
+    let own_args = args(own.to_str().unwrap());
+    for _ in 0..2 {
+        let o = run(&own_args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert!(
+        listing(&own).contains(&".stickslip-output".to_string())
+            && listing(&own).contains(&"manifest.json".to_string())
+    );
 }

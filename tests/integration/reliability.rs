@@ -381,9 +381,9 @@ fn plot_outputs_stay_one_runs() {
     let drawn = snapshot(&figs);
     refused(&["plot", b_s, "--out", figs_s], &["--out", "figures of the sweep", "same kind and source"]);
     assert_eq!(snapshot(&figs), drawn);
-    // Loose figures that no plot.json attributes are not replaced.
+    // Loose figures that stickslip did not write as an output set are not replaced.
     s.write("loose/fig8.png", "not ours");
-    refused(&["plot", a_s, "--out", s.path("loose").to_str().unwrap()], &["--out", "plot.json"]);
+    refused(&["plot", a_s, "--out", s.path("loose").to_str().unwrap()], &["--out", ".stickslip-output"]);
     refused(&["plot", a_s, "--out", &format!("{a_s}/sub")], &["--out", "inside"]);
     // In place: the data stay as they were, the figures join them.
     let data = snapshot(&a);
