@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use crate::budget::{Cost, Force};
 use crate::engine::{BackendKind, Condition, Engine, Job, Model, Oscillator, Record, RunPlan};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::{OutputSet, owned};
 use crate::sweep::{self, Grid, RefineSettings, Refinement, RunIdentity, Shard, SweepResult, SweepSettings};
 
@@ -90,6 +90,20 @@ impl SweepRequest {
         let (grid, refinement) = sweep::refined_grid(&model, grid, settings.plan.warmup_cycles, refine)?;
         let refine_s = started.elapsed().as_secs_f64();
         let all = grid.conditions();
+        if shard.count as usize > all.len() {
+            // Every shard must hold a point, or `merge` could never be given
+            // all N of them.
+            return Err(Error::setting(
+                "--shard",
+                format!(
+                    "{}/{}: the grid has {} point(s), so it splits into at most {} shards",
+                    shard.index,
+                    shard.count,
+                    all.len(),
+                    all.len()
+                ),
+            ));
+        }
         let conditions = all[shard.points(all.len())].to_vec();
         if !conditions.is_empty() {
             let points = sweep::steady_points(&model, &conditions);

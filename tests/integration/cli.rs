@@ -337,6 +337,11 @@ fn refined_shards_merge_into_the_unsharded_run() {
     run(args(&plain, &["--no-refine"]));
     let rows = std::fs::read_to_string(plain.join("sweep.csv")).unwrap().lines().count() - 1;
     assert_eq!(rows, 3 * 2, "--no-refine kept the grid");
+    // More shards than points: some shard would be empty and `merge` could
+    // never be given them all, so it is refused up front, naming --shard.
+    let v = args(&dir.join("too-many"), &["--no-refine", "--shard", "0/7"]);
+    let (ok, _, err) = stickslip_out(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!ok && err.contains("--shard") && err.contains("6 point"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
