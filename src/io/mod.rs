@@ -278,11 +278,34 @@ fn pending() -> std::sync::MutexGuard<'static, Vec<Pending>> {
 }
 
 fn remove_pending(p: &Pending) {
-    let _ = std::fs::remove_dir_all(&p.staging);
+    remove_tree(&p.staging);
     let _ = std::fs::remove_file(&p.lock_path);
     for dir in p.created.iter().rev() {
         // Only empty directories go: never anything another process put there.
         let _ = std::fs::remove_dir(dir);
+    }
+}
+
+/// Removes the directory `dir` whole, even while other threads still write
+/// into it (an interrupt arrives mid-write): it is first renamed aside
+/// (`….old`, which a later run into the same place also clears), so that
+/// no new file lands under its name, then removed; both are repeated
+/// while a removal finds the directory refilled or recreated.
+fn remove_tree(dir: &Path) {
+    for _ in 0..8 {
+        if std::fs::symlink_metadata(dir).is_err() {
+            return;
+        }
+        let aside = dir.with_extension("old");
+        let gone = if std::fs::rename(dir, &aside).is_ok() {
+            std::fs::remove_dir_all(&aside).is_ok() || std::fs::remove_dir_all(&aside).is_ok()
+        } else {
+            std::fs::remove_dir_all(dir).is_ok()
+        };
+        if gone && std::fs::symlink_metadata(dir).is_err() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
     }
 }
 
@@ -738,6 +761,33 @@ pub fn install_interrupt_cleanup() {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A staging directory that another thread keeps writing into is
+    /// removed whole, and nothing of it (nor its renamed copy) is left.
+    #[test]
+    fn a_tree_written_into_while_removed_is_removed_whole() {
+        let parent = std::env::temp_dir().join(format!("stickslip-remove-tree-{}", std::process::id()));
+        let dir = parent.join(".out.stickslip-1-0.tmp");
+        std::fs::create_dir_all(&dir).unwrap();
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let writer = {
+            let (dir, stop) = (dir.clone(), stop.clone());
+            std::thread::spawn(move || {
+                let mut i = 0u64;
+                while !stop.load(Ordering::Relaxed) {
+                    let _ = std::fs::write(dir.join(format!("run-{i}.csv")), b"t,x\n0,0\n");
+                    i += 1;
+                }
+            })
+        };
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        remove_tree(&dir);
+        stop.store(true, Ordering::Relaxed);
+        writer.join().unwrap();
+        let left: Vec<_> = std::fs::read_dir(&parent).unwrap().flatten().map(|e| e.file_name()).collect();
+        assert!(left.is_empty(), "{left:?}");
+        std::fs::remove_dir_all(&parent).unwrap();
+    }
 
     #[test]
     fn confinement_refuses_names_that_climb_out() {
