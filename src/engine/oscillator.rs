@@ -163,6 +163,9 @@ pub struct Oscillator {
     pub noise_interval_fixed: u64,
 }
 
+/// Fewest integration steps per period of the rig's natural frequency, –.
+pub const NATURAL_PERIOD_STEPS: f64 = 16.0;
+
 impl Oscillator {
     /// Derives the constants for one grid point.
     pub fn new(model: &Model, condition: Condition) -> Result<Oscillator> {
@@ -239,7 +242,7 @@ impl Oscillator {
     /// than a step. A memory that would need more than
     /// [`Solver::MAX_STEPS_PER_PERIOD`] steps is refused, by name.
     fn steps_resolving(model: &Model, condition: Condition) -> Result<u32> {
-        let steps = model.solver.steps_per_period;
+        let steps = model.solver.steps_per_period.max(Self::steps_resolving_the_rig(model, condition)?);
         let Some(h) = model.effects.friction_hysteresis.as_ref() else {
             return Ok(steps);
         };
@@ -287,6 +290,31 @@ impl Oscillator {
             });
         }
         Ok(steps.max(needed as u32))
+    }
+
+    /// Steps per excitation period that give a swing at the rig's natural
+    /// frequency f0 at least [`NATURAL_PERIOD_STEPS`] steps: RK4 is stable
+    /// only below ω0·dt ≈ 2.8, and a stiff rig driven far below resonance
+    /// (f0 = 1 kHz at 8 Hz) would otherwise diverge at the default steps.
+    /// On the paper rig (f0 near 10 Hz, 5–15 Hz) it asks for at most 32,
+    /// below the default. A rig that would need more than
+    /// [`Solver::MAX_STEPS_PER_PERIOD`] is refused, by name.
+    fn steps_resolving_the_rig(model: &Model, condition: Condition) -> Result<u32> {
+        let needed = (NATURAL_PERIOD_STEPS * model.rig.natural_frequency_hz / condition.excitation_frequency_hz).ceil();
+        if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
+            return Err(Error::InvalidParameter {
+                key: "rig.natural_frequency_hz".into(),
+                value: model.rig.natural_frequency_hz.to_string(),
+                message: format!(
+                    "a natural frequency {:e} times the excitation's ({} Hz) needs {needed:e} steps per period to be \
+                     integrated stably ({NATURAL_PERIOD_STEPS} per natural period); at most {} are allowed",
+                    model.rig.natural_frequency_hz / condition.excitation_frequency_hz,
+                    condition.excitation_frequency_hz,
+                    Solver::MAX_STEPS_PER_PERIOD
+                ),
+            });
+        }
+        Ok(needed as u32)
     }
 
     /// The noise interval of a noiseless model: 2^31 − 1 periods, longer

@@ -668,6 +668,33 @@ fn a_slip_distance_raises_the_steps_to_resolve_it() {
     assert!(err.contains("friction_hysteresis.length_m") && err.contains("steps per period"), "{err}");
 }
 
+/// A stiff rig driven far below resonance (f0 = 1 kHz at 7 Hz) takes the
+/// steps that resolve its natural period (16 each: 2286 per period), and
+/// its record stays finite and within the base's amplitude plus the
+/// friction's static deflection (it diverged at the default steps: RK4 is
+/// unstable past ω0·dt ≈ 2.8); one that would need more than the solver
+/// allows is refused, naming the natural frequency.
+#[test]
+fn a_stiff_rig_takes_the_steps_its_natural_period_needs() {
+    let m = model(&["rig.natural_frequency_hz=1000.0"]);
+    let steps = Oscillator::new(&m, COND).expect("an oscillator").steps_per_period;
+    assert_eq!(steps, (16.0 * 1000.0 / COND.excitation_frequency_hz).ceil() as u32);
+    let r = record(&m, 2.0);
+    let bound = 2.0 * m.excitation.amplitude_m + 0.2;
+    assert!(
+        r.iter().all(|s| s.x_m.is_finite() && s.x_m.abs() < bound),
+        "{:?}",
+        r.iter().map(|s| s.x_m).fold(0.0, f64::max)
+    );
+    let err = Oscillator::new(&model(&["rig.natural_frequency_hz=1e6"]), COND).expect_err("refused").to_string();
+    assert!(err.contains("rig.natural_frequency_hz") && err.contains("steps per period"), "{err}");
+    // The paper rig keeps its steps.
+    assert_eq!(
+        Oscillator::new(&Model::default(), COND).unwrap().steps_per_period,
+        Model::default().solver.steps_per_period
+    );
+}
+
 /// A slip distance far below one step's slip (10 µm against up to 0.4 mm
 /// per step at the model's 64 steps at 7 Hz) integrated with the raised
 /// steps: the friction
