@@ -200,6 +200,8 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         let all = BenchmarkSettings { sets: Vec::new(), ..settings.clone() }.plan().len();
         anyhow::bail!("invalid --sets: {i}; this plan has sets 0 to {}", all.saturating_sub(1));
     }
+    let out = OutputSet::prepare(&settings.out, "--out", owned::BENCHMARK, &[])?;
+    let settings = BenchmarkSettings { out: out.dir().to_path_buf(), ..settings };
     let engine = open_engine(backend, GpuOptions::default())?;
     super::check_budget(
         Cost::of_benchmark(&settings)?,
@@ -219,6 +221,7 @@ pub(crate) fn run_benchmark(args: BenchmarkArgs) -> Result<()> {
         progress.position(done, sets as u64);
     })?;
     progress.finish();
+    out.commit()?;
     emit_bytes(text.as_bytes())
 }
 

@@ -245,6 +245,9 @@ pub mod owned {
     ];
     /// `simulate`.
     pub const SIMULATION: &[&str] = &["manifest.json", "model.toml", "run-*.csv"];
+    /// `benchmark-diagnosis`: its summary and a directory per set (a
+    /// pattern ending in `/` names directories).
+    pub const BENCHMARK: &[&str] = &["summary.txt", "set-*/"];
     /// `plot`: the figures it draws, of a sweep and of a diagnosis, and,
     /// in a directory of their own (`--out`), the `plot.json` that names
     /// their kind and source.
@@ -537,14 +540,17 @@ impl OutputSet {
                 .map_err(|e| Error::setting(&self.flag, format!("`{}`: cannot list it: {e}", shown(&self.dest))))?;
             let name = entry.file_name().to_string_lossy().into_owned();
             let regular = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
+            let directory = entry.file_type().map(|t| t.is_dir()).unwrap_or(false);
             let temporary = name.starts_with('.') && name.contains(".tmp");
             if regular && name == OUTPUT_STAMP {
                 continue;
             }
-            if regular && !temporary {
+            if (regular || directory) && !temporary {
                 outputs.get_or_insert(name.clone());
             }
-            if !(regular && (temporary || self.owned.iter().any(|p| matches_pattern(p, &name)))) {
+            let owned_directory =
+                directory && self.owned.iter().any(|p| p.strip_suffix('/').is_some_and(|p| matches_pattern(p, &name)));
+            if !(owned_directory || regular && (temporary || self.owned.iter().any(|p| matches_pattern(p, &name)))) {
                 return Err(Error::setting(
                     &self.flag,
                     format!(

@@ -165,6 +165,52 @@ fn small_blind_benchmark() {
     println!("{stdout}");
     assert!(stdout.contains("single-effect sets, top-1: 2/2"), "{stdout}");
     assert!(stdout.contains("null sets: false positives 0/1"), "{stdout}");
+    // Its output is one set: a rerun of only the null replaces it whole (no
+    // set of the first run is left beside the new summary), and a directory
+    // holding anything else is refused before any set is generated.
+    let args = |out: &str, sets: &str| -> Vec<String> {
+        [
+            "benchmark-diagnosis",
+            "--out",
+            out,
+            "--effects",
+            "normal_force_drift,normal_force_harmonics",
+            "--forms",
+            "1",
+            "--levels",
+            "1",
+            "--nulls",
+            "1",
+            "--pairs",
+            "0",
+            "--phase-only",
+            "0",
+            "--duration",
+            "12",
+            "--replicates",
+            "6",
+            "--sets",
+            sets,
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect()
+    };
+    let rerun = args(dir.to_str().unwrap(), "2");
+    let (ok, _, err) = stickslip(&rerun.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{err}");
+    let mut names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, [".stickslip-output", "set-002", "summary.txt"]);
+    let populated = scratch("blind-populated");
+    std::fs::create_dir_all(&populated).unwrap();
+    std::fs::write(populated.join("notes.txt"), "mine").unwrap();
+    let into = args(populated.to_str().unwrap(), "2");
+    let (ok, _, err) = stickslip(&into.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!ok && err.contains("--out") && err.contains("notes.txt"), "{err}");
+    assert_eq!(std::fs::read_dir(&populated).unwrap().count(), 1, "nothing was written beside it");
+    std::fs::remove_dir_all(&populated).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
