@@ -357,7 +357,13 @@ impl Model {
         let mu = FRICTION_COEFFICIENT_MAX;
         within("friction.a", f.a, -mu, mu, false, "", "the friction level a")?;
         within("friction.b", f.b, -mu, mu, false, "", "the Stribeck drop b")?;
-        check("friction.b", f.b, f.a + f.b >= 0.0, "the friction coefficient at rest, a + b, must be >= 0")?;
+        if f.a + f.b < 0.0 {
+            return Err(Error::InvalidParameter {
+                key: "friction.a + friction.b".into(),
+                value: format!("{} + {} = {}", fmt_value(f.a), fmt_value(f.b), fmt_value(f.a + f.b)),
+                message: "the friction coefficient at rest, a + b, must be >= 0".into(),
+            });
+        }
         within("friction.c", f.c, 0.0, STRIBECK_RATE_MAX_S_PER_M, false, "s/m", "the Stribeck rate")?;
         let d_max = QUADRATIC_MAX_S2_PER_M2;
         within("friction.d", f.d, -d_max, d_max, false, "s²/m²", "the quadratic term")?;

@@ -305,6 +305,9 @@ fn physics_that_stays_finite() {
         let err = Model::paper_rig(&[table.into(), format!("{key}=-1e308")]).expect_err(key).to_string();
         assert!(err.contains(key) && err.len() < 300, "{err}");
     }
+    // A rule over two keys names both: a friction level below −b.
+    let err = Model::paper_rig(&["friction.a=-0.5".into()]).expect_err("a + b < 0").to_string();
+    assert!(err.contains("friction.a") && err.contains("friction.b") && err.contains("-0.4"), "{err}");
     // Grid flags name the flag and the physical rule, negative numbers included.
     refused(&["sweep", "--normal-forces", "-1", "--out", "/nonexistent/x"], &["--normal-forces", ">= 0 N"]);
     refused(&["sweep", "--normal-forces", "1e308", "--out", "/nonexistent/x"], &["--normal-forces"]);
