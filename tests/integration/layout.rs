@@ -125,6 +125,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 memory,
                 stick_since_s,
                 ageing_excess,
+                drift_walk,
             }),
             "ensemble.wgsl",
         ),
