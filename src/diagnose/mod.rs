@@ -441,12 +441,23 @@ pub fn diagnose_set(
     let in_sample = search::pair_gaps(&baseline_scores, &fitted_scores, &data, 0..data.units.len());
     let gaps = [in_sample.0, in_sample.1].into_iter().chain(cv_gaps.into_iter().flat_map(|(b, a)| [b, a]));
     if gaps.chain(fold_gaps.iter().flat_map(|f| [f.before, f.after])).any(|g| !g.is_finite()) {
+        // Name the first score that overflows: which observable, where, and
+        // what the model made of it (a spread of 0 where the data move, say).
+        let culprit = baseline_scores.iter().chain(&fitted_scores).find(|s| !(s.z * s.z).is_finite()).map_or_else(
+            String::new,
+            |s| {
+                format!(
+                    "; first at {} Hz, {} N: {} measured {:.4e} against {:.4e} simulated with a spread of {:.4e}",
+                    s.excitation_frequency_hz, s.normal_force_n, s.observable, s.measured, s.simulated, s.scale
+                )
+            },
+        );
         return Err(crate::Error::Measurement {
             file: set.dir.clone(),
             line: None,
             message: format!(
                 "the gap between the set and the model is not a finite number (baseline {} -> after {}): a \
-                 measured value lies where the scores overflow, so there is no result to report",
+                 measured value lies where the scores overflow, so there is no result to report{culprit}",
                 in_sample.0, in_sample.1
             ),
         });

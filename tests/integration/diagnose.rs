@@ -308,3 +308,37 @@ fn records_with_an_undeclared_free_time_origin_do_not_make_an_effect() {
     assert!(d.effects.is_empty(), "named {}", d.verdict_names());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A summary whose rows say the base did not move (amplitude 0) while the
+/// block did: the model's peaks are 0 with no spread, every score
+/// overflows, and the refusal names where and what (the observable, the
+/// measured and simulated values and the spread), not only that the gap
+/// is not a number.
+#[test]
+fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
+    let root = scratch("unexcited");
+    let dir = root.join("set");
+    std::fs::create_dir_all(&dir).unwrap();
+    let manifest = std::fs::read_to_string("data/figure8/manifest.json").unwrap();
+    std::fs::write(dir.join("manifest.json"), manifest).unwrap();
+    let summary = std::fs::read_to_string("data/figure8/summary.csv").unwrap().replace(",0.0025,", ",0,");
+    std::fs::write(dir.join("summary.csv"), summary).unwrap();
+    let out = root.join("out");
+    let (ok, _, err) = stickslip(&[
+        "diagnose",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--replicates",
+        "2",
+        "--realisations",
+        "4",
+    ]);
+    assert!(
+        !ok && err.contains("not a finite number") && err.contains("peak_mean_m") && err.contains("spread"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
