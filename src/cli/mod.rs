@@ -488,6 +488,15 @@ impl Drop for Progress {
     }
 }
 
+/// `--fig8-frequency`: the frequency Figure 8 is drawn at, a finite number
+/// of hertz above 0.
+fn check_fig8_frequency(hz: f64) -> Result<()> {
+    if !(hz.is_finite() && hz > 0.0) {
+        anyhow::bail!("invalid --fig8-frequency: `{hz}`; it must be a frequency > 0 Hz");
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -87,9 +87,7 @@ impl From<SizeArg> for SizePreset {
 }
 
 pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
-    if !args.fig8_frequency.is_finite() {
-        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
-    }
+    super::check_fig8_frequency(args.fig8_frequency)?;
     let kind = if args.dir.join("accumulators.json").is_file() {
         "sweep"
     } else if args.dir.join("report.json").is_file() {

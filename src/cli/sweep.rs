@@ -173,9 +173,7 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     if args.steps_per_dispatch == 0 {
         anyhow::bail!("invalid --steps-per-dispatch: must be at least 1");
     }
-    if !args.fig8_frequency.is_finite() {
-        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
-    }
+    super::check_fig8_frequency(args.fig8_frequency)?;
     // The grid is refined the same in every shard, before the shard takes its part.
     let refine = (!args.no_refine).then_some(RefineSettings { max_added: args.refine_max, ..Default::default() });
     if refine.is_some()
@@ -236,9 +234,7 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
 }
 
 pub(crate) fn merge(args: MergeArgs) -> Result<()> {
-    if !args.fig8_frequency.is_finite() {
-        anyhow::bail!("invalid --fig8-frequency: `{}` is not a finite number", args.fig8_frequency);
-    }
+    super::check_fig8_frequency(args.fig8_frequency)?;
     let inputs: Vec<&Path> = args.shards.iter().map(PathBuf::as_path).collect();
     // --out may be neither a shard nor contain one: checked before reading them.
     let out = OutputSet::prepare(&args.out, "--out", owned::SWEEP, &inputs)?;

@@ -308,6 +308,9 @@ fn physics_that_stays_finite() {
     // A rule over two keys names both: a friction level below −b.
     let err = Model::paper_rig(&["friction.a=-0.5".into()]).expect_err("a + b < 0").to_string();
     assert!(err.contains("friction.a") && err.contains("friction.b") && err.contains("-0.4"), "{err}");
+    // The frequency Figure 8 is drawn at, for a sweep or a redraw.
+    refused(&["sweep", "--fig8-frequency", "-5", "--out", "/nonexistent/x"], &["--fig8-frequency", "> 0 Hz"]);
+    refused(&["plot", "/nonexistent/y", "--fig8-frequency", "0"], &["--fig8-frequency", "> 0 Hz"]);
     // Grid flags name the flag and the physical rule, negative numbers included.
     refused(&["sweep", "--normal-forces", "-1", "--out", "/nonexistent/x"], &["--normal-forces", ">= 0 N"]);
     refused(&["sweep", "--normal-forces", "1e308", "--out", "/nonexistent/x"], &["--normal-forces"]);
