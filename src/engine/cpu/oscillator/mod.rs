@@ -47,7 +47,7 @@ mod step;
 mod tests;
 
 #[cfg(test)]
-pub(crate) use period::HALF_LANES;
+pub(crate) use period::QUARTER_LANES;
 pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
 use crate::engine::cpu::{effects, noise};

@@ -1,4 +1,4 @@
-//! The slip step of [`LANES`](super::LANES) realisations at once as vector
+//! The slip step of up to [`LANES`](super::LANES) realisations at once as vector
 //! code: the baseline's RK4 step (no friction memory, no history) laid out
 //! as structure of arrays, one array element per lane, so that each
 //! operation is one vector instruction over the lanes instead of a scalar
@@ -227,9 +227,15 @@ mod tests {
 
     /// Every compiled copy of the step gives the same bits (the one the
     /// processor runs is checked against the scalar path elsewhere), with
-    /// lanes slipping either way, past a velocity zero and stuck.
+    /// lanes slipping either way, past a velocity zero and stuck, at each
+    /// group width (one vector register of AVX-512 and two).
     #[test]
     fn every_copy_of_the_step_gives_the_same_bits() {
+        copies_give_the_same_bits::<8>();
+        copies_give_the_same_bits::<16>();
+    }
+
+    fn copies_give_the_same_bits<const N: usize>() {
         let law = SlipLaw {
             a_offset: 0.35,
             b: 0.1,
@@ -248,16 +254,16 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..200 {
-            let mut lanes = SlipLanes::<8> {
-                x_m: [0.0; 8],
-                v_m_per_s: [0.0; 8],
-                sign: [0.0; 8],
-                friction_noise: [0.0; 8],
-                normal_force_n: [0.0; 8],
-                cos: [0.0; 8],
-                sin: [0.0; 8],
+            let mut lanes = SlipLanes::<N> {
+                x_m: [0.0; N],
+                v_m_per_s: [0.0; N],
+                sign: [0.0; N],
+                friction_noise: [0.0; N],
+                normal_force_n: [0.0; N],
+                cos: [0.0; N],
+                sin: [0.0; N],
             };
-            for l in 0..8 {
+            for l in 0..N {
                 let angle = std::f64::consts::TAU * uniform();
                 lanes.x_m[l] = 2e-3 * (uniform() - 0.5);
                 lanes.v_m_per_s[l] = 0.1 * (uniform() - 0.5);
@@ -268,7 +274,7 @@ mod tests {
             }
             let h_s = 2e-3 * uniform();
             let half = Trig { cos: (0.5 * 70.0 * h_s).cos(), sin: (0.5 * 70.0 * h_s).sin() };
-            let bits = |s: SlippedLanes<8>| {
+            let bits = |s: SlippedLanes<N>| {
                 [s.x_m, s.v_m_per_s, s.end_cos, s.end_sin, s.cos_integral, s.sin_integral].map(|a| a.map(f64::to_bits))
             };
             let portable = bits(slip_step_lanes(&lanes, &law, h_s, half));
