@@ -89,11 +89,17 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
             sin: std::array::from_fn(|l| trigs[l].sin),
         };
         let step = simd::slip_step(&state, &lanes[0].slip_law(), h, turn);
+        let zero: [bool; N] = std::array::from_fn(|l| signs[l] != 0.0 && signs[l] * step.v_m_per_s[l] <= 0.0);
+        // Two or more zeros in the step are located side by side.
+        let mut located = [None; N];
+        if zero.iter().filter(|&&z| z).count() > 1 {
+            located = Path::locate_zeros(lanes, &state, zero, h, turn, step.v_m_per_s);
+        }
         for l in 0..N {
             trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
                 lanes[l].commit_slip_lane(&step, l, measuring)
             } else {
-                let past_zero = (signs[l] != 0.0).then_some(step.v_m_per_s[l]);
+                let past_zero = zero[l].then_some(PastZero { full_step_v: step.v_m_per_s[l], located: located[l] });
                 lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
             };
         }
@@ -107,7 +113,8 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
         trigs[l] = match &steps[l] {
             Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
             Some(step) => {
-                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(step.v_m_per_s))
+                let past_zero = PastZero { full_step_v: step.v_m_per_s, located: None };
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(past_zero))
             }
             None => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
         };
