@@ -191,6 +191,7 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
             }
             for (path, pair) in lanes.iter_mut().zip(pairs) {
                 path.draw_noise_with(pair);
+                path.pair_a_table.prefetch(path.interval);
             }
             // A sampler aligned with the noise samples at each boundary.
             sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);
