@@ -16,6 +16,7 @@
 //! - this file: its state, its noise and its friction law;
 //! - `step.rs`: the slip ODE's RK4 step, velocity zeros, breakaway from
 //!   stick, and a segment between two grid times;
+//! - `interval.rs`: a group's noise at the start of each interval;
 //! - `period.rs`: a period of up to `LANES` paths stepped together, and the
 //!   output samples of records;
 //! - `simd.rs`: the baseline's slip step of all lanes as vector code, and
@@ -42,6 +43,7 @@
 //! only; records sampled at the noise boundaries split none, and the GPU
 //! kernel writes those itself.
 
+mod interval;
 mod period;
 mod simd;
 mod step;

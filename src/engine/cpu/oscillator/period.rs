@@ -2,8 +2,8 @@
 //! together, grid step by grid step, and the samples a record takes on the
 //! way.
 
-use super::simd;
 use super::*;
+use super::{interval, simd};
 
 /// Realisations of one oscillator stepped together, grid step by grid step.
 /// Their step grids are the same (the noise boundaries and samples fall at
@@ -16,10 +16,6 @@ use super::*;
 /// 12% more CPU time); 32 took 15% more than 16 (the step's values no longer
 /// fit the registers).
 pub(crate) const LANES: usize = 16;
-
-// A group's lanes draw their noise side by side (`rng::pair_a_side_by_side`),
-// `rng::SIDE_BY_SIDE` at a time.
-const _: () = assert!(LANES.is_multiple_of(rng::SIDE_BY_SIDE));
 
 /// Half of [`LANES`]: a group of fewer steps this many together.
 const HALF_LANES: usize = LANES / 2;
@@ -178,21 +174,7 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
                 path.interval += 1;
                 path.next_boundary += o.noise_interval_fixed;
             }
-            // Lanes without a table draw their pairs side by side.
-            let mut pairs = [None; LANES];
-            if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
-                for (pairs, lanes) in pairs.chunks_mut(rng::SIDE_BY_SIDE).zip(lanes.chunks(rng::SIDE_BY_SIDE)) {
-                    let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
-                    let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
-                    for (pair, drawn) in pairs.iter_mut().zip(drawn) {
-                        *pair = Some(drawn);
-                    }
-                }
-            }
-            for (path, pair) in lanes.iter_mut().zip(pairs) {
-                path.draw_noise_with(pair);
-                path.pair_a_table.prefetch(path.interval);
-            }
+            interval::draw_lanes_noise(lanes);
             // A sampler aligned with the noise samples at each boundary.
             sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);
         }
