@@ -231,6 +231,9 @@ pub(crate) struct Path<'a> {
     /// m·s (the response's fundamental; see [`phase_of`]).
     pub(crate) period_cos_integral: f64,
     pub(crate) period_sin_integral: f64,
+    /// The last `acos` of each breakaway direction's level, by the level's
+    /// bits (a stuck block's are the same over an interval; [`Path::breakaway_time`]).
+    entry_acos: std::cell::Cell<[(u64, f64); 2]>,
 }
 
 impl<'a> Path<'a> {
@@ -274,6 +277,7 @@ impl<'a> Path<'a> {
             period_stick_s: 0.0,
             period_cos_integral: 0.0,
             period_sin_integral: 0.0,
+            entry_acos: std::cell::Cell::new([(f64::NAN.to_bits(), f64::NAN); 2]),
         };
         path.draw_noise();
         path.mode = if initial.v_m_per_s > 0.0 {

@@ -269,10 +269,24 @@ impl Path<'_> {
         if !(-1.0..=1.0).contains(&level) {
             return best;
         }
-        let base = -f64::from(sign) * level.acos();
+        let base = -f64::from(sign) * self.entry_acos(sign, level);
         let n = ((phase_a - base) / std::f64::consts::TAU).ceil();
         let t = (base + n * std::f64::consts::TAU) / o.omega_rad_per_s;
         if t <= t_b && best.is_none_or(|(tb, _)| t < tb) { Some((t, sign)) } else { best }
+    }
+
+    /// `level.acos()` (rad) for the breakaway direction `sign`, remembered:
+    /// a stuck block's levels are the same at every grid step of an
+    /// interval (its x, load and noise are held), and two `acos` a stuck
+    /// step were 3% of the main job.
+    fn entry_acos(&self, sign: i8, level: f64) -> f64 {
+        let k = usize::from(sign < 0);
+        let mut memo = self.entry_acos.get();
+        if memo[k].0 != level.to_bits() {
+            memo[k] = (level.to_bits(), level.acos());
+            self.entry_acos.set(memo);
+        }
+        memo[k].1
     }
 
     /// Advances from `t_a` to `t_b` (local times in the period, where the
