@@ -325,11 +325,12 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(us
 mod tests {
     use super::*;
     use crate::engine::{Condition, Model, Point};
-    use oscillator::HALF_LANES;
+    use oscillator::QUARTER_LANES;
 
     /// Lane groups cover the chunk's tasks once, in order, never straddle
-    /// two points, and take eight while eight are left, then four, then one
-    /// by one (13 realisations per point: 8, 4, 1), none wider than asked.
+    /// two points, and take sixteen while sixteen are left, then eight, then
+    /// four, then one by one (29 realisations per point: 16, 8, 4, 1), none
+    /// wider than asked.
     #[test]
     fn lane_groups_cover_the_tasks_in_order_within_points() {
         let model = Model::paper_rig(&[]).expect("the paper rig");
@@ -340,23 +341,24 @@ mod tests {
         let job = Job {
             model: &model,
             points: &points,
-            realisations: 13,
+            realisations: 29,
             first_realisation: 100,
             seed: 1,
             plan: RunPlan { warmup_cycles: 0, measured_cycles: 1 },
             record: Record::Sums,
         };
         let sizes = |start, end| lane_groups(&job, start, end, LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
-        assert_eq!(sizes(0, 26), [LANES, HALF_LANES, 1, LANES, HALF_LANES, 1]);
-        let narrow = lane_groups(&job, 0, 13, HALF_LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
-        assert_eq!(narrow, [HALF_LANES, HALF_LANES, HALF_LANES, 1]);
+        let (half, quarter) = (LANES / 2, QUARTER_LANES);
+        assert_eq!(sizes(0, 58), [LANES, half, quarter, 1, LANES, half, quarter, 1]);
+        let narrow = lane_groups(&job, 0, 29, quarter).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        assert_eq!(narrow, [quarter, quarter, quarter, quarter, quarter, quarter, quarter, 1]);
         assert_eq!(lane_groups(&job, 0, 3, 1).len(), 3);
         // A chunk that starts and ends inside points.
-        let groups = lane_groups(&job, 5, 19, LANES);
+        let groups = lane_groups(&job, 5, 43, LANES);
         let tasks: Vec<(usize, u32)> = groups.iter().flat_map(|(p, rs)| rs.iter().map(move |&r| (*p, r))).collect();
-        let expected: Vec<(usize, u32)> = (5..19).map(|i| (i / 13, 100 + (i % 13) as u32)).collect();
+        let expected: Vec<(usize, u32)> = (5..43).map(|i| (i / 29, 100 + (i % 29) as u32)).collect();
         assert_eq!(tasks, expected);
-        assert_eq!(sizes(5, 19), [LANES, HALF_LANES, 1, 1]);
+        assert_eq!(sizes(5, 43), [LANES, half, half, quarter, 1, 1]);
     }
 
     fn bits(values: &[f64]) -> Vec<u64> {

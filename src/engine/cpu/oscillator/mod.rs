@@ -16,9 +16,12 @@
 //! - this file: its state, its noise and its friction law;
 //! - `step.rs`: the slip ODE's RK4 step, velocity zeros, breakaway from
 //!   stick, and a segment between two grid times;
+//! - `interval.rs`: a group's noise at the start of each interval;
 //! - `period.rs`: a period of up to `LANES` paths stepped together, and the
 //!   output samples of records;
-//! - `simd.rs`: the baseline's slip step of all lanes as vector code.
+//! - `simd.rs`: the baseline's slip step of all lanes as vector code, and
+//!   probes of their velocity zeros;
+//! - `zeros.rs`: the velocity zeros of several lanes located side by side.
 //!
 //! `shaders/oscillator.wgsl` is the same algorithm in f32; the functions
 //! carry the kernel's names and come in its order, file after file. The two
@@ -34,20 +37,22 @@
 //! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
-//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all (the baseline's as vector code, `simd`), then events one lane at a time (`run_period`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
+//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all (the baseline's as vector code, `simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
 //!
 //! Output samples (records) between noise boundaries split steps on the CPU
 //! only; records sampled at the noise boundaries split none, and the GPU
 //! kernel writes those itself.
 
+mod interval;
 mod period;
 mod simd;
 mod step;
 #[cfg(test)]
 mod tests;
+mod zeros;
 
 #[cfg(test)]
-pub(crate) use period::HALF_LANES;
+pub(crate) use period::QUARTER_LANES;
 pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
 use crate::engine::cpu::{effects, noise};
@@ -58,6 +63,7 @@ use crate::engine::effects::{
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
 use crate::engine::schedule::FIXED_ONE;
+use zeros::PastZero;
 
 /// Whether the block sticks or slips, and in which direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -228,6 +234,9 @@ pub(crate) struct Path<'a> {
     /// m·s (the response's fundamental; see [`phase_of`]).
     pub(crate) period_cos_integral: f64,
     pub(crate) period_sin_integral: f64,
+    /// The last `acos` of each breakaway direction's level, by the level's
+    /// bits (a stuck block's are the same over an interval; [`Path::breakaway_time`]).
+    entry_acos: std::cell::Cell<[(u64, f64); 2]>,
 }
 
 impl<'a> Path<'a> {
@@ -272,6 +281,7 @@ impl<'a> Path<'a> {
             period_stick_s: 0.0,
             period_cos_integral: 0.0,
             period_sin_integral: 0.0,
+            entry_acos: std::cell::Cell::new([(f64::NAN.to_bits(), f64::NAN); 2]),
         };
         path.draw_noise();
         path.mode = if initial.v_m_per_s > 0.0 {

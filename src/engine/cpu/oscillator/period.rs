@@ -2,28 +2,31 @@
 //! together, grid step by grid step, and the samples a record takes on the
 //! way.
 
-use super::simd;
 use super::*;
+use super::{interval, simd};
 
 /// Realisations of one oscillator stepped together, grid step by grid step.
 /// Their step grids are the same (the noise boundaries and samples fall at
 /// the same times), so each grid step's RK4 for all of them is one run of
-/// straight-line code: eight independent dependency chains the core overlaps
+/// straight-line code: independent dependency chains the core overlaps
 /// instead of waiting out one chain's latency (one realisation at a time,
 /// the reference was latency-bound: each stage's division and sums wait on
-/// the last).
-pub(crate) const LANES: usize = 8;
+/// the last). Sixteen are two AVX-512 registers' worth, two chains: eight,
+/// one register, still waited out each stage's latency (the main job took
+/// 12% more CPU time); 32 took 15% more than 16 (the step's values no longer
+/// fit the registers).
+pub(crate) const LANES: usize = 16;
 
-// A group's lanes draw their noise side by side (`rng::pair_a_side_by_side`).
-const _: () = assert!(LANES <= rng::SIDE_BY_SIDE);
+/// Half of [`LANES`]: a group of fewer steps this many together.
+const HALF_LANES: usize = LANES / 2;
 
-/// The smaller set of lanes stepped together: a diagnosis's search runs 4
+/// The smallest set of lanes stepped together: a diagnosis's search runs 4
 /// replicates per condition.
-pub(crate) const HALF_LANES: usize = LANES / 2;
+pub(crate) const QUARTER_LANES: usize = LANES / 4;
 
 /// The group sizes that step together ([`advance_lanes`] takes each),
 /// widest first; other sizes step one realisation at a time.
-pub(crate) const LANE_WIDTHS: [usize; 2] = [LANES, HALF_LANES];
+pub(crate) const LANE_WIDTHS: [usize; 3] = [LANES, HALF_LANES, QUARTER_LANES];
 
 /// Advances every path in `lanes` over the grid step `[t_a, t_b]` (local
 /// times in the period; `turn` rotates by half of it), each from its base
@@ -38,6 +41,8 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
     match lanes.len() {
         LANES if memory => slip_lanes::<LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
         LANES => slip_lanes::<LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
+        QUARTER_LANES if memory => slip_lanes::<QUARTER_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
+        QUARTER_LANES => slip_lanes::<QUARTER_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
         HALF_LANES if memory => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
         HALF_LANES => slip_lanes::<HALF_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
         _ => {
@@ -80,11 +85,17 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
             sin: std::array::from_fn(|l| trigs[l].sin),
         };
         let step = simd::slip_step(&state, &lanes[0].slip_law(), h, turn);
+        let zero: [bool; N] = std::array::from_fn(|l| signs[l] != 0.0 && signs[l] * step.v_m_per_s[l] <= 0.0);
+        // Two or more zeros in the step are located side by side.
+        let mut located = [None; N];
+        if zero.iter().filter(|&&z| z).count() > 1 {
+            located = Path::locate_zeros(lanes, &state, zero, h, turn, step.v_m_per_s);
+        }
         for l in 0..N {
             trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
                 lanes[l].commit_slip_lane(&step, l, measuring)
             } else {
-                let past_zero = (signs[l] != 0.0).then_some(step.v_m_per_s[l]);
+                let past_zero = zero[l].then_some(PastZero { full_step_v: step.v_m_per_s[l], located: located[l] });
                 lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
             };
         }
@@ -98,7 +109,8 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
         trigs[l] = match &steps[l] {
             Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
             Some(step) => {
-                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(step.v_m_per_s))
+                let past_zero = PastZero { full_step_v: step.v_m_per_s, located: None };
+                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(past_zero))
             }
             None => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
         };
@@ -162,18 +174,7 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
                 path.interval += 1;
                 path.next_boundary += o.noise_interval_fixed;
             }
-            // Lanes without a table draw their pairs side by side.
-            let mut pairs = [None; LANES];
-            if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
-                let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
-                let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
-                for (pair, drawn) in pairs.iter_mut().zip(drawn) {
-                    *pair = Some(drawn);
-                }
-            }
-            for (path, pair) in lanes.iter_mut().zip(pairs) {
-                path.draw_noise_with(pair);
-            }
+            interval::draw_lanes_noise(lanes);
             // A sampler aligned with the noise samples at each boundary.
             sample_now |= sampler.and_then(|s| s.from_interval).is_some_and(|j| lanes[0].interval >= j);
         }

@@ -1,4 +1,4 @@
-//! The slip step of [`LANES`](super::LANES) realisations at once as vector
+//! The slip step of up to [`LANES`](super::LANES) realisations at once as vector
 //! code: the baseline's RK4 step (no friction memory, no history) laid out
 //! as structure of arrays, one array element per lane, so that each
 //! operation is one vector instruction over the lanes instead of a scalar
@@ -181,17 +181,22 @@ fn acceleration<const N: usize>(
     (spring - V::splat(law.damping_n_s_per_m) * v_m_per_s - sign * friction_n) * V::splat(law.inv_mass)
 }
 
-/// The step itself, inlined into each target's copy.
+/// The RK4 stages of every lane from the step's start over `h` (s), with
+/// `hh` = `0.5 · h` and `sixth` = `h / 6` (s), `half` the rotation by
+/// `Ωh/2` (cos, sin): [`Path::rk4_slip_with`](super::Path)'s operations.
 #[inline(always)]
-fn slip_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
-    let (half_cos, half_sin) = (V::splat(half.cos), V::splat(half.sin));
+fn rk4_lanes<const N: usize>(
+    lanes: &SlipLanes<N>,
+    law: &SlipLaw,
+    (h, hh, sixth): (V<N>, V<N>, V<N>),
+    (half_cos, half_sin): (V<N>, V<N>),
+) -> Stages<N> {
     // `Trig::rotated`, twice.
     let rotate = |cos: V<N>, sin: V<N>| (cos * half_cos - sin * half_sin, sin * half_cos + cos * half_sin);
     let (start_cos, start_sin) = (V(lanes.cos), V(lanes.sin));
     let (mid_cos, mid_sin) = rotate(start_cos, start_sin);
     let (end_cos, end_sin) = rotate(mid_cos, mid_sin);
     let (x, v) = (V(lanes.x_m), V(lanes.v_m_per_s));
-    let (h, hh) = (V::splat(h_s), V::splat(0.5 * h_s));
     let two = V::splat(2.0);
     let k1x = v;
     let k1v = acceleration(law, lanes, start_cos, x, v);
@@ -204,20 +209,138 @@ fn slip_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64
     let k4x = v + h * k3v;
     let x4 = x + h * k3x;
     let k4v = acceleration(law, lanes, end_cos, x4, k4x);
-    let sixth = V::splat(h_s / 6.0);
-    let x_end = x + sixth * (k1x + two * k2x + two * k3x + k4x);
-    let v_end = v + sixth * (k1v + two * k2v + two * k3v + k4v);
+    Stages {
+        x_end: x + sixth * (k1x + two * k2x + two * k3x + k4x),
+        v_end: v + sixth * (k1v + two * k2v + two * k3v + k4v),
+        stage_x: [x, x2, x3, x4],
+        mid: (mid_cos, mid_sin),
+        end: (end_cos, end_sin),
+    }
+}
+
+/// [`rk4_lanes`]'s results: the end state (m, m/s), the four stage
+/// displacements (m) and the base's (cos, sin) in the middle and at the end.
+struct Stages<const N: usize> {
+    x_end: V<N>,
+    v_end: V<N>,
+    stage_x: [V<N>; 4],
+    mid: (V<N>, V<N>),
+    end: (V<N>, V<N>),
+}
+
+/// The step itself, inlined into each target's copy.
+#[inline(always)]
+fn slip_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: f64, half: Trig) -> SlippedLanes<N> {
+    let lengths = (V::splat(h_s), V::splat(0.5 * h_s), V::splat(h_s / 6.0));
+    let s = rk4_lanes(lanes, law, lengths, (V::splat(half.cos), V::splat(half.sin)));
+    let (start_cos, start_sin) = (V(lanes.cos), V(lanes.sin));
+    let ((mid_cos, mid_sin), (end_cos, end_sin)) = (s.mid, s.end);
+    let [x, x2, x3, x4] = s.stage_x;
     // `Path::add_slip_phase`'s increments.
-    let middle = two * (x2 + x3);
+    let sixth = lengths.2;
+    let middle = V::splat(2.0) * (x2 + x3);
     let cos_integral = sixth * (x * start_cos + middle * mid_cos + x4 * end_cos);
     let sin_integral = sixth * (x * start_sin + middle * mid_sin + x4 * end_sin);
     SlippedLanes {
-        x_m: x_end.0,
-        v_m_per_s: v_end.0,
+        x_m: s.x_end.0,
+        v_m_per_s: s.v_end.0,
         end_cos: end_cos.0,
         end_sin: end_sin.0,
         cos_integral: cos_integral.0,
         sin_integral: sin_integral.0,
+    }
+}
+
+/// Probes of a velocity zero's search, one per lane, each over its own
+/// step length: the RK4 step and the acceleration at its end, one element
+/// per lane.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ProbedLanes<const N: usize> {
+    /// Displacement and velocity at the probe's end, m and m/s.
+    pub(super) x_m: [f64; N],
+    pub(super) v_m_per_s: [f64; N],
+    /// The stage displacements `[x, x2, x3, x4]`, m.
+    pub(super) stage_x_m: [[f64; N]; 4],
+    /// `cos Ωt` and `sin Ωt` of the base in the probe's middle and at its end, –.
+    pub(super) mid_cos: [f64; N],
+    pub(super) mid_sin: [f64; N],
+    pub(super) end_cos: [f64; N],
+    pub(super) end_sin: [f64; N],
+    /// The acceleration at the end (the slip ODE's at the end state), m/s².
+    pub(super) end_acceleration: [f64; N],
+}
+
+/// One RK4 slip step of every lane over its own `h_s[l]` seconds (base
+/// angular frequency `omega`, rad/s), as [`Path::locate_velocity_zero`]'s
+/// `step_to` takes it (the half turn `Trig::turn(0.5 · Ω · h)`), and the
+/// acceleration at each step's end, with the widest vector unit there is.
+pub(super) fn probe_step<const N: usize>(
+    lanes: &SlipLanes<N>,
+    law: &SlipLaw,
+    h_s: [f64; N],
+    omega: f64,
+) -> ProbedLanes<N> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor has AVX-512F, checked just above.
+            return unsafe { probe_step_avx512(lanes, law, h_s, omega) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { probe_step_avx2(lanes, law, h_s, omega) };
+        }
+    }
+    probe_step_lanes(lanes, law, h_s, omega)
+}
+
+/// [`probe_step_lanes`] compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn probe_step_avx512<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: [f64; N], omega: f64) -> ProbedLanes<N> {
+    probe_step_lanes(lanes, law, h_s, omega)
+}
+
+/// [`probe_step_lanes`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn probe_step_avx2<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: [f64; N], omega: f64) -> ProbedLanes<N> {
+    probe_step_lanes(lanes, law, h_s, omega)
+}
+
+/// The probes themselves, inlined into each target's copy.
+#[inline(always)]
+fn probe_step_lanes<const N: usize>(lanes: &SlipLanes<N>, law: &SlipLaw, h_s: [f64; N], omega: f64) -> ProbedLanes<N> {
+    let h = V(h_s);
+    // `Trig::turn(0.5 * w * h)`: the series where it holds, `sin_cos` (lane
+    // by lane) where it does not.
+    let theta = V::splat(0.5 * omega) * h;
+    let t2 = theta * theta;
+    let q = |d: f64| t2 / V::splat(d);
+    let one = V::splat(1.0);
+    let series_sin = theta * (one - q(6.0) * (one - q(20.0) * (one - q(42.0) * (one - q(72.0)))));
+    // t2/2 is t2 · ½ exactly.
+    let series_cos = one - t2 * V::splat(0.5) * (one - q(12.0) * (one - q(30.0) * (one - q(56.0) * (one - q(90.0)))));
+    let mut half = (series_cos, series_sin);
+    if theta.0.iter().any(|t| t.abs() > 0.1) {
+        for l in 0..N {
+            if theta.0[l].abs() > 0.1 {
+                let (sin, cos) = theta.0[l].sin_cos();
+                (half.0.0[l], half.1.0[l]) = (cos, sin);
+            }
+        }
+    }
+    let s = rk4_lanes(lanes, law, (h, V::splat(0.5) * h, h / V::splat(6.0)), half);
+    let end_acceleration = acceleration(law, lanes, s.end.0, s.x_end, s.v_end);
+    ProbedLanes {
+        x_m: s.x_end.0,
+        v_m_per_s: s.v_end.0,
+        stage_x_m: s.stage_x.map(|x| x.0),
+        mid_cos: s.mid.0.0,
+        mid_sin: s.mid.1.0,
+        end_cos: s.end.0.0,
+        end_sin: s.end.1.0,
+        end_acceleration: end_acceleration.0,
     }
 }
 
@@ -227,9 +350,15 @@ mod tests {
 
     /// Every compiled copy of the step gives the same bits (the one the
     /// processor runs is checked against the scalar path elsewhere), with
-    /// lanes slipping either way, past a velocity zero and stuck.
+    /// lanes slipping either way, past a velocity zero and stuck, at each
+    /// group width (one vector register of AVX-512 and two).
     #[test]
     fn every_copy_of_the_step_gives_the_same_bits() {
+        copies_give_the_same_bits::<8>();
+        copies_give_the_same_bits::<16>();
+    }
+
+    fn copies_give_the_same_bits<const N: usize>() {
         let law = SlipLaw {
             a_offset: 0.35,
             b: 0.1,
@@ -248,16 +377,16 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..200 {
-            let mut lanes = SlipLanes::<8> {
-                x_m: [0.0; 8],
-                v_m_per_s: [0.0; 8],
-                sign: [0.0; 8],
-                friction_noise: [0.0; 8],
-                normal_force_n: [0.0; 8],
-                cos: [0.0; 8],
-                sin: [0.0; 8],
+            let mut lanes = SlipLanes::<N> {
+                x_m: [0.0; N],
+                v_m_per_s: [0.0; N],
+                sign: [0.0; N],
+                friction_noise: [0.0; N],
+                normal_force_n: [0.0; N],
+                cos: [0.0; N],
+                sin: [0.0; N],
             };
-            for l in 0..8 {
+            for l in 0..N {
                 let angle = std::f64::consts::TAU * uniform();
                 lanes.x_m[l] = 2e-3 * (uniform() - 0.5);
                 lanes.v_m_per_s[l] = 0.1 * (uniform() - 0.5);
@@ -268,20 +397,34 @@ mod tests {
             }
             let h_s = 2e-3 * uniform();
             let half = Trig { cos: (0.5 * 70.0 * h_s).cos(), sin: (0.5 * 70.0 * h_s).sin() };
-            let bits = |s: SlippedLanes<8>| {
+            let bits = |s: SlippedLanes<N>| {
                 [s.x_m, s.v_m_per_s, s.end_cos, s.end_sin, s.cos_integral, s.sin_integral].map(|a| a.map(f64::to_bits))
             };
             let portable = bits(slip_step_lanes(&lanes, &law, h_s, half));
             assert_eq!(bits(slip_step(&lanes, &law, h_s, half)), portable);
+            // Probes, each lane over its own length (some past the series'
+            // range of the half turn).
+            let probes: [f64; N] = std::array::from_fn(|l| if l == 1 { 0.01 } else { h_s * uniform() });
+            let probed_bits = |s: ProbedLanes<N>| {
+                let [a, b, c, d] = s.stage_x_m;
+                [s.x_m, s.v_m_per_s, a, b, c, d, s.mid_cos, s.mid_sin, s.end_cos, s.end_sin, s.end_acceleration]
+                    .map(|a| a.map(f64::to_bits))
+            };
+            let probed = probed_bits(probe_step_lanes(&lanes, &law, probes, 70.0));
+            assert_eq!(probed_bits(probe_step(&lanes, &law, probes, 70.0)), probed);
             #[cfg(target_arch = "x86_64")]
             {
                 if std::arch::is_x86_feature_detected!("avx2") {
                     // SAFETY: the processor has AVX2, checked just above.
                     assert_eq!(bits(unsafe { slip_step_avx2(&lanes, &law, h_s, half) }), portable);
+                    // SAFETY: as above.
+                    assert_eq!(probed_bits(unsafe { probe_step_avx2(&lanes, &law, probes, 70.0) }), probed);
                 }
                 if std::arch::is_x86_feature_detected!("avx512f") {
                     // SAFETY: the processor has AVX-512F, checked just above.
                     assert_eq!(bits(unsafe { slip_step_avx512(&lanes, &law, h_s, half) }), portable);
+                    // SAFETY: as above.
+                    assert_eq!(probed_bits(unsafe { probe_step_avx512(&lanes, &law, probes, 70.0) }), probed);
                 }
             }
         }

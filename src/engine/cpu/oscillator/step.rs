@@ -12,7 +12,7 @@ impl Path<'_> {
     /// whether [`Path::memory_form`] is one, a constant so that without it
     /// no stage computes it).
     #[inline(always)]
-    fn slip_rates<const MEMORY: bool>(
+    pub(super) fn slip_rates<const MEMORY: bool>(
         &self,
         cos_omega_t: f64,
         x_m: f64,
@@ -31,7 +31,7 @@ impl Path<'_> {
     /// One classical RK4 step of the slip ODE from `t` (where the base's trig
     /// is `start`) over `h` seconds; `half` rotates by `Ωh/2`.
     #[inline]
-    fn rk4_slip(&self, start: Trig, x_m: f64, v_m_per_s: f64, h_s: f64, half: Trig, sign: f64) -> SlipStep {
+    pub(super) fn rk4_slip(&self, start: Trig, x_m: f64, v_m_per_s: f64, h_s: f64, half: Trig, sign: f64) -> SlipStep {
         // Compiled twice, with and without the friction memory's state:
         // the same arithmetic (its rate is exactly 0 without it), but the
         // step most runs take has no memory rate in its dependency chain
@@ -102,7 +102,7 @@ impl Path<'_> {
     /// RK4 step to it when it was taken on the way (not for `h* = h`).
     /// `full_step_v` is the full step's end velocity (m/s) where the caller
     /// has taken that very step.
-    fn locate_velocity_zero(
+    pub(super) fn locate_velocity_zero(
         &self,
         start: Trig,
         h_s: f64,
@@ -269,10 +269,24 @@ impl Path<'_> {
         if !(-1.0..=1.0).contains(&level) {
             return best;
         }
-        let base = -f64::from(sign) * level.acos();
+        let base = -f64::from(sign) * self.entry_acos(sign, level);
         let n = ((phase_a - base) / std::f64::consts::TAU).ceil();
         let t = (base + n * std::f64::consts::TAU) / o.omega_rad_per_s;
         if t <= t_b && best.is_none_or(|(tb, _)| t < tb) { Some((t, sign)) } else { best }
+    }
+
+    /// `level.acos()` (rad) for the breakaway direction `sign`, remembered:
+    /// a stuck block's levels are the same at every grid step of an
+    /// interval (its x, load and noise are held), and two `acos` a stuck
+    /// step were 3% of the main job.
+    fn entry_acos(&self, sign: i8, level: f64) -> f64 {
+        let k = usize::from(sign < 0);
+        let mut memo = self.entry_acos.get();
+        if memo[k].0 != level.to_bits() {
+            memo[k] = (level.to_bits(), level.acos());
+            self.entry_acos.set(memo);
+        }
+        memo[k].1
     }
 
     /// Advances from `t_a` to `t_b` (local times in the period, where the
@@ -291,13 +305,14 @@ impl Path<'_> {
     }
 
     /// [`Path::advance_segment`] of a slipping path whose slip step over
-    /// the whole segment (with `regular`) is known to end at velocity
-    /// `full_step_v` (m/s) with `sign · v ≤ 0`, past a velocity zero (a
-    /// vector step's, [`simd`]), or of any path with `None`. The step is
-    /// the one this would take first, so it is not taken again, and where
-    /// its half-turn is the one [`Path::locate_velocity_zero`] takes, the
-    /// search starts from its velocity instead of a step of its own: the
-    /// same steps, bit for bit, taken once.
+    /// the whole segment (with `regular`) is known to end past a velocity
+    /// zero (a vector step's, [`simd`]; [`PastZero`]), or of any path with
+    /// `None`. The step is the one this would take first, so it is not
+    /// taken again, and where its half-turn is the one
+    /// [`Path::locate_velocity_zero`] takes, the search starts from its
+    /// velocity instead of a step of its own; where the zero was located
+    /// already (side by side with other lanes', [`zeros`]), it is not
+    /// searched for again: the same steps, bit for bit, taken once.
     pub(super) fn advance_segment_past(
         &mut self,
         mut t_a: f64,
@@ -305,16 +320,16 @@ impl Path<'_> {
         mut start: Trig,
         regular: Option<Trig>,
         measuring: bool,
-        full_step_v: Option<f64>,
+        past_zero: Option<PastZero>,
     ) -> Trig {
         let w = self.osc.omega_rad_per_s;
         let period_start_s = self.period as f64 * self.osc.period_s;
         let mut events = 0;
         let mut whole = regular;
-        let mut full_step_v = full_step_v;
+        let mut past_zero = past_zero;
         while t_a < t_b {
             // Only the first pass takes the segment's first step whole.
-            let known_v = full_step_v.take();
+            let known = past_zero.take();
             match self.mode {
                 Mode::Stick => {
                     let until =
@@ -351,8 +366,8 @@ impl Path<'_> {
                     let sign = f64::from(s);
                     let h = t_b - t_a;
                     let half = whole.unwrap_or_else(|| Trig::turn(0.5 * w * h));
-                    let full_v = match known_v {
-                        Some(v) => v,
+                    let full_v = match known {
+                        Some(known) => known.full_step_v,
                         None => {
                             let step = self.rk4_slip(start, self.x_m, self.v_m_per_s, h, half, sign);
                             if sign * step.v_m_per_s > 0.0 {
@@ -361,10 +376,15 @@ impl Path<'_> {
                             step.v_m_per_s
                         }
                     };
-                    let searched_half = Trig::turn(0.5 * w * h);
-                    let same_step = searched_half.cos.to_bits() == half.cos.to_bits()
-                        && searched_half.sin.to_bits() == half.sin.to_bits();
-                    let (h_zero, to_zero) = self.locate_velocity_zero(start, h, sign, same_step.then_some(full_v));
+                    let (h_zero, to_zero) = match known.and_then(|k| k.located) {
+                        Some(located) => located,
+                        None => {
+                            let searched_half = Trig::turn(0.5 * w * h);
+                            let same_step = searched_half.cos.to_bits() == half.cos.to_bits()
+                                && searched_half.sin.to_bits() == half.sin.to_bits();
+                            self.locate_velocity_zero(start, h, sign, same_step.then_some(full_v))
+                        }
+                    };
                     let to_zero = to_zero.unwrap_or_else(|| {
                         self.rk4_slip(start, self.x_m, self.v_m_per_s, h_zero, Trig::turn(0.5 * w * h_zero), sign)
                     });

@@ -1,0 +1,296 @@
+//! Velocity zeros of several lanes located side by side.
+//!
+//! The realisations of a group share their base motion, so they reach
+//! their velocity zeros in the same grid steps: on the main job, a step in
+//! which one of sixteen lanes met a zero held 5.4 on average, and one in
+//! twelve held all sixteen. One lane's search ([`Path::locate_velocity_zero`])
+//! is a chain of RK4 probes, each waiting on the last; here the lanes' searches
+//! run in lockstep, each round one vector probe for every lane still
+//! searching ([`simd::probe_step`]), so their chains overlap. Each lane's
+//! decisions are its own search's, made on the same values, so each finds
+//! the same zero, bit for bit.
+
+use super::simd;
+use super::*;
+
+/// A lane's velocity zero inside a slip step, as
+/// [`Path::locate_velocity_zero`] returns it: the step length to the zero
+/// (s) and the RK4 step to it where a probe took it.
+pub(super) type Located = (f64, Option<SlipStep>);
+
+/// A slipping lane's step over a whole segment that ended past a velocity
+/// zero ([`Path::advance_segment_past`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PastZero {
+    /// The step's end velocity, m/s (`sign · v ≤ 0`).
+    pub(super) full_step_v: f64,
+    /// The zero, where it was located already.
+    pub(super) located: Option<Located>,
+}
+
+/// The lanes' searches in progress, one element per lane.
+struct Searches<const N: usize> {
+    /// The bracket: under way after `lo`, not after `hi`, s.
+    lo: [f64; N],
+    hi: [f64; N],
+    /// The next probe's step length, s.
+    x: [f64; N],
+    /// Where the bracket is narrow enough, s.
+    tolerance: [f64; N],
+    searching: [bool; N],
+    /// Whether a probe reached `hi` (then `hi_step` holds it).
+    probed_hi: [bool; N],
+    hi_step: [SlipStep; N],
+}
+
+impl Path<'_> {
+    /// [`Path::locate_velocity_zero`] of the lanes in `zero` side by side:
+    /// each lane `l` slipping from the vector step's start `state` (its
+    /// trig there `start`) over `h_s` seconds, whose full step ends at
+    /// velocity `full_step_v[l]` with `sign · v ≤ 0`, and which was under way
+    /// at the start (`sign · v > 0`; a lane from rest probes halvings first
+    /// and is left to its own search: `None`). `half` is the step's half turn as the
+    /// vector step took it; where it is not `Trig::turn` of this step's
+    /// length, the search takes its own full step, as the scalar one does.
+    pub(super) fn locate_zeros<const N: usize>(
+        lanes: &[Path<'_>; N],
+        state: &simd::SlipLanes<N>,
+        zero: [bool; N],
+        h_s: f64,
+        half: Trig,
+        full_step_v: [f64; N],
+    ) -> [Option<Located>; N] {
+        let o = lanes[0].osc;
+        let w = o.omega_rad_per_s;
+        let law = lanes[0].slip_law();
+        let searched_half = Trig::turn(0.5 * w * h_s);
+        let same_step =
+            searched_half.cos.to_bits() == half.cos.to_bits() && searched_half.sin.to_bits() == half.sin.to_bits();
+        let unprobed = SlipStep { x_m: 0.0, v_m_per_s: 0.0, memory: 0.0, stage_x_m: [0.0; 4], trig: [half; 3] };
+        let mut s = Searches {
+            lo: [0.0; N],
+            hi: [h_s; N],
+            x: [h_s; N],
+            tolerance: [0.0; N],
+            searching: [false; N],
+            probed_hi: [false; N],
+            hi_step: [unprobed; N],
+        };
+        for l in 0..N {
+            let p = &lanes[l];
+            let sign = state.sign[l];
+            let g_lo = sign * p.v_m_per_s;
+            if !zero[l] || g_lo <= 0.0 {
+                continue;
+            }
+            let start = Trig { cos: state.cos[l], sin: state.sin[l] };
+            let g_hi = if same_step {
+                sign * full_step_v[l]
+            } else {
+                sign * p.rk4_slip(start, p.x_m, p.v_m_per_s, h_s, searched_half, sign).v_m_per_s
+            };
+            (s.x[l], s.tolerance[l]) = p.first_newton_guess(start, h_s, sign, g_lo, g_hi);
+            s.searching[l] = true;
+        }
+        let searched = s.searching;
+        for _ in 0..100 {
+            // The lanes still searching, their probes packed together.
+            let mut active = [0; N];
+            let mut count = 0;
+            for l in 0..N {
+                if !s.searching[l] {
+                    continue;
+                }
+                if s.hi[l] - s.lo[l] <= s.tolerance[l] {
+                    s.searching[l] = false;
+                    continue;
+                }
+                if !(s.x[l] > s.lo[l] && s.x[l] < s.hi[l]) {
+                    s.x[l] = 0.5 * (s.lo[l] + s.hi[l]);
+                }
+                active[count] = l;
+                count += 1;
+            }
+            let active = &active[..count];
+            match count {
+                0 => break,
+                1..=4 => probe_packed::<N, 4>(lanes, state, &law, w, active, &mut s),
+                5..=8 => probe_packed::<N, 8>(lanes, state, &law, w, active, &mut s),
+                _ => probe_packed::<N, N>(lanes, state, &law, w, active, &mut s),
+            }
+        }
+        std::array::from_fn(|l| searched[l].then(|| (s.hi[l], s.probed_hi[l].then_some(s.hi_step[l]))))
+    }
+
+    /// The bracket `(0, h_s)` of a search under way at the start (`g_lo` =
+    /// `sign · v` > 0 there, `g_hi` ≤ 0 after the full step): its first
+    /// guess and its tolerance (s), as [`Path::locate_velocity_zero`]
+    /// starts it.
+    fn first_newton_guess(&self, start: Trig, h_s: f64, sign: f64, g_lo: f64, g_hi: f64) -> (f64, f64) {
+        let (lo, hi) = (0.0, h_s);
+        let tolerance = 1e-15 * h_s.max(self.osc.period_s * 1e-6);
+        let mut x = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+        let b = sign * self.slip_rates::<false>(start.cos, self.x_m, self.v_m_per_s, self.memory, sign).0;
+        let c = (g_hi - g_lo - b * h_s) / (h_s * h_s);
+        let disc = b * b - 4.0 * c * g_lo;
+        if disc >= 0.0 {
+            x = 2.0 * g_lo / (disc.sqrt() - b);
+        }
+        (x, tolerance)
+    }
+}
+
+/// One round of the searches of the lanes `active` (at most `M`): their
+/// probes packed into `M` lanes (the rest copies of the first, discarded),
+/// then each lane's Newton step on its own probe, as
+/// [`Path::locate_velocity_zero`]'s loop takes it.
+#[inline(always)]
+fn probe_packed<const N: usize, const M: usize>(
+    lanes: &[Path<'_>; N],
+    state: &simd::SlipLanes<N>,
+    law: &simd::SlipLaw,
+    omega: f64,
+    active: &[usize],
+    s: &mut Searches<N>,
+) {
+    let lane = |j: usize| active.get(j).copied().unwrap_or(active[0]);
+    let packed = simd::SlipLanes::<M> {
+        x_m: std::array::from_fn(|j| state.x_m[lane(j)]),
+        v_m_per_s: std::array::from_fn(|j| state.v_m_per_s[lane(j)]),
+        sign: std::array::from_fn(|j| state.sign[lane(j)]),
+        friction_noise: std::array::from_fn(|j| state.friction_noise[lane(j)]),
+        normal_force_n: std::array::from_fn(|j| state.normal_force_n[lane(j)]),
+        cos: std::array::from_fn(|j| state.cos[lane(j)]),
+        sin: std::array::from_fn(|j| state.sin[lane(j)]),
+    };
+    let probed = simd::probe_step(&packed, law, std::array::from_fn(|j| s.x[lane(j)]), omega);
+    for (j, &l) in active.iter().enumerate() {
+        let sign = packed.sign[j];
+        let x = s.x[l];
+        let g_x = sign * probed.v_m_per_s[j];
+        let slope = sign * probed.end_acceleration[j];
+        let newton = x - g_x / slope;
+        let tolerance = s.tolerance[l];
+        if g_x > 0.0 {
+            s.lo[l] = x;
+        } else {
+            s.hi[l] = x;
+            s.probed_hi[l] = true;
+            // As the scalar RK4 step returns it (without a friction memory:
+            // its RK4 adds 0 to it).
+            s.hi_step[l] = SlipStep {
+                x_m: probed.x_m[j],
+                v_m_per_s: probed.v_m_per_s[j],
+                memory: lanes[l].memory + x / 6.0 * 0.0,
+                stage_x_m: probed.stage_x_m.map(|x| x[j]),
+                trig: [
+                    Trig { cos: packed.cos[j], sin: packed.sin[j] },
+                    Trig { cos: probed.mid_cos[j], sin: probed.mid_sin[j] },
+                    Trig { cos: probed.end_cos[j], sin: probed.end_sin[j] },
+                ],
+            };
+            if (newton - x).abs() < 0.5 * tolerance {
+                s.searching[l] = false;
+                continue;
+            }
+        }
+        s.x[l] = if (newton - x).abs() < 0.5 * tolerance {
+            x + if g_x > 0.0 { 0.5 } else { -0.5 } * tolerance
+        } else {
+            newton
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::{Condition, Model};
+
+    /// The lanes' zeros located side by side are each lane's own search's,
+    /// bit for bit, with lanes slipping either way (some stuck, some with no
+    /// zero in the step), over a grid step whose half turn is the search's
+    /// and one whose is not, at each group width.
+    #[test]
+    fn zeros_side_by_side_are_those_located_alone() {
+        let model = Model::paper_rig(&[]).expect("the paper rig");
+        let osc = Oscillator::new(&model, Condition { excitation_frequency_hz: 12.0, normal_force_n: 16.39 })
+            .expect("an oscillator");
+        let compared = compare::<16>(&osc) + compare::<8>(&osc) + compare::<4>(&osc);
+        assert!(compared > 500, "only {compared} zeros compared");
+    }
+
+    /// Zeros compared.
+    fn compare<const N: usize>(osc: &Oscillator) -> usize {
+        let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let w = osc.omega_rad_per_s;
+        let mut compared = 0;
+        for trial in 0..100 {
+            let h_s = osc.period_s / 64.0 * (0.5 + uniform());
+            // The vector step's half turn is the search's, or (every third
+            // trial) a last bit off it, as a span's equal steps can be.
+            let mut half = Trig::turn(0.5 * w * h_s);
+            if trial % 3 == 0 {
+                half.cos = f64::from_bits(half.cos.to_bits() - 1);
+            }
+            let mut lanes: [Path<'_>; N] = std::array::from_fn(|r| Path::new(osc, 7, r as u32, initial));
+            let mut trigs = [Trig { cos: 1.0, sin: 0.0 }; N];
+            for (l, (p, trig)) in lanes.iter_mut().zip(&mut trigs).enumerate() {
+                let sign = [1.0, -1.0, 1.0, 0.0, -1.0][l % 5];
+                p.mode = if sign == 0.0 { Mode::Stick } else { Mode::Slip(sign as i8) };
+                p.x_m = 3e-3 * (uniform() - 0.5);
+                // Slow enough for the step to reverse many of them.
+                p.v_m_per_s = sign * 0.02 * uniform();
+                p.friction_noise = 0.1 * (uniform() - 0.5);
+                *trig = Trig::at(std::f64::consts::TAU * uniform());
+            }
+            let sign: [f64; N] = std::array::from_fn(|l| match lanes[l].mode {
+                Mode::Slip(s) => f64::from(s),
+                Mode::Stick => 0.0,
+            });
+            let state = simd::SlipLanes {
+                x_m: std::array::from_fn(|l| lanes[l].x_m),
+                v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
+                sign,
+                friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
+                normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
+                cos: trigs.map(|t| t.cos),
+                sin: trigs.map(|t| t.sin),
+            };
+            let step = simd::slip_step(&state, &lanes[0].slip_law(), h_s, half);
+            let zero: [bool; N] = std::array::from_fn(|l| sign[l] != 0.0 && sign[l] * step.v_m_per_s[l] <= 0.0);
+            let located = Path::locate_zeros(&lanes, &state, zero, h_s, half, step.v_m_per_s);
+            let searched_half = Trig::turn(0.5 * w * h_s);
+            let same_step = searched_half.cos.to_bits() == half.cos.to_bits();
+            for l in 0..N {
+                let Some((h_zero, to_zero)) = located[l] else {
+                    assert!(!zero[l] || sign[l] * lanes[l].v_m_per_s <= 0.0, "lane {l} not searched");
+                    continue;
+                };
+                let full_v = same_step.then_some(step.v_m_per_s[l]);
+                let (alone_h, alone_step) = lanes[l].locate_velocity_zero(trigs[l], h_s, sign[l], full_v);
+                assert_eq!(h_zero.to_bits(), alone_h.to_bits(), "lane {l} of {N}, trial {trial}");
+                let bits = |s: Option<SlipStep>| {
+                    s.map(|s| {
+                        let trig = s.trig.map(|t| [t.cos, t.sin]).concat();
+                        [&[s.x_m, s.v_m_per_s, s.memory][..], &s.stage_x_m, &trig]
+                            .concat()
+                            .iter()
+                            .map(|v| v.to_bits())
+                            .collect::<Vec<_>>()
+                    })
+                };
+                assert_eq!(bits(to_zero), bits(alone_step), "lane {l} of {N}, trial {trial}");
+                compared += 1;
+            }
+        }
+        compared
+    }
+}
