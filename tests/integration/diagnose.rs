@@ -140,39 +140,12 @@ fn figure8_report_and_models_run() {
 #[test]
 fn small_blind_benchmark() {
     let dir = scratch("blind");
-    let (ok, stdout, err) = stickslip(&[
-        "benchmark-diagnosis",
-        "--out",
-        dir.to_str().unwrap(),
-        "--effects",
-        "normal_force_drift,normal_force_harmonics",
-        "--forms",
-        "1",
-        "--levels",
-        "1",
-        "--nulls",
-        "1",
-        "--pairs",
-        "0",
-        "--phase-only",
-        "0",
-        "--duration",
-        "12",
-        "--replicates",
-        "6",
-    ]);
-    assert!(ok, "{err}");
-    println!("{stdout}");
-    assert!(stdout.contains("single-effect sets, top-1: 2/2"), "{stdout}");
-    assert!(stdout.contains("null sets: false positives 0/1"), "{stdout}");
-    // Its output is one set: a rerun of only the null replaces it whole (no
-    // set of the first run is left beside the new summary), and a directory
-    // holding anything else is refused before any set is generated.
-    let args = |out: &str, sets: &str| -> Vec<String> {
-        [
+    // The benchmark's flags into `out`, then `extra`.
+    let args = |out: &std::path::Path, extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = [
             "benchmark-diagnosis",
             "--out",
-            out,
+            out.to_str().unwrap(),
             "--effects",
             "normal_force_drift,normal_force_harmonics",
             "--forms",
@@ -189,15 +162,23 @@ fn small_blind_benchmark() {
             "12",
             "--replicates",
             "6",
-            "--sets",
-            sets,
         ]
         .iter()
         .map(|a| a.to_string())
-        .collect()
+        .collect();
+        v.extend(extra.iter().map(|a| a.to_string()));
+        v
     };
-    let rerun = args(dir.to_str().unwrap(), "2");
-    let (ok, _, err) = stickslip(&rerun.iter().map(String::as_str).collect::<Vec<_>>());
+    let run = |v: Vec<String>| stickslip(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    let (ok, stdout, err) = run(args(&dir, &[]));
+    assert!(ok, "{err}");
+    println!("{stdout}");
+    assert!(stdout.contains("single-effect sets, top-1: 2/2"), "{stdout}");
+    assert!(stdout.contains("null sets: false positives 0/1"), "{stdout}");
+    // Its output is one set: a rerun of only the null replaces it whole (no
+    // set of the first run is left beside the new summary), and a directory
+    // holding anything else is refused before any set is generated.
+    let (ok, _, err) = run(args(&dir, &["--sets", "2"]));
     assert!(ok, "{err}");
     let mut names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
@@ -206,8 +187,7 @@ fn small_blind_benchmark() {
     let populated = scratch("blind-populated");
     std::fs::create_dir_all(&populated).unwrap();
     std::fs::write(populated.join("notes.txt"), "mine").unwrap();
-    let into = args(populated.to_str().unwrap(), "2");
-    let (ok, _, err) = stickslip(&into.iter().map(String::as_str).collect::<Vec<_>>());
+    let (ok, _, err) = run(args(&populated, &["--sets", "2"]));
     assert!(!ok && err.contains("--out") && err.contains("notes.txt"), "{err}");
     assert_eq!(std::fs::read_dir(&populated).unwrap().count(), 1, "nothing was written beside it");
     std::fs::remove_dir_all(&populated).unwrap();
