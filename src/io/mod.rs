@@ -295,17 +295,14 @@ fn remove_pending(p: &Pending) {
 /// no new file lands under its name, then removed; both are repeated
 /// while a removal finds the directory refilled or recreated.
 fn remove_tree(dir: &Path) {
+    let aside = dir.with_extension("old");
+    let exists = |p: &Path| std::fs::symlink_metadata(p).is_ok();
     for _ in 0..8 {
-        if std::fs::symlink_metadata(dir).is_err() {
-            return;
+        if exists(dir) && std::fs::rename(dir, &aside).is_err() {
+            let _ = std::fs::remove_dir_all(dir);
         }
-        let aside = dir.with_extension("old");
-        let gone = if std::fs::rename(dir, &aside).is_ok() {
-            std::fs::remove_dir_all(&aside).is_ok() || std::fs::remove_dir_all(&aside).is_ok()
-        } else {
-            std::fs::remove_dir_all(dir).is_ok()
-        };
-        if gone && std::fs::symlink_metadata(dir).is_err() {
+        let _ = std::fs::remove_dir_all(&aside);
+        if !exists(dir) && !exists(&aside) {
             return;
         }
         std::thread::sleep(std::time::Duration::from_millis(5));
