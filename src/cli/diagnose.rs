@@ -66,10 +66,11 @@ pub(crate) struct BenchmarkArgs {
     /// Length of each synthetic record, s (5 to 600).
     #[arg(long, default_value_t = 20.0)]
     pub(crate) duration: f64,
-    /// Normal-force levels as shares of Den Hartog's no-stop threshold
-    /// (comma list; below 1 the noiseless block never stops).
-    #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::synthetic::LOAD_SHARES)]
-    pub(crate) load_shares: Vec<f64>,
+    /// Normal-force levels of stickslip's own generator, as shares of Den
+    /// Hartog's no-stop threshold (comma list; below 1 the noiseless block
+    /// never stops) [default: 0.4,0.65,0.9].
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) load_shares: Option<Vec<f64>>,
     /// Excitation frequencies as ratios of each set's natural frequency
     /// (comma list, 0.2 to 3, at most 8; e.g. 0.6,0.7,0.8,0.9,1.1,1.2 with
     /// three load shares and --duration 50 makes the 18-run sets of 3 loads ×
@@ -94,9 +95,9 @@ pub(crate) struct BenchmarkArgs {
     /// from the literature that no candidate has; loads from --loads).
     #[arg(long, value_enum, default_value = "engine")]
     pub(crate) generator: GeneratorArg,
-    /// Normal forces of the independent generator's sets, N (comma list).
-    #[arg(long, value_delimiter = ',', default_values_t = crate::diagnose::benchmark::independent::DEFAULT_LOADS_N)]
-    pub(crate) loads: Vec<f64>,
+    /// Normal forces of the independent generator's sets, N (comma list) [default: 4,8,16].
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) loads: Option<Vec<f64>>,
     /// The time frame of the independent generator's records: `t` in the model's frame, a free time origin
     /// (declared in the manifest), a free one with a base_x column, or the three in turn.
     #[arg(long, value_enum, default_value = "mixed")]
@@ -233,11 +234,30 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
         .map(|e| e.parse::<Effect>())
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| anyhow::anyhow!("invalid --effects: {e}"))?;
-    if args.load_shares.is_empty() || args.load_shares.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+    // Each generator reads its own flag for the loads; the other's is refused, not ignored.
+    let independent = args.generator == GeneratorArg::Independent;
+    if independent && args.load_shares.is_some() {
+        anyhow::bail!("invalid --load-shares with --generator independent: its loads are set by --loads (in N)");
+    }
+    if !independent && args.loads.is_some() {
         anyhow::bail!(
-            "invalid --load-shares {:?}: each must be a number > 0 (a share of the no-stop threshold)",
-            args.load_shares
+            "invalid --loads with --generator engine: its loads are set by --load-shares (shares of the no-stop \
+             threshold)"
         );
+    }
+    let load_shares = args.load_shares.unwrap_or_else(|| crate::diagnose::synthetic::LOAD_SHARES.to_vec());
+    let loads = args.loads.unwrap_or_else(|| crate::diagnose::benchmark::independent::DEFAULT_LOADS_N.to_vec());
+    if load_shares.is_empty() || load_shares.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        anyhow::bail!(
+            "invalid --load-shares {load_shares:?}: each must be a number > 0 (a share of the no-stop threshold)"
+        );
+    }
+    for (flag, values) in
+        [("--load-shares", &load_shares), ("--loads", &loads), ("--frequency-ratios", &args.frequency_ratios)]
+    {
+        if let Some(v) = values.iter().enumerate().find_map(|(i, v)| values[..i].contains(v).then_some(v)) {
+            anyhow::bail!("invalid {flag}: {v} is given twice; each level once");
+        }
     }
     if let Some(f) = args.forms.iter().find(|f| !(1..=2).contains(*f)) {
         anyhow::bail!("invalid --forms: {f}; the withheld forms are 1 and 2");
@@ -266,14 +286,14 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
             args.frequency_ratios
         );
     }
-    if args.loads.is_empty() || args.loads.len() > 8 || args.loads.iter().any(|n| !(n.is_finite() && *n > 0.0)) {
-        anyhow::bail!("invalid --loads {:?}: 1 to 8 normal forces, each > 0 N", args.loads);
+    if loads.is_empty() || loads.len() > 8 || loads.iter().any(|n| !(n.is_finite() && *n > 0.0)) {
+        anyhow::bail!("invalid --loads {loads:?}: 1 to 8 normal forces, each > 0 N");
     }
     if args.generator == GeneratorArg::Independent && args.phase_only > 0 {
         anyhow::bail!("invalid --phase-only {}: the independent generator writes records only", args.phase_only);
     }
-    if args.load_shares.len() > 8 {
-        anyhow::bail!("invalid --load-shares: {} levels; at most 8", args.load_shares.len());
+    if load_shares.len() > 8 {
+        anyhow::bail!("invalid --load-shares: {} levels; at most 8", load_shares.len());
     }
     Ok(BenchmarkSettings {
         out: args.out,
@@ -288,7 +308,7 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
             duration_s: args.duration,
             ..SetShape::default()
         },
-        load_shares: args.load_shares,
+        load_shares,
         frequency_ratios: args.frequency_ratios,
         seed: args.seed,
         replicates: args.replicates,
@@ -296,7 +316,7 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
         generator: match args.generator {
             GeneratorArg::Engine => Generator::Engine,
             GeneratorArg::Independent => Generator::Independent {
-                loads_n: args.loads.clone(),
+                loads_n: loads,
                 origins: match args.time_origin {
                     OriginArg::Model => Origins::Model,
                     OriginArg::Free => Origins::Free,

@@ -572,16 +572,18 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         engine.description()
     ));
     text.push_str("confusion matrix of the leading verdict (rows: leading hidden effect, columns: verdict)\n");
-    let short = |l: &str| l.split('_').map(|w| &w[..w.len().min(4)]).collect::<Vec<_>>().join("_");
+    // Column heads: each word of the name cut to three letters (at most 11
+    // characters), a space between columns.
+    let short = |l: &str| l.split('_').map(|w| &w[..w.len().min(3)]).collect::<Vec<_>>().join("_");
     text.push_str(&format!("{:<26}", ""));
     for &l in &labels {
-        text.push_str(&format!("{:>11}", short(name(l))));
+        text.push_str(&format!(" {:>11}", short(name(l))));
     }
     text.push('\n');
     for (r, &l) in labels.iter().enumerate() {
         text.push_str(&format!("{:<26}", name(l)));
         for c in &confusion[r] {
-            text.push_str(&format!("{c:>11}"));
+            text.push_str(&format!(" {c:>11}"));
         }
         text.push('\n');
     }

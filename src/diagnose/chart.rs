@@ -172,17 +172,19 @@ impl ChartData {
             rows.push(row);
         }
         let report_path = dir.join("report.json");
-        let report: serde_json::Value = crate::io::read_bounded(&report_path, 256 << 20)
-            .ok()
-            .and_then(|b| crate::io::parse_json(&b).ok())
-            .unwrap_or_default();
-        let verdict = report
+        let bad_report = |message: String| Error::Measurement { file: report_path.clone(), line: None, message };
+        let bytes = crate::io::read_bounded(&report_path, 256 << 20)
+            .map_err(|e| bad_report(format!("cannot read the diagnosis's report ({e})")))?;
+        let report: serde_json::Value =
+            crate::io::parse_json(&bytes).map_err(|e| bad_report(format!("not a diagnosis report: {e}")))?;
+        let named = report
             .pointer("/verdict/effects")
             .and_then(|e| e.as_array())
             .filter(|e| !e.is_empty())
-            .map(|e| e.iter().filter_map(|x| x.get("effect")?.as_str()).collect::<Vec<_>>().join(" + "))
+            .map(|e| e.iter().filter_map(|x| x.get("effect")?.as_str()).collect::<Vec<_>>().join(" + "));
+        let verdict = named
             .or_else(|| report.pointer("/verdict/effect").and_then(|e| e.as_str()).map(str::to_string))
-            .unwrap_or_else(|| "?".into());
+            .ok_or_else(|| bad_report("not a diagnosis report: it has no verdict.effect".into()))?;
         Ok(ChartData { verdict, rows })
     }
 

@@ -120,6 +120,13 @@ impl SweepSettings {
         if self.plan.measured_cycles == 0 {
             return Err(Error::setting("--cycles", "must be at least 1 measured cycle"));
         }
+        if u64::from(self.realisations) * u64::from(self.plan.measured_cycles) < 2 {
+            return Err(Error::setting(
+                "--realisations",
+                "1 realisation of 1 measured cycle gives one peak per point, and a variance needs two (raise \
+                 --realisations or --cycles)",
+            ));
+        }
         Ok(())
     }
 }

@@ -76,6 +76,8 @@ fn bad_input_is_named_and_nothing_is_written() {
     run(&["--set", "noise.interval_s=0"], "noise.interval_s");
     run(&["--frequencies", "5:15"], "--frequencies");
     run(&["--realisations", "0"], "--realisations");
+    // One peak per point has no variance: refused, not written as 0.
+    run(&["--realisations", "1", "--cycles", "1"], "--realisations");
     run(&["--config", dir.join("absent.toml").to_str().unwrap()], "absent.toml");
 
     refused(&["simulate", "--out", out_s, "--set", "rig.mass_kg=-1"], &out, "rig.mass_kg");
@@ -84,6 +86,14 @@ fn bad_input_is_named_and_nothing_is_written() {
     refused(&["benchmark-diagnosis", "--out", out_s, "--load-shares", "0.5,-1"], &out, "--load-shares");
     refused(&["benchmark-diagnosis", "--out", out_s, "--effects", "stickiness"], &out, "stickiness");
     refused(&["benchmark-diagnosis", "--out", out_s, "--frequency-ratios", "0.7,NaN"], &out, "--frequency-ratios");
+    refused(&["benchmark-diagnosis", "--out", out_s, "--frequency-ratios", "0.7,0.9,0.7"], &out, "--frequency-ratios");
+    // A generator's load flag is refused with the other generator, not ignored.
+    refused(&["benchmark-diagnosis", "--out", out_s, "--loads", "4,8"], &out, "--loads");
+    refused(
+        &["benchmark-diagnosis", "--out", out_s, "--generator", "independent", "--load-shares", "0.5"],
+        &out,
+        "--load-shares",
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

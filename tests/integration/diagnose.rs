@@ -110,6 +110,12 @@ fn figure8_report_and_models_run() {
     let (ok, _, err) = stickslip(&["plot", out.to_str().unwrap(), "--out", redrawn.to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(redrawn.join("gap.png").is_file() && redrawn.join("comparison.svg").is_file());
+    // A report that is not a diagnosis's is refused by name, not drawn with an unknown verdict.
+    let report = std::fs::read(out.join("report.json")).unwrap();
+    std::fs::write(out.join("report.json"), "{}").unwrap();
+    let (ok, _, err) = stickslip(&["plot", out.to_str().unwrap(), "--out", redrawn.to_str().unwrap()]);
+    assert!(!ok && err.contains("report.json") && err.contains("verdict"), "{err}");
+    std::fs::write(out.join("report.json"), report).unwrap();
     for model in ["baseline-model.toml", "fitted-model.toml"] {
         let sweep = dir.join(format!("sweep-{model}"));
         let (ok, _, err) = stickslip(&[
