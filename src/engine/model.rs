@@ -303,7 +303,23 @@ impl Model {
         }
         let model: Model = match Model::deserialize(toml::Value::Table(table.clone())) {
             Ok(model) => model,
-            Err(e) => return Err(syntax(schema_problem(&table, &e))),
+            Err(e) => {
+                // A value a `--set` put there is that flag's fault, not the file's.
+                let problem = schema_problem(&table, &e);
+                let set_here = overrides.iter().find(|a| {
+                    a.split_once('=').is_some_and(|(key, _)| {
+                        let (key, table) = (key.trim(), key.trim().split('.').next().unwrap_or_default());
+                        problem.starts_with(&format!("`{key}`"))
+                            || (problem.starts_with(&format!("in table `{table}`")) && !text_has_table(text, table))
+                    })
+                });
+                return Err(match set_here {
+                    Some(assignment) => {
+                        Error::ModelSyntax { source_name: format!("--set {assignment}"), message: problem }
+                    }
+                    None => syntax(problem),
+                });
+            }
         };
         model.validate()?;
         Ok(model)
@@ -606,6 +622,12 @@ fn key_at(text: &str, span: Option<std::ops::Range<usize>>) -> Option<String> {
 /// Applies one `KEY=VALUE` override to a TOML table, creating tables on the
 /// way. The value is read as a TOML value (number, boolean, string); a bare
 /// word is taken as a string.
+/// Whether the model text itself has the top-level table `name` (else a
+/// `--set` made it).
+fn text_has_table(text: &str, name: &str) -> bool {
+    text.parse::<toml::Table>().is_ok_and(|t| t.contains_key(name))
+}
+
 fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
     let bad =
         |message: &str| Error::ModelSyntax { source_name: format!("--set {assignment}"), message: message.into() };
@@ -625,6 +647,9 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
         node = entry.as_table_mut().ok_or_else(|| bad(&format!("`{part}` is not a table")))?;
     }
     let leaf = parts[parts.len() - 1];
+    if leaf.contains('[') {
+        return Err(bad("a list is set whole, as KEY=[v1, v2, ...]; one element cannot be set by its index"));
+    }
     // An integer given where the schema has a float is fine: serde converts.
     node.insert(leaf.to_string(), value);
     Ok(())
@@ -642,6 +667,20 @@ mod tests {
         assert_eq!(m.rig.damping_ratio, 0.00225);
         assert_eq!(m.excitation.amplitude_m, 0.0025);
         assert!((m.normal_force.sigma.powi(2) - 0.1102).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_bad_set_is_named_as_the_flag_not_the_file() {
+        for (assignment, needle) in [
+            ("friction.a=abc", "expected f64"),
+            ("friction.zzz=1", "unknown field"),
+            ("normal_force_harmonics.amplitudes_n[0]=1", "set whole"),
+            ("stiction.release_length_m=1", "missing field `excess`"),
+        ] {
+            let err = Model::paper_rig(&[assignment.into()]).unwrap_err().to_string();
+            assert!(err.contains(&format!("--set {assignment}")) && err.contains(needle), "{err}");
+            assert!(!err.contains("embedded"), "{err}");
+        }
     }
 
     #[test]
