@@ -25,7 +25,12 @@ fn position_load(linear_n: f32, quadratic_n: f32, r: f32) -> f32 {
     return (linear_n + quadratic_n * r) * r;
 }
 
-fn non_gaussian(s: f32, g: f32, g2: f32) -> f32 {
+fn non_gaussian(s: f32, d: f32, g: f32, g2: f32) -> f32 {
+    if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_POLYNOMIAL) {
+        // b solves b² + 6bd + 2c² + 15d² = 1 (unit variance), c = s.
+        let b = sqrt(max(1.0 - 2.0 * s * s - 6.0 * d * d, 0.0)) - 3.0 * d;
+        return g * (b + g * (s + d * g)) - s;
+    }
     if (effects.non_gaussian_form == NON_GAUSSIAN_FORM_LOGNORMAL) {
         if (s == 0.0) {
             return g;

@@ -86,6 +86,8 @@ struct GridPoint {
     friction_offset: f32,
     // Non-Gaussian strength at this point's N0, –.
     non_gaussian_strength: f32,
+    // The polynomial non-Gaussian form's cubic coefficient at this point's N0, –.
+    non_gaussian_cubic: f32,
     // Phases are reduced as their deviation from this angle, rad.
     phase_ref_rad: f32,
     // Normal-force harmonic amplitudes at this point's N0, N.

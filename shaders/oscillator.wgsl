@@ -146,8 +146,8 @@ fn draw_noise() {
         }
     }
     var xi_mu = g;
-    if (point.non_gaussian_strength != 0.0) {
-        xi_mu = non_gaussian(point.non_gaussian_strength, g, pair_b(friction_block).x);
+    if (point.non_gaussian_strength != 0.0 || point.non_gaussian_cubic != 0.0) {
+        xi_mu = non_gaussian(point.non_gaussian_strength, point.non_gaussian_cubic, g, pair_b(friction_block).x);
     }
     path.friction_noise = params.friction_sigma * xi_mu;
     let t_s = f32(path.interval) * effects.noise_interval_s;

@@ -133,6 +133,7 @@ pub fn random_truth(
                 m.effects.non_gaussian_friction = Some(NonGaussianFriction {
                     form: if first { NonGaussianForm::Lognormal } else { NonGaussianForm::Mixture },
                     strength: if first { pick(0.6, 1.0) } else { pick(1.0, 2.0) },
+                    cubic: 0.0,
                     load_exponent: if first { 0.5 } else { 0.0 },
                     reference_force_n: mean_n0,
                 });

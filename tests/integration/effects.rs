@@ -13,7 +13,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 39] = [
+const ZERO: [&[&str]; 40] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -29,6 +29,7 @@ const ZERO: [&[&str]; 39] = [
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"tukey_h\""],
     &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"mixture\""],
+    &["non_gaussian_friction.strength=0.0", "non_gaussian_friction.form=\"polynomial\""],
     &["friction_hysteresis.length_m=0.0"],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"rational\""],
@@ -70,7 +71,7 @@ const ZERO: [&[&str]; 39] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 40] = [
+const ON: [&[&str]; 41] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -94,6 +95,12 @@ const ON: [&[&str]; 40] = [
     &["non_gaussian_friction.strength=0.7", "non_gaussian_friction.form=\"lognormal\""],
     &["non_gaussian_friction.strength=0.2", "non_gaussian_friction.form=\"tukey_h\""],
     &["non_gaussian_friction.strength=0.8", "non_gaussian_friction.form=\"mixture\""],
+    // Skewed with tails lighter than a Gaussian's.
+    &[
+        "non_gaussian_friction.strength=0.25",
+        "non_gaussian_friction.cubic=-0.1",
+        "non_gaussian_friction.form=\"polynomial\"",
+    ],
     &["friction_hysteresis.length_m=2e-4"],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"tanh\""],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"rational\""],

@@ -94,6 +94,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 histogram_bins_per_m,
                 friction_offset,
                 non_gaussian_strength,
+                non_gaussian_cubic,
                 phase_ref_rad,
                 harmonic_amplitude_1_n,
                 harmonic_amplitude_2_n,

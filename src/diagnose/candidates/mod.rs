@@ -7,14 +7,14 @@
 //! | effect | forms searched | started from | signature |
 //! | --- | --- | --- | --- |
 //! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin); a load that follows the block's position, N0 (1 + α x/U0 + β (x/U0)²) | the measured N's harmonics; the regression of N on x | N's harmonics and residual variance |
-//! | non-Gaussian friction | skew, heavy tails (Tukey h), each with a load exponent | the sign of the residual's skew | residual quantile skewness and tail weight |
+//! | non-Gaussian friction | skew; skew and tails set apart (Fleishman's power polynomial); each with a load exponent | the signs of the residual's skew and of its tails' excess | residual quantile skewness and tail weight |
 //! | hysteresis | build-up over a displacement (Dahl), lag in time (Hess & Soom), relaxation over a slip distance (rate-and-state slip law, Ruina), contact ageing (rate-and-state ageing law, Dieterich) | the sign of the branch asymmetry; the slipping speeds | branch asymmetry, low-speed μ, residual memory |
 //! | coloured noise | AR(1) with a coloured share (Lorentzian plus white), two corners | the residual autocorrelation | residual autocorrelation, peak variance |
 //! | stiction | constant (released over a slip length), ageing with dwell time | the breakaway excess (the measured one, released, where the baseline's law absorbed it) | breakaway excess, stick fraction |
 //! | load-dependent friction | linear (bent where three or more loads are fitted), power law of the level, the whole law scaled by a power of N0, two-term adhesion F = μN + A | the slope of μ (or of the peaks, or of the phases) against N0 | mean μ, mean peak and phase across loads |
-//! | normal-force drift | linear, quadratic | the measured N's drift and curvature (or the peaks' trend) | N's drift and curvature, the peaks' trend |
+//! | normal-force drift | linear, quadratic, a random walk | the measured N's drift and curvature (or the peaks' trend), the spread of the records' slopes | N's drift, curvature and wander, the peaks' trend |
 //!
-//! The library's other forms (bumps and square harmonics, lognormal and
+//! The library's other forms (bumps and square harmonics, Tukey h, lognormal and
 //! mixture noise, tanh and rational build-ups, held and multi-scale colour,
 //! noisy and decaying stiction, saturating and exponential load
 //! dependence, saturating and wandering drift) are never searched: the
@@ -92,8 +92,8 @@ pub enum SearchedForm {
     Position,
     /// Skewed friction noise.
     Skew,
-    /// Heavy-tailed friction noise (Tukey h).
-    TukeyH,
+    /// Friction noise with its skew and tails set apart (Fleishman's polynomial).
+    Polynomial,
     /// Friction that builds up over a displacement after each reversal (Dahl).
     BuildUp,
     /// Friction that lags the law in time.
@@ -136,7 +136,7 @@ impl SearchedForm {
             SearchedForm::FourierNewtons => "fourier (amplitudes in N)",
             SearchedForm::Position => "position",
             SearchedForm::Skew => "skew",
-            SearchedForm::TukeyH => "tukey_h",
+            SearchedForm::Polynomial => "polynomial",
             SearchedForm::BuildUp => "exponential",
             SearchedForm::Lag => "lag",
             SearchedForm::Slip => "slip",

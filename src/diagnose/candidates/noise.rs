@@ -11,11 +11,13 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
     }
     let skew = ctx.excess(Observable::FrictionResidualSkewness).unwrap_or(0.0);
     let sign = if skew < 0.0 { -1.0 } else { 1.0 };
-    let non_gaussian = move |form: NonGaussianForm, p: &[f64]| NonGaussianFriction {
-        form,
-        strength: p[0],
-        load_exponent: p[1],
-        reference_force_n: mean_n0,
+    // The polynomial starts where its own quantile shape is the excess
+    // the data show over the model (the data's sensor noise dilutes it,
+    // so the search moves on from there).
+    let tails = ctx.excess(Observable::FrictionResidualTailWeight).unwrap_or(0.0);
+    let (c0, d0) = polynomial_with_shape(skew, tails);
+    let non_gaussian = move |form: NonGaussianForm, strength: f64, cubic: f64, load_exponent: f64| {
+        NonGaussianFriction { form, strength, cubic, load_exponent, reference_force_n: mean_n0 }
     };
     vec![
         Variant {
@@ -27,24 +29,78 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
             ],
             apply: Box::new(move |m, p| {
                 let mut m = m.clone();
-                m.effects.non_gaussian_friction = Some(non_gaussian(NonGaussianForm::Skew, p));
+                m.effects.non_gaussian_friction = Some(non_gaussian(NonGaussianForm::Skew, p[0], 0.0, p[1]));
                 m
             }),
         },
+        // Skew and tails set apart, so a noise skewed with light tails (two
+        // contact states, say) or heavy-tailed without skew is reached by one
+        // form; the search keeps the pair inside the form's range by
+        // shrinking it along its ray.
         Variant {
             effect,
-            form: SearchedForm::TukeyH,
+            form: SearchedForm::Polynomial,
             params: vec![
-                Param::log("strength", 0.08, 1.6, 0.005, 0.2),
+                Param::linear("strength", c0, 0.03, -0.7, 0.7),
+                Param::linear("cubic", d0, 0.015, -0.25, 0.25),
                 Param::linear("load_exponent", 0.0, 1.0, -3.0, 3.0),
             ],
             apply: Box::new(move |m, p| {
+                let (c, d) = within_polynomial_range(p[0], p[1]);
                 let mut m = m.clone();
-                m.effects.non_gaussian_friction = Some(non_gaussian(NonGaussianForm::TukeyH, p));
+                m.effects.non_gaussian_friction = Some(non_gaussian(NonGaussianForm::Polynomial, c, d, p[2]));
                 m
             }),
         },
     ]
+}
+
+/// The polynomial noise's quantile shape: Kelly's skewness and the excess
+/// tail weight (as the features measure them) of −c + bz + cz² + dz³, z
+/// standard normal, read off the transform of z's quantiles (it keeps their
+/// order where it rises, which the search's range keeps it doing there).
+fn polynomial_shape(c: f64, d: f64) -> (f64, f64) {
+    const Z90: f64 = 1.281_551_565_544_600_4;
+    const Z75: f64 = 0.674_489_750_196_081_7;
+    const Z975: f64 = 1.959_963_984_540_054;
+    let b = (1.0 - 2.0 * c * c - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
+    let x = |z: f64| z * (b + z * (c + d * z)) - c;
+    let (wide, mid) = (x(Z90) - x(-Z90), x(Z75) - x(-Z75));
+    let skewness = (x(Z90) + x(-Z90) - 2.0 * x(0.0)) / wide;
+    let tail = (x(Z975) - x(-Z975)) / mid / crate::diagnose::features::GAUSSIAN_TAIL_RATIO - 1.0;
+    (skewness, tail)
+}
+
+/// The polynomial's (c, d) whose quantile shape is nearest (`skewness`,
+/// `tail`), on a grid of steps 0.01 in c and 0.005 in d within the search's
+/// range and where the transform rises over z in ±2.5.
+fn polynomial_with_shape(skewness: f64, tail: f64) -> (f64, f64) {
+    let rises = |c: f64, d: f64| {
+        let b = (1.0 - 2.0 * c * c - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
+        [-2.5, 0.0, 2.5].iter().all(|&z| b + 2.0 * c * z + 3.0 * d * z * z > 0.0) && b > 0.0
+    };
+    let mut best = (0.0, 0.0, f64::INFINITY);
+    for i in -60..=60 {
+        for j in -40..=50 {
+            let (c, d) = (f64::from(i) * 0.01, f64::from(j) * 0.005);
+            if 2.0 * c * c + 15.0 * d * d > 0.95 || !rises(c, d) {
+                continue;
+            }
+            let (s, t) = polynomial_shape(c, d);
+            let miss = (s - skewness).powi(2) + (t - tail).powi(2);
+            if miss < best.2 {
+                best = (c, d, miss);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
+/// The polynomial noise's coefficients (c, d), shrunk along their ray to
+/// 2c² + 15d² ≤ 0.95 where the search stepped beyond the form's range.
+fn within_polynomial_range(c: f64, d: f64) -> (f64, f64) {
+    let reach = 2.0 * c * c + 15.0 * d * d;
+    if reach <= 0.95 { (c, d) } else { ((0.95 / reach).sqrt() * c, (0.95 / reach).sqrt() * d) }
 }
 
 /// The forms of a coloured friction noise searched, started where the data point.
@@ -94,4 +150,27 @@ pub(super) fn coloured_friction_noise(effect: Effect, ctx: &Context<'_>) -> Vec<
             ],
         ),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_polynomial_starts_at_the_shape_asked_for() {
+        let (s0, t0) = polynomial_shape(0.0, 0.0);
+        assert!(s0.abs() < 1e-12 && t0.abs() < 1e-6, "a Gaussian's shape read as ({s0}, {t0})");
+        for (c, d) in [(0.0, 0.0), (0.1, -0.03), (-0.1, 0.08), (0.0, 0.15), (0.2, 0.05)] {
+            let (skewness, tail) = polynomial_shape(c, d);
+            let (c1, d1) = polynomial_with_shape(skewness, tail);
+            let (s1, t1) = polynomial_shape(c1, d1);
+            assert!(
+                (s1 - skewness).abs() < 0.01 && (t1 - tail).abs() < 0.02,
+                "({c}, {d}): shape ({skewness}, {tail}); started at ({c1}, {d1}), shape ({s1}, {t1})"
+            );
+        }
+        // A positive c skews to the right, a positive d weighs the tails.
+        let (s, t) = polynomial_shape(0.2, 0.1);
+        assert!(s > 0.05 && t > 0.2, "skewness {s}, tail {t}");
+    }
 }

@@ -204,7 +204,7 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
 }
 
 /// The ratio (q97.5 − q2.5) / (q75 − q25) of a Gaussian: 3.919 93 / 1.348 98.
-const GAUSSIAN_TAIL_RATIO: f64 = 2.905_847_5;
+pub(crate) const GAUSSIAN_TAIL_RATIO: f64 = 2.905_847_5;
 
 /// Kelly's quantile skewness (q90 + q10 − 2 q50) / (q90 − q10), in [−1, 1],
 /// and the excess tail weight (q97.5 − q2.5) / (q75 − q25) / that of a

@@ -24,6 +24,7 @@ mod record;
 mod stats;
 
 pub(crate) use stats::{least_squares, solve_normal};
+pub(crate) use friction::GAUSSIAN_TAIL_RATIO;
 
 use crate::diagnose::observable::Observable;
 use crate::measure::Run;

@@ -27,9 +27,15 @@ pub fn position_load(linear_n: f64, quadratic_n: f64, r: f64) -> f64 {
 }
 
 /// Standardised non-Gaussian transform of a standard normal `g`, with an
-/// independent standard normal `g2`; strength `s` (–).
-pub fn non_gaussian(form: NonGaussianForm, s: f64, g: f64, g2: f64) -> f64 {
+/// independent standard normal `g2`; strength `s` and the `polynomial`
+/// form's cubic coefficient `d` (both –).
+pub fn non_gaussian(form: NonGaussianForm, s: f64, d: f64, g: f64, g2: f64) -> f64 {
     match form {
+        NonGaussianForm::Polynomial => {
+            // b solves b² + 6bd + 2c² + 15d² = 1 (unit variance), c = s.
+            let b = (1.0 - 2.0 * s * s - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
+            g * (b + g * (s + d * g)) - s
+        }
         NonGaussianForm::Lognormal => {
             if s == 0.0 {
                 g
@@ -110,4 +116,66 @@ pub fn contact_age_term(strength: f64, age_s: f64, reference_age_s: f64, cutoff_
 /// magnitude, is clipped at 0.
 pub fn adhesion(friction_n: f64, adhesion_n: f64) -> f64 {
     adhesion_n.max(-friction_n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// E[f(z)] over a standard normal z, by Simpson's rule on ±12.
+    fn expect(f: impl Fn(f64) -> f64) -> f64 {
+        let (n, h) = (24_000, 24.0 / 24_000.0);
+        let density = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+        (0..=n)
+            .map(|i| {
+                let z = -12.0 + i as f64 * h;
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * f(z) * density(z)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    }
+
+    /// (mean, variance, skewness, excess kurtosis) of a transform of z.
+    fn moments(f: impl Fn(f64) -> f64) -> [f64; 4] {
+        let mean = expect(&f);
+        let central = |k: i32| expect(|z| (f(z) - mean).powi(k));
+        let var = central(2);
+        [mean, var, central(3) / var.powf(1.5), central(4) / (var * var) - 3.0]
+    }
+
+    #[test]
+    fn one_variable_forms_are_standardised() {
+        for (form, s) in [(NonGaussianForm::Lognormal, 0.7), (NonGaussianForm::TukeyH, 0.2)] {
+            let [mean, var, ..] = moments(|z| non_gaussian(form, s, 0.0, z, 0.0));
+            assert!(mean.abs() < 1e-9 && (var - 1.0).abs() < 1e-9, "{form:?}: mean {mean}, variance {var}");
+        }
+    }
+
+    #[test]
+    fn the_polynomial_sets_skew_and_tails_apart() {
+        for (c, d) in [(0.0, 0.0), (0.3, -0.08), (-0.2, 0.1), (0.0, 0.15), (0.5, 0.0)] {
+            let [mean, var, skew, kurt] = moments(|z| non_gaussian(NonGaussianForm::Polynomial, c, d, z, 0.0));
+            let b = (1.0 - 2.0 * c * c - 6.0 * d * d).sqrt() - 3.0 * d;
+            // Fleishman (1978): the skewness and excess kurtosis of −c + bz + cz² + dz³.
+            let fleishman_skew = 2.0 * c * (b * b + 24.0 * b * d + 105.0 * d * d + 2.0);
+            let fleishman_kurt = 24.0
+                * (b * d
+                    + c * c * (1.0 + b * b + 28.0 * b * d)
+                    + d * d * (12.0 + 48.0 * b * d + 141.0 * c * c + 225.0 * d * d));
+            assert!(mean.abs() < 1e-9 && (var - 1.0).abs() < 1e-9, "c {c}, d {d}: mean {mean}, variance {var}");
+            assert!((skew - fleishman_skew).abs() < 1e-7, "c {c}, d {d}: skewness {skew} vs {fleishman_skew}");
+            assert!((kurt - fleishman_kurt).abs() < 1e-6, "c {c}, d {d}: excess kurtosis {kurt} vs {fleishman_kurt}");
+        }
+        // A negative cubic makes the tails lighter than a Gaussian's while c skews.
+        let [_, _, skew, kurt] = moments(|z| non_gaussian(NonGaussianForm::Polynomial, 0.25, -0.1, z, 0.0));
+        assert!(skew > 0.7 && kurt < 0.0, "skewness {skew}, excess kurtosis {kurt}");
+    }
 }

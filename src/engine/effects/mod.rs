@@ -165,6 +165,13 @@ pub const STICTION_DECAY_M: f64 = 1e-4;
 /// less above.
 pub const AGEING_CUTOFF_SPEED_M_PER_S: f64 = 1e-3;
 
+/// Whether the `polynomial` non-Gaussian form with quadratic coefficient
+/// `c` and cubic coefficient `d` (both –) has a positive linear coefficient
+/// that gives unit variance: 2c² + 15d² < 1.
+pub fn polynomial_feasible(c: f64, d: f64) -> bool {
+    2.0 * c * c + 15.0 * d * d < 1.0
+}
+
 /// Share of `mixture` non-Gaussian noise drawn from its outlier component.
 pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
 /// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].
@@ -252,12 +259,21 @@ impl Effects {
                 NonGaussianForm::Lognormal => g.strength >= 0.0 && g.strength <= 3.0,
                 NonGaussianForm::TukeyH => (0.0..0.25).contains(&g.strength),
                 NonGaussianForm::Mixture => (0.0..=3.0).contains(&g.strength),
+                NonGaussianForm::Polynomial => polynomial_feasible(g.strength, g.cubic),
             };
             check(
                 "non_gaussian_friction.strength",
                 g.strength,
                 ok,
-                "lognormal and mixture need 0..=3, tukey_h needs 0 <= h < 0.25",
+                "lognormal and mixture need 0..=3, tukey_h needs 0 <= h < 0.25, polynomial needs \
+                 2·strength² + 15·cubic² < 1",
+            )?;
+            let polynomial = g.form == NonGaussianForm::Polynomial;
+            check(
+                "non_gaussian_friction.cubic",
+                g.cubic,
+                polynomial || g.cubic == 0.0,
+                "is read by the polynomial form only (0 for the others)",
             )?;
             check("non_gaussian_friction.load_exponent", g.load_exponent, true, "must be finite")?;
             check(

@@ -24,6 +24,9 @@ pub struct EffectParams {
     pub non_gaussian_form: NonGaussianForm,
     /// Strength at this point's N0 (load scaling applied), –.
     pub non_gaussian_strength: f64,
+    /// The `polynomial` form's cubic coefficient at this point's N0 (load
+    /// scaling applied), –.
+    pub non_gaussian_cubic: f64,
     pub hysteresis_form: HysteresisForm,
     /// Build-up length δ, or the slip distance L of `slip` and `ageing`, m.
     pub hysteresis_length_m: f64,
@@ -62,6 +65,9 @@ pub struct EffectParams {
     pub drift_curvature_per_s2: f64,
 }
 
+/// The largest 2c² + 15d² a load-scaled `polynomial` noise is given.
+const POLYNOMIAL_REACH: f64 = 0.98;
+
 /// E[max(0, cos θ)^p] over θ uniform: Γ((p+1)/2) / (2 √π Γ(p/2 + 1)).
 fn bump_mean(p: f64) -> f64 {
     use statrs::function::gamma::gamma;
@@ -99,8 +105,21 @@ impl EffectParams {
             let scale =
                 if g.load_exponent == 0.0 { 1.0 } else { (n0.max(1e-9) / g.reference_force_n).powf(g.load_exponent) };
             p.non_gaussian_strength = g.strength * scale;
-            if g.form == NonGaussianForm::TukeyH {
-                p.non_gaussian_strength = p.non_gaussian_strength.min(0.24);
+            p.non_gaussian_cubic = g.cubic * scale;
+            match g.form {
+                NonGaussianForm::TukeyH => p.non_gaussian_strength = p.non_gaussian_strength.min(0.24),
+                NonGaussianForm::Polynomial => {
+                    // A load scaling may carry the coefficients out of the
+                    // form's range at another load: shrunk back along their ray.
+                    let (c, d) = (p.non_gaussian_strength, p.non_gaussian_cubic);
+                    let reach = 2.0 * c * c + 15.0 * d * d;
+                    if reach >= POLYNOMIAL_REACH {
+                        let shrink = (POLYNOMIAL_REACH / reach).sqrt();
+                        p.non_gaussian_strength = c * shrink;
+                        p.non_gaussian_cubic = d * shrink;
+                    }
+                }
+                _ => {}
             }
         }
         if let Some(h) = &effects.friction_hysteresis {

@@ -76,12 +76,21 @@ pub struct NonGaussianFriction {
     /// `skew`: (z + s (z'² − 1)/√2)/√(1+s²); `lognormal`: standardised exp(s z);
     /// `tukey_h`: standardised z·exp(h z²/2) (heavy tails); `mixture`: with
     /// probability 0.1 (z' below its 10% quantile) an outlier component
-    /// N(3s, (1 + s)²), else N(0, 1), standardised (skewed and heavy-tailed).
-    /// All have mean 0, variance 1.
+    /// N(3s, (1 + s)²), else N(0, 1), standardised (skewed and heavy-tailed);
+    /// `polynomial`: Fleishman's power polynomial −c + b z + c z² + d z³
+    /// (Fleishman 1978, Psychometrika 43), c = `strength`, d = `cubic`, b
+    /// the positive root that makes the variance 1: c sets the skew and d
+    /// the tails apart (d > 0 heavier, d < 0 lighter than a Gaussian's), so
+    /// one form reaches skew with light tails as well as heavy symmetric
+    /// tails. All have mean 0, variance 1.
     #[serde(default)]
     pub form: NonGaussianForm,
-    /// s (skew, lognormal, mixture) or h (tukey_h, < 0.25), –.
+    /// s (skew, lognormal, mixture), h (tukey_h, < 0.25) or c (polynomial;
+    /// 2c² + 15d² < 1), –.
     pub strength: f64,
+    /// d, the `polynomial` form's cubic coefficient (0 for the other forms), –.
+    #[serde(default)]
+    pub cubic: f64,
     /// Strength scales as (N0 / reference)^load_exponent, –.
     #[serde(default)]
     pub load_exponent: f64,
@@ -98,11 +107,17 @@ pub enum NonGaussianForm {
     Lognormal = 1,
     TukeyH = 2,
     Mixture = 3,
+    Polynomial = 4,
 }
 
 impl Form for NonGaussianForm {
-    const ALL: &'static [Self] =
-        &[NonGaussianForm::Skew, NonGaussianForm::Lognormal, NonGaussianForm::TukeyH, NonGaussianForm::Mixture];
+    const ALL: &'static [Self] = &[
+        NonGaussianForm::Skew,
+        NonGaussianForm::Lognormal,
+        NonGaussianForm::TukeyH,
+        NonGaussianForm::Mixture,
+        NonGaussianForm::Polynomial,
+    ];
 
     fn code(self) -> u32 {
         self as u32

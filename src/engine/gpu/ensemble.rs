@@ -36,6 +36,7 @@ fn validate(job: &Job<'_>, plan: RunPlan, oscillators: &[Oscillator]) -> Result<
         let mut effects = o.effects.clone();
         effects.friction_offset = 0.0;
         effects.non_gaussian_strength = 0.0;
+        effects.non_gaussian_cubic = 0.0;
         // Per point on the GPU too (`GridPoint`): they scale with N0.
         effects.harmonic_amplitudes_n = [0.0; 4];
         effects.friction_scale = 1.0;

@@ -205,6 +205,8 @@ pub struct GridPoint {
     pub friction_offset: f32,
     /// Non-Gaussian strength at this point's N0, –.
     pub non_gaussian_strength: f32,
+    /// The `polynomial` non-Gaussian form's cubic coefficient at this point's N0, –.
+    pub non_gaussian_cubic: f32,
     /// Phases are reduced as their deviation from this angle, rad.
     pub phase_ref_rad: f32,
     /// Normal-force harmonic amplitudes at this point's N0, N.
@@ -318,6 +320,7 @@ impl GridPoint {
             histogram_bins_per_m: point.range.bins_per_m_f32(),
             friction_offset: o.effects.friction_offset as f32,
             non_gaussian_strength: o.effects.non_gaussian_strength as f32,
+            non_gaussian_cubic: o.effects.non_gaussian_cubic as f32,
             phase_ref_rad: point.range.phase_ref_f32(),
             harmonic_amplitude_1_n: o.effects.harmonic_amplitudes_n[0] as f32,
             harmonic_amplitude_2_n: o.effects.harmonic_amplitudes_n[1] as f32,

@@ -48,6 +48,7 @@ impl Path<'_> {
             && e.colour_rho == 0.0
             && !(e.colour_form == ColourForm::Hold && e.colour_hold_intervals > 1)
             && e.non_gaussian_strength == 0.0
+            && e.non_gaussian_cubic == 0.0
             && (e.harmonic_form != HarmonicForm::Position || e.harmonic_amplitudes_n.iter().all(|&a| a == 0.0))
             && !matches!(e.stiction_form, StictionForm::Noisy | StictionForm::Dwell)
             && self.memory_form != Memory::Ageing

@@ -370,10 +370,11 @@ impl<'a> Path<'a> {
                 (1.0 - e.colour_share).sqrt() * self.colour_state[0] + e.colour_share.sqrt() * self.colour_state[1]
             }
         };
-        let xi_mu = if e.non_gaussian_strength == 0.0 {
+        let xi_mu = if e.non_gaussian_strength == 0.0 && e.non_gaussian_cubic == 0.0 {
             g
         } else {
-            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, g, rng::pair_b(friction_block()).0)
+            let g2 = rng::pair_b(friction_block()).0;
+            effects::non_gaussian(e.non_gaussian_form, e.non_gaussian_strength, e.non_gaussian_cubic, g, g2)
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
