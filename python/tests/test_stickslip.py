@@ -82,14 +82,15 @@ def test_work_beyond_the_budget_raises_unless_forced(tmp_path):
         stickslip.diagnose(FIGURE8, out=tmp_path / "d", backend="cpu", realisations=1_000_000, progress=False)
     assert time.monotonic() - started < 20, "refusals come before any work"
     assert list(tmp_path.iterdir()) == [], "a refused run writes nothing"
-    # force=True runs it: one measured period of one realisation at 100 Hz
-    # with 1e7 noise intervals in each of its two periods (a second or two).
-    forced = dict(frequencies=[100.0], normal_forces=[10.0], realisations=1, warmup_cycles=1, cycles=1,
+    # force=True runs it: two measured periods (the fewest a variance
+    # needs) of one realisation at 100 Hz with 1e7 noise intervals in each
+    # of its three periods (a few seconds).
+    forced = dict(frequencies=[100.0], normal_forces=[10.0], realisations=1, warmup_cycles=1, cycles=2,
                   backend="cpu", refine=False, overrides=tiny_noise)
     with pytest.raises(ValueError, match="per period"):
         stickslip.sweep(**forced)
     ds = stickslip.sweep(**forced, force=True, as_xarray=False)
-    assert len(ds) == 1 and ds["peaks"].iloc[0] == 1
+    assert len(ds) == 1 and ds["peaks"].iloc[0] == 2
 
 
 # -- sweeps -------------------------------------------------------------------

@@ -264,8 +264,9 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
     );
     assert!(started.elapsed() < std::time::Duration::from_secs(20), "refusals come before any work");
     assert_eq!(listing(&s.0), Vec::<String>::new(), "a refused run writes nothing");
-    // --force runs what the budget refuses (here two periods of one
-    // realisation at 100 Hz with 1e7 noise intervals each: a second or two).
+    // --force runs what the budget refuses (here three periods of one
+    // realisation at 100 Hz, one of warm-up and the two a variance needs,
+    // with 1e7 noise intervals each: a few seconds).
     let forced = [
         "--set",
         "noise.interval_s=1e-9",
@@ -274,7 +275,7 @@ fn work_beyond_the_budget_is_refused_unless_forced() {
         "--realisations",
         "1",
         "--cycles",
-        "1",
+        "2",
         "--no-plots",
         "--no-refine",
     ];

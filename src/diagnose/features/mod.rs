@@ -23,8 +23,8 @@ mod friction;
 mod record;
 mod stats;
 
-pub(crate) use stats::{least_squares, solve_normal};
 pub(crate) use friction::GAUSSIAN_TAIL_RATIO;
+pub(crate) use stats::{least_squares, solve_normal};
 
 use crate::diagnose::observable::Observable;
 use crate::measure::Run;
