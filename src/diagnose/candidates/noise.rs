@@ -1,6 +1,7 @@
 //! The friction noise's shape and colour: non-Gaussian and coloured friction noise.
 
 use super::*;
+use crate::engine::effects::{POLYNOMIAL_REACH, polynomial_within_reach};
 
 /// The forms of a non-Gaussian friction noise searched, started where the data point.
 pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
@@ -46,7 +47,7 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
                 Param::linear("load_exponent", 0.0, 1.0, -3.0, 3.0),
             ],
             apply: Box::new(move |m, p| {
-                let (c, d) = within_polynomial_range(p[0], p[1]);
+                let (c, d) = polynomial_within_reach(p[0], p[1]);
                 let mut m = m.clone();
                 m.effects.non_gaussian_friction = Some(non_gaussian(NonGaussianForm::Polynomial, c, d, p[2]));
                 m
@@ -83,7 +84,7 @@ fn polynomial_with_shape(skewness: f64, tail: f64) -> (f64, f64) {
     for i in -60..=60 {
         for j in -40..=50 {
             let (c, d) = (f64::from(i) * 0.01, f64::from(j) * 0.005);
-            if 2.0 * c * c + 15.0 * d * d > 0.95 || !rises(c, d) {
+            if 2.0 * c * c + 15.0 * d * d > POLYNOMIAL_REACH || !rises(c, d) {
                 continue;
             }
             let (s, t) = polynomial_shape(c, d);
@@ -94,13 +95,6 @@ fn polynomial_with_shape(skewness: f64, tail: f64) -> (f64, f64) {
         }
     }
     (best.0, best.1)
-}
-
-/// The polynomial noise's coefficients (c, d), shrunk along their ray to
-/// 2c² + 15d² ≤ 0.95 where the search stepped beyond the form's range.
-fn within_polynomial_range(c: f64, d: f64) -> (f64, f64) {
-    let reach = 2.0 * c * c + 15.0 * d * d;
-    if reach <= 0.95 { (c, d) } else { ((0.95 / reach).sqrt() * c, (0.95 / reach).sqrt() * d) }
 }
 
 /// The forms of a coloured friction noise searched, started where the data point.

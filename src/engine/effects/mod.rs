@@ -172,6 +172,23 @@ pub fn polynomial_feasible(c: f64, d: f64) -> bool {
     2.0 * c * c + 15.0 * d * d < 1.0
 }
 
+/// The largest 2c² + 15d² a `polynomial` noise is given where the
+/// coefficients are not a user's own (scaled to another load, or stepped by
+/// the diagnosis's search).
+pub const POLYNOMIAL_REACH: f64 = 0.95;
+
+/// The `polynomial` form's (c, d), shrunk along their ray to 2c² + 15d² ≤
+/// [`POLYNOMIAL_REACH`] where they reach beyond it (unchanged otherwise).
+pub fn polynomial_within_reach(c: f64, d: f64) -> (f64, f64) {
+    let reach = 2.0 * c * c + 15.0 * d * d;
+    if reach <= POLYNOMIAL_REACH {
+        (c, d)
+    } else {
+        let shrink = (POLYNOMIAL_REACH / reach).sqrt();
+        (c * shrink, d * shrink)
+    }
+}
+
 /// Share of `mixture` non-Gaussian noise drawn from its outlier component.
 pub const MIXTURE_OUTLIER_SHARE: f64 = 0.1;
 /// The standard normal's quantile at [`MIXTURE_OUTLIER_SHARE`].

@@ -65,9 +65,6 @@ pub struct EffectParams {
     pub drift_curvature_per_s2: f64,
 }
 
-/// The largest 2c² + 15d² a load-scaled `polynomial` noise is given.
-const POLYNOMIAL_REACH: f64 = 0.98;
-
 /// E[max(0, cos θ)^p] over θ uniform: Γ((p+1)/2) / (2 √π Γ(p/2 + 1)).
 fn bump_mean(p: f64) -> f64 {
     use statrs::function::gamma::gamma;
@@ -110,14 +107,9 @@ impl EffectParams {
                 NonGaussianForm::TukeyH => p.non_gaussian_strength = p.non_gaussian_strength.min(0.24),
                 NonGaussianForm::Polynomial => {
                     // A load scaling may carry the coefficients out of the
-                    // form's range at another load: shrunk back along their ray.
-                    let (c, d) = (p.non_gaussian_strength, p.non_gaussian_cubic);
-                    let reach = 2.0 * c * c + 15.0 * d * d;
-                    if reach >= POLYNOMIAL_REACH {
-                        let shrink = (POLYNOMIAL_REACH / reach).sqrt();
-                        p.non_gaussian_strength = c * shrink;
-                        p.non_gaussian_cubic = d * shrink;
-                    }
+                    // form's range at another load.
+                    (p.non_gaussian_strength, p.non_gaussian_cubic) =
+                        super::polynomial_within_reach(p.non_gaussian_strength, p.non_gaussian_cubic);
                 }
                 _ => {}
             }
