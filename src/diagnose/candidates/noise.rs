@@ -1,7 +1,7 @@
 //! The friction noise's shape and colour: non-Gaussian and coloured friction noise.
 
 use super::*;
-use crate::engine::effects::{POLYNOMIAL_REACH, polynomial_within_reach};
+use crate::engine::effects::{POLYNOMIAL_REACH, polynomial_linear, polynomial_within_reach};
 
 /// The forms of a non-Gaussian friction noise searched, started where the data point.
 pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
@@ -57,15 +57,14 @@ pub(super) fn non_gaussian_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Va
 }
 
 /// The polynomial noise's quantile shape: Kelly's skewness and the excess
-/// tail weight (as the features measure them) of −c + bz + cz² + dz³, z
-/// standard normal, read off the transform of z's quantiles (it keeps their
-/// order where it rises, which the search's range keeps it doing there).
+/// tail weight (as the features measure them) of the engine's transform,
+/// read off the transform of a standard normal's quantiles (it keeps their
+/// order where it rises, which [`polynomial_with_shape`] keeps it doing).
 fn polynomial_shape(c: f64, d: f64) -> (f64, f64) {
     const Z90: f64 = 1.281_551_565_544_600_4;
     const Z75: f64 = 0.674_489_750_196_081_7;
     const Z975: f64 = 1.959_963_984_540_054;
-    let b = (1.0 - 2.0 * c * c - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
-    let x = |z: f64| z * (b + z * (c + d * z)) - c;
+    let x = |z: f64| crate::engine::cpu::effects::non_gaussian(NonGaussianForm::Polynomial, c, d, z, 0.0);
     let (wide, mid) = (x(Z90) - x(-Z90), x(Z75) - x(-Z75));
     let skewness = (x(Z90) + x(-Z90) - 2.0 * x(0.0)) / wide;
     let tail = (x(Z975) - x(-Z975)) / mid / crate::diagnose::features::GAUSSIAN_TAIL_RATIO - 1.0;
@@ -76,9 +75,12 @@ fn polynomial_shape(c: f64, d: f64) -> (f64, f64) {
 /// `tail`), on a grid of steps 0.01 in c and 0.005 in d within the search's
 /// range and where the transform rises over z in ±2.5.
 fn polynomial_with_shape(skewness: f64, tail: f64) -> (f64, f64) {
+    // The slope b + 2cz + 3dz² is least at an end of the range or at its
+    // vertex z = −c/(3d).
     let rises = |c: f64, d: f64| {
-        let b = (1.0 - 2.0 * c * c - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
-        [-2.5, 0.0, 2.5].iter().all(|&z| b + 2.0 * c * z + 3.0 * d * z * z > 0.0) && b > 0.0
+        let slope = |z: f64| polynomial_linear(c, d) + 2.0 * c * z + 3.0 * d * z * z;
+        let vertex = if d == 0.0 { 0.0 } else { (-c / (3.0 * d)).clamp(-2.5, 2.5) };
+        [-2.5, vertex, 2.5].into_iter().all(|z| slope(z) > 0.0)
     };
     let mut best = (0.0, 0.0, f64::INFINITY);
     for i in -60..=60 {

@@ -5,7 +5,7 @@
 //! (`tests/integration/effects.rs` checks paths bit for bit).
 
 use crate::engine::effects::{
-    HarmonicForm, HysteresisForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, NonGaussianForm,
+    HarmonicForm, HysteresisForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, NonGaussianForm, polynomial_linear,
 };
 
 /// Harmonic waveform g(c) of a form, c = cos(kθ + φ). The `position` form
@@ -31,11 +31,7 @@ pub fn position_load(linear_n: f64, quadratic_n: f64, r: f64) -> f64 {
 /// form's cubic coefficient `d` (both –).
 pub fn non_gaussian(form: NonGaussianForm, s: f64, d: f64, g: f64, g2: f64) -> f64 {
     match form {
-        NonGaussianForm::Polynomial => {
-            // b solves b² + 6bd + 2c² + 15d² = 1 (unit variance), c = s.
-            let b = (1.0 - 2.0 * s * s - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d;
-            g * (b + g * (s + d * g)) - s
-        }
+        NonGaussianForm::Polynomial => g * (polynomial_linear(s, d) + g * (s + d * g)) - s,
         NonGaussianForm::Lognormal => {
             if s == 0.0 {
                 g

@@ -172,6 +172,13 @@ pub fn polynomial_feasible(c: f64, d: f64) -> bool {
     2.0 * c * c + 15.0 * d * d < 1.0
 }
 
+/// The `polynomial` form's linear coefficient b (–) for quadratic and cubic
+/// coefficients `c` and `d` (–): the positive root of b² + 6bd + 2c² + 15d² =
+/// 1, which gives the noise unit variance.
+pub fn polynomial_linear(c: f64, d: f64) -> f64 {
+    (1.0 - 2.0 * c * c - 6.0 * d * d).max(0.0).sqrt() - 3.0 * d
+}
+
 /// The largest 2c² + 15d² a `polynomial` noise is given where the
 /// coefficients are not a user's own (scaled to another load, or stepped by
 /// the diagnosis's search).
