@@ -288,6 +288,8 @@ impl Model {
         let syntax = |message: String| Error::ModelSyntax { source_name: source_name.to_string(), message };
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| syntax(toml_problem(text, &e)))?;
+        // The tables the text itself has; one a `--set` creates is that flag's.
+        let own_tables: Vec<String> = table.keys().cloned().collect();
         for assignment in overrides {
             apply_override(&mut table, assignment)?;
         }
@@ -310,7 +312,8 @@ impl Model {
                     a.split_once('=').is_some_and(|(key, _)| {
                         let (key, table) = (key.trim(), key.trim().split('.').next().unwrap_or_default());
                         problem.starts_with(&format!("`{key}`"))
-                            || (problem.starts_with(&format!("in table `{table}`")) && !text_has_table(text, table))
+                            || (problem.starts_with(&format!("in table `{table}`"))
+                                && !own_tables.iter().any(|t| t == table))
                     })
                 });
                 return Err(match set_here {
@@ -622,12 +625,6 @@ fn key_at(text: &str, span: Option<std::ops::Range<usize>>) -> Option<String> {
 /// Applies one `KEY=VALUE` override to a TOML table, creating tables on the
 /// way. The value is read as a TOML value (number, boolean, string); a bare
 /// word is taken as a string.
-/// Whether the model text itself has the top-level table `name` (else a
-/// `--set` made it).
-fn text_has_table(text: &str, name: &str) -> bool {
-    text.parse::<toml::Table>().is_ok_and(|t| t.contains_key(name))
-}
-
 fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
     let bad =
         |message: &str| Error::ModelSyntax { source_name: format!("--set {assignment}"), message: message.into() };
