@@ -93,8 +93,8 @@ fn ageing_rate(age_s: f32, speed: f32) -> f32 {
 }
 
 // B ln((θ + θ_c)/(θ_ref + θ_c)), θ read as 0 below 0, –.
-fn contact_age_term(age_s: f32, reference_age_s: f32, cutoff_age_s: f32) -> f32 {
-    return effects.hysteresis_strength * log((max(age_s, 0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s));
+fn contact_age_term(age_s: f32, reference_age_s: f32, floor_age_s: f32) -> f32 {
+    return effects.hysteresis_strength * log((max(age_s, 0.0) + floor_age_s) / (reference_age_s + floor_age_s));
 }
 
 // A `random_walk`'s factor is its expectation, 1: each path adds its walk.

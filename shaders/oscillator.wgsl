@@ -178,10 +178,11 @@ fn contact_age_at(interval_start_s: f32) -> f32 {
     return path.memory + max(interval_start_s - path.stick_since_s, 0.0);
 }
 
-// B ln((θ + θ_c)/(2 θ_c)): the static coefficient's contact-age term.
+// B ln((θ + θ_0)/(θ_c + θ_0)): the static coefficient's contact-age term.
 fn contact_age_excess(age_s: f32) -> f32 {
     let cutoff_age_s = effects.hysteresis_length_m / AGEING_CUTOFF_SPEED_M_PER_S;
-    return contact_age_term(age_s, cutoff_age_s, cutoff_age_s);
+    let floor_age_s = effects.hysteresis_length_m / AGEING_FLOOR_SPEED_M_PER_S;
+    return contact_age_term(age_s, cutoff_age_s, floor_age_s);
 }
 
 // A stick starts at t_s (from the run's start): dwell stiction ages anew.
@@ -264,13 +265,13 @@ fn friction_force_n(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f32) -
     return friction_n;
 }
 
-// μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c)), θ_ss(v) = L/(|v| + v_c): the
-// sliding coefficient of hysteresis `ageing` before stiction.
+// μ_ss(v) + B ln((θ + θ_0)/(θ_ss(v) + θ_0)), θ_ss(v) = L/(|v| + v_c),
+// θ_0 = L/v_0: the sliding coefficient of hysteresis `ageing` before stiction.
 fn ageing_coefficient(speed_m_per_s: f32, v_m_per_s: f32, age_s: f32) -> f32 {
     let length_m = effects.hysteresis_length_m;
     let steady_age_s = length_m / (abs(v_m_per_s) + AGEING_CUTOFF_SPEED_M_PER_S);
-    let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
-    return steady_law(speed_m_per_s, v_m_per_s) + contact_age_term(age_s, steady_age_s, cutoff_age_s);
+    let floor_age_s = length_m / AGEING_FLOOR_SPEED_M_PER_S;
+    return steady_law(speed_m_per_s, v_m_per_s) + contact_age_term(age_s, steady_age_s, floor_age_s);
 }
 
 fn static_coefficient() -> f32 {

@@ -98,12 +98,12 @@ pub fn ageing_rate(age_s: f64, speed: f64, length: f64) -> f64 {
 }
 
 /// The contact-age term of hysteresis `ageing`, –:
-/// `B ln((θ + θ_c)/(θ_ref + θ_c))` with `strength` B (–), the contact age
+/// `B ln((θ + θ_0)/(θ_ref + θ_0))` with `strength` B (–), the contact age
 /// θ = `age_s` (s; read as 0 where an RK4 stage overshoots below it),
 /// `reference_age_s` θ_ref (s: the steady age L/(|v| + v_c) while sliding,
-/// θ_c at rest) and the cut-off age θ_c = L/v_c (`cutoff_age_s`, s).
-pub fn contact_age_term(strength: f64, age_s: f64, reference_age_s: f64, cutoff_age_s: f64) -> f64 {
-    strength * ((age_s.max(0.0) + cutoff_age_s) / (reference_age_s + cutoff_age_s)).ln()
+/// θ_c = L/v_c at rest) and the floor age θ_0 = L/v_0 (`floor_age_s`, s).
+pub fn contact_age_term(strength: f64, age_s: f64, reference_age_s: f64, floor_age_s: f64) -> f64 {
+    strength * ((age_s.max(0.0) + floor_age_s) / (reference_age_s + floor_age_s)).ln()
 }
 
 /// The adhesion force of load dependence `adhesion` as it adds to a

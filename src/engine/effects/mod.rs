@@ -158,12 +158,18 @@ pub const DRIFT_WANDER_S: f64 = 15.0;
 /// Displacement over which `decaying` stiction fades, m.
 pub const STICTION_DECAY_M: f64 = 1e-4;
 /// Cut-off speed v_c of hysteresis `ageing`, m/s: the steady contact age is
-/// L/(|v| + v_c), and θ_c = L/v_c keeps the logarithm finite at rest and for
-/// fresh contacts (θ = 0). 1 mm/s: well below the paper rig's sliding
-/// speeds (cm/s to m/s), so in steady sliding (θ = L/|v|) the state term
-/// B ln(1 + 1/(u (u + 2))), u = |v|/v_c, is about 0.1% of B at 3 cm/s and
-/// less above.
+/// L/(|v| + v_c), finite at rest, where it is θ_c = L/v_c (the age whose
+/// static coefficient is the law's μ(0)). 1 mm/s: well below the paper
+/// rig's sliding speeds (cm/s to m/s), so in steady sliding (θ = L/|v|)
+/// the state term is under 1% of B at 10 cm/s.
 pub const AGEING_CUTOFF_SPEED_M_PER_S: f64 = 1e-3;
+/// Floor speed v_0 of hysteresis `ageing`, m/s: θ_0 = L/v_0 is added to
+/// every contact age in the logarithm, so that it stays finite for a
+/// fresh contact (θ = 0). 1 m/s: above the paper rig's sliding speeds, so
+/// θ_0 is below the steady age of any slip the rig makes and the state
+/// term follows ln θ through a slip's transient (a floor as large as θ_c
+/// would flatten that transient to a few per cent of B).
+pub const AGEING_FLOOR_SPEED_M_PER_S: f64 = 1.0;
 
 /// Whether the `polynomial` non-Gaussian form with quadratic coefficient
 /// `c` and cubic coefficient `d` (both –) has a positive linear coefficient

@@ -156,11 +156,14 @@ pub struct FrictionHysteresis {
     /// 1983) with a contact age θ (s): dθ/dt = 1 − |v| θ / L, so θ grows at
     /// rate 1 while stuck (contact healing) and tends to L/|v| in steady
     /// sliding (L = `length_m`). Sliding friction is
-    /// μ = μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c)) with θ_ss(v) = L/(|v| + v_c),
-    /// θ_c = L/v_c, v_c = [`AGEING_CUTOFF_SPEED_M_PER_S`] (1 mm/s: the cut-off
-    /// keeps the logarithm finite at rest and at θ = 0) and B = `strength`.
-    /// The static coefficient adds the same term at v = 0:
-    /// μ_s = μ(0) + B ln((θ + θ_c)/(2 θ_c)), with θ evaluated at the start of
+    /// μ = μ_ss(v) + B ln((θ + θ_0)/(θ_ss(v) + θ_0)) with θ_ss(v) = L/(|v| + v_c),
+    /// v_c = [`AGEING_CUTOFF_SPEED_M_PER_S`] (1 mm/s: the steady age stays
+    /// finite at rest, θ_c = L/v_c), θ_0 = L/v_0, v_0 =
+    /// [`AGEING_FLOOR_SPEED_M_PER_S`] (1 m/s: the floor keeps the logarithm
+    /// finite at θ = 0 and is below every steady age of a slip the rig
+    /// makes, so the term follows ln θ through a slip's transient) and
+    /// B = `strength`. The static coefficient adds the same term at v = 0:
+    /// μ_s = μ(0) + B ln((θ + θ_0)/(θ_c + θ_0)), with θ evaluated at the start of
     /// each noise interval while stuck (held over the interval, so breakaway
     /// stays closed-form) and at the start of each stick. θ is not reset at a
     /// breakaway: the slip starts from the θ the static coefficient was judged
@@ -170,6 +173,7 @@ pub struct FrictionHysteresis {
     /// baseline) when B = 0 or L = 0.
     ///
     /// [`AGEING_CUTOFF_SPEED_M_PER_S`]: super::AGEING_CUTOFF_SPEED_M_PER_S
+    /// [`AGEING_FLOOR_SPEED_M_PER_S`]: super::AGEING_FLOOR_SPEED_M_PER_S
     #[serde(default)]
     pub form: HysteresisForm,
     /// Characteristic displacement δ of the build-up forms, or the slip

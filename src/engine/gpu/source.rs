@@ -15,9 +15,9 @@
 use std::fmt::Write;
 
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm, Form, HarmonicForm,
-    HysteresisForm, LoadForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, Memory, NonGaussianForm,
-    STICTION_DECAY_M, StictionForm,
+    AGEING_CUTOFF_SPEED_M_PER_S, AGEING_FLOOR_SPEED_M_PER_S, ColourForm, DRIFT_SATURATION_S, DRIFT_WANDER_S, DriftForm,
+    Form, HarmonicForm, HysteresisForm, LoadForm, MIXTURE_OUTLIER_QUANTILE, MIXTURE_OUTLIER_SHARE, Memory,
+    NonGaussianForm, STICTION_DECAY_M, StictionForm,
 };
 use crate::engine::gpu::shared::EffectParams;
 use crate::engine::gpu::{MAX_WORKGROUPS_PER_DIMENSION, WORKGROUP_SIZE};
@@ -167,6 +167,7 @@ fn constants() -> String {
         ("DRIFT_WANDER_S", DRIFT_WANDER_S),
         ("STICTION_DECAY_M", STICTION_DECAY_M),
         ("AGEING_CUTOFF_SPEED_M_PER_S", AGEING_CUTOFF_SPEED_M_PER_S),
+        ("AGEING_FLOOR_SPEED_M_PER_S", AGEING_FLOOR_SPEED_M_PER_S),
         ("MIXTURE_OUTLIER_SHARE", MIXTURE_OUTLIER_SHARE),
         ("MIXTURE_OUTLIER_QUANTILE", MIXTURE_OUTLIER_QUANTILE),
     ] {

@@ -57,8 +57,8 @@ pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
 
 use crate::engine::cpu::{effects, noise};
 use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, ColourForm, DriftForm, EffectParams, HarmonicForm, HysteresisForm, Memory,
-    STICTION_DECAY_M, StictionForm, drift_factor,
+    AGEING_CUTOFF_SPEED_M_PER_S, AGEING_FLOOR_SPEED_M_PER_S, ColourForm, DriftForm, EffectParams, HarmonicForm,
+    HysteresisForm, Memory, STICTION_DECAY_M, StictionForm, drift_factor,
 };
 use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
@@ -202,7 +202,7 @@ pub(crate) struct Path<'a> {
     /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
     /// contact age θ of `ageing` (s; while stuck, θ when the stick began).
     memory: f64,
-    /// The static coefficient's contact-age term B ln((θ + θ_c)/(2 θ_c)) of
+    /// The static coefficient's contact-age term B ln((θ + θ_0)/(θ_c + θ_0)) of
     /// hysteresis `ageing`, with θ at the current interval's start while
     /// stuck (or at the stick's start), and at the last velocity zero, –.
     ageing_excess: f64,
@@ -410,11 +410,12 @@ impl<'a> Path<'a> {
     }
 
     /// The static coefficient's contact-age term at age `age_s` (s):
-    /// `B ln((θ + θ_c)/(2 θ_c))`, the sliding friction's term at v = 0, –.
+    /// `B ln((θ + θ_0)/(θ_c + θ_0))`, the sliding friction's term at v = 0, –.
     fn contact_age_excess(&self, age_s: f64) -> f64 {
         let e = &self.osc.effects;
         let cutoff_age_s = e.hysteresis_length_m / AGEING_CUTOFF_SPEED_M_PER_S;
-        effects::contact_age_term(e.hysteresis_strength, age_s, cutoff_age_s, cutoff_age_s)
+        let floor_age_s = e.hysteresis_length_m / AGEING_FLOOR_SPEED_M_PER_S;
+        effects::contact_age_term(e.hysteresis_strength, age_s, cutoff_age_s, floor_age_s)
     }
 
     /// Marks the start of a stick at `t_s` (from the run's start): the
@@ -501,16 +502,16 @@ impl<'a> Path<'a> {
     }
 
     /// The sliding coefficient of hysteresis `ageing` with contact age
-    /// `age_s` (s), before stiction: `μ_ss(v) + B ln((θ + θ_c)/(θ_ss(v) + θ_c))`,
-    /// θ_ss(v) = L/(|v| + v_c), –. Not inlined: it calls `ln` anyway.
+    /// `age_s` (s), before stiction: `μ_ss(v) + B ln((θ + θ_0)/(θ_ss(v) + θ_0))`,
+    /// θ_ss(v) = L/(|v| + v_c), θ_0 = L/v_0, –. Not inlined: it calls `ln` anyway.
     #[inline(never)]
     fn ageing_coefficient(&self, speed_m_per_s: f64, v_m_per_s: f64, age_s: f64) -> f64 {
         let e = &self.osc.effects;
         let length_m = e.hysteresis_length_m;
         let steady_age_s = length_m / (v_m_per_s.abs() + AGEING_CUTOFF_SPEED_M_PER_S);
-        let cutoff_age_s = length_m / AGEING_CUTOFF_SPEED_M_PER_S;
+        let floor_age_s = length_m / AGEING_FLOOR_SPEED_M_PER_S;
         self.steady_law(speed_m_per_s, v_m_per_s)
-            + effects::contact_age_term(e.hysteresis_strength, age_s, steady_age_s, cutoff_age_s)
+            + effects::contact_age_term(e.hysteresis_strength, age_s, steady_age_s, floor_age_s)
     }
 
     /// The static coefficient `μ(0) + stiction excess + contact-age term`,

@@ -126,7 +126,7 @@ fn a_breakaway_under_lag_and_a_released_stiction_slips_on() {
 /// the slip starts from that same age, so sliding friction at v = 0
 /// starts at exactly that static coefficient (no stop and re-slip at
 /// once). The age held is the stick's start plus the time stuck up to
-/// the interval's start, and the term is B ln((θ + θ_c)/(2 θ_c)).
+/// the interval's start, and the term is B ln((θ + θ_0)/(θ_c + θ_0)).
 #[test]
 fn an_ageing_slip_starts_at_the_static_coefficient() {
     let model = crate::engine::Model::paper_rig(&[
@@ -148,8 +148,9 @@ fn an_ageing_slip_starts_at_the_static_coefficient() {
     let t_s = 100.0 * osc.noise_interval_s;
     let age_s = path.contact_age_at(t_s);
     let cutoff_age_s = 1e-5 / AGEING_CUTOFF_SPEED_M_PER_S;
+    let floor_age_s = 1e-5 / AGEING_FLOOR_SPEED_M_PER_S;
     assert!((age_s - (2e-3 + t_s - 0.1)).abs() < 1e-15, "{age_s}");
-    let expected = 0.03 * ((age_s + cutoff_age_s) / (2.0 * cutoff_age_s)).ln();
+    let expected = 0.03 * ((age_s + floor_age_s) / (cutoff_age_s + floor_age_s)).ln();
     assert!((path.ageing_excess - expected).abs() < 1e-15, "{} vs {expected}", path.ageing_excess);
     assert!((path.static_coefficient() - (0.527 + expected)).abs() < 1e-12);
     let sliding = path.friction_coefficient(0.0, 0.0, path.x_m, age_s);
