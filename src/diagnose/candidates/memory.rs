@@ -15,6 +15,14 @@ const STICTION_RELEASE_START_M: f64 = 1e-4;
 /// 440 at 7 Hz and 0.1 mm on the paper's rig).
 const SLIP_MEMORY_MIN_M: f64 = 5e-5;
 
+/// The largest state coefficient B of the ageing law searched, –. Rock and
+/// metal friction experiments put b between a few thousandths and a few
+/// hundredths (Dieterich 1979; Marone 1998, Annu. Rev. Earth Planet. Sci.
+/// 26); 0.05 leaves room above those. The term moves by B ln(θ/θ_ss), a few
+/// B through a slip of the rig, so a B of tenths would turn a few
+/// millimetres of slip into a friction change larger than μ itself.
+const AGEING_STRENGTH_MAX: f64 = 0.05;
+
 /// The forms of a friction memory searched, started where the data point.
 pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
     let friction = ctx.has(Observable::FrictionMuMean);
@@ -82,11 +90,12 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
             m
         }),
     };
+    // The ageing law's state coefficient B within ±AGEING_STRENGTH_MAX.
     let ageing = Variant {
         effect,
         form: SearchedForm::Ageing,
         params: vec![
-            Param::log("strength", 0.01, 2.0, -0.2, 0.2),
+            Param::log("strength", 0.01, 2.0, -AGEING_STRENGTH_MAX, AGEING_STRENGTH_MAX),
             Param::log("length_m", length, 2.5, SLIP_MEMORY_MIN_M, 1e-2),
         ],
         apply: Box::new(move |m, p| {
