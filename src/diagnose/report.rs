@@ -42,7 +42,7 @@ pub struct Report {
 }
 
 /// How the confidence is defined, as `report.json` states it.
-pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and predicts every withheld fold no worse than the model before it; `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above";
+pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above";
 
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
