@@ -92,7 +92,7 @@ fn ageing_rate(age_s: f32, speed: f32) -> f32 {
     return 1.0 - speed * age_s / effects.hysteresis_length_m;
 }
 
-// B ln((θ + θ_c)/(θ_ref + θ_c)), θ read as 0 below 0, –.
+// B ln((θ + θ_0)/(θ_ref + θ_0)), θ read as 0 below 0, θ_0 the floor age, –.
 fn contact_age_term(age_s: f32, reference_age_s: f32, floor_age_s: f32) -> f32 {
     return effects.hysteresis_strength * log((max(age_s, 0.0) + floor_age_s) / (reference_age_s + floor_age_s));
 }

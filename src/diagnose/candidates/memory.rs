@@ -90,7 +90,6 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
             m
         }),
     };
-    // The ageing law's state coefficient B within ±AGEING_STRENGTH_MAX.
     let ageing = Variant {
         effect,
         form: SearchedForm::Ageing,
