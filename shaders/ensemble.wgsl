@@ -99,6 +99,8 @@ struct GridPoint {
     friction_scale: f32,
     // Steps per period at this point (raised by a friction memory, by frequency).
     steps_per_period: u32,
+    // Added to params.realisation_offset for this point's realisation numbers.
+    realisation_offset: u32,
 }
 
 struct PathState {
@@ -164,7 +166,7 @@ fn record_sample(t_s: f32) {
 fn load_invocation(n: u32) {
     point_index = n / params.realisations_per_point;
     point = points[params.point_offset + point_index];
-    realisation = params.realisation_offset + n % params.realisations_per_point;
+    realisation = params.realisation_offset + point.realisation_offset + n % params.realisations_per_point;
     key = vec2<u32>(params.seed_lo, params.seed_hi);
     law_a = params.friction_a * point.friction_scale;
     law_b = params.friction_b * point.friction_scale;

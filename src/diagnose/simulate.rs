@@ -29,55 +29,66 @@ const REPLICATE_STRIDE: u32 = 1000;
 /// 7 Hz on the paper's rig).
 const REPLICATE_STEPS_PER_PERIOD: u32 = 32;
 
-/// Replicates `numbers` (of `0..settings.replicates`, say) of unit `unit`
-/// under `model`: records as long as the unit's, sampled like the data (at
-/// the noise boundaries, the noise interval being the data's sample
-/// interval), with the measurement noise estimated on the data added.
+/// Replicates `numbers` (of `0..settings.replicates`, say) of each unit of
+/// `units` under `model`, all in one engine job (a point per unit, so the
+/// backend fills its cores or the GPU with every unit's records at once):
+/// records as long as the unit's, sampled like the data (at the noise
+/// boundaries, the noise interval being the data's sample interval), with
+/// the measurement noise estimated on the data added. Every unit of `units`
+/// must have the same record length; per unit, in the order of `units`.
 pub(crate) fn replicates(
     engine: &Engine,
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
-    unit: usize,
+    units: &[usize],
     numbers: std::ops::Range<u32>,
-) -> Result<Vec<Run>> {
+) -> Result<Vec<Vec<Run>>> {
+    let Some(&first_unit) = units.first() else { return Ok(Vec::new()) };
     if numbers.is_empty() {
-        return Ok(Vec::new());
+        return Ok(vec![Vec::new(); units.len()]);
     }
+    let duration_s = data.record_s[first_unit];
+    debug_assert!(units.iter().all(|&u| data.record_s[u].to_bits() == duration_s.to_bits()));
     let mut model = model.clone();
     model.solver.steps_per_period = model.solver.steps_per_period.min(REPLICATE_STEPS_PER_PERIOD);
-    let condition = data.simulated_condition(&data.units[unit], &model, settings.warmup_cycles);
-    let points = [Point::steady(&model, condition)];
+    let conditions: Vec<Condition> =
+        units.iter().map(|&u| data.simulated_condition(&data.units[u], &model, settings.warmup_cycles)).collect();
     // Each replicate's noise is keyed by its realisation number alone, so a
-    // replicate is the same record whichever others are simulated with it.
-    let first_realisation = REPLICATE_STRIDE * unit as u32 + numbers.start;
+    // replicate is the same record whichever others are simulated with it;
+    // unit `u`'s numbers start at `u × REPLICATE_STRIDE`.
+    let points: Vec<Point> = units
+        .iter()
+        .zip(&conditions)
+        .map(|(&u, &c)| Point { realisation_offset: REPLICATE_STRIDE * u as u32, ..Point::steady(&model, c) })
+        .collect();
     let job = Job {
         model: &model,
         points: &points,
         realisations: numbers.len() as u32,
-        first_realisation,
+        first_realisation: numbers.start,
         seed: settings.seed,
         plan: RunPlan { warmup_cycles: settings.warmup_cycles, measured_cycles: 0 },
-        record: Record::Samples {
-            interval_s: data.sample_interval_s,
-            duration_s: data.record_s[unit],
-            at_noise_boundaries: true,
-        },
+        record: Record::Samples { interval_s: data.sample_interval_s, duration_s, at_noise_boundaries: true },
     };
     let records = engine.run(&job, &mut |_, _| {})?.records;
-    Ok(records
-        .into_iter()
+    let per_unit = numbers.len();
+    let runs: Vec<Run> = records
+        .into_par_iter()
         .enumerate()
-        .map(|(r, mut samples)| {
-            add_sensor_noise(&mut samples, data, settings.seed, first_realisation + r as u32);
+        .map(|(i, mut samples)| {
+            let (p, r) = (i / per_unit, (i % per_unit) as u32);
+            add_sensor_noise(&mut samples, data, settings.seed, job.realisation(p, r));
             Run::from_samples(
                 &samples,
-                condition.excitation_frequency_hz,
+                conditions[p].excitation_frequency_hz,
                 model.excitation.amplitude_m,
-                condition.normal_force_n,
+                conditions[p].normal_force_n,
             )
         })
-        .collect())
+        .collect();
+    let mut runs = runs.into_iter();
+    Ok(units.iter().map(|_| runs.by_ref().take(per_unit).collect()).collect())
 }
 
 /// Adds white Gaussian measurement noise to a simulated record's `x` and `v`
@@ -96,17 +107,6 @@ fn add_sensor_noise(samples: &mut [Sample], data: &Data<'_>, seed: u64, realisat
         s.x_m += noise.x_m * gx;
         s.v_m_per_s += noise.v_m_per_s * gv;
     }
-}
-
-/// The features of unit `unit`'s replicate records, on the unit's
-/// [`SampleGrid`] (made once per diagnosis: every model's records of a unit
-/// are sampled at the same times, and the grid's base trigonometry and
-/// normal-force design, made for every model, cost several percent of a
-/// diagnosis).
-pub(crate) fn features_of(data: &Data<'_>, unit: usize, runs: &[Run]) -> Vec<RunFeatures> {
-    let Some(first) = runs.first() else { return Vec::new() };
-    let grid = data.caches.grids.of(unit, first);
-    runs.iter().map(|r| run_features_on(r, &grid)).collect()
 }
 
 /// What the diagnosis reads from a model's replicate records of the data's
@@ -136,32 +136,46 @@ fn readings_of(
 ) -> Result<Vec<Vec<RecordReading>>> {
     let wanted = settings.replicates as usize;
     let mut kept = data.caches.records.get(model, settings);
-    let short: Vec<usize> = units.iter().copied().filter(|u| kept.get(u).is_none_or(|r| r.len() < wanted)).collect();
+    // The units short of replicates, one job per number of replicates kept
+    // and record length (every unit of a job runs the same replicates).
+    let mut short: BTreeMap<(usize, u64), Vec<usize>> = BTreeMap::new();
+    for &u in units {
+        let have = kept.get(&u).map_or(0, Vec::len);
+        if have < wanted {
+            short.entry((have, data.record_s[u].to_bits())).or_default().push(u);
+        }
+    }
     if !short.is_empty() {
         let c = data.law_c;
         let sensor_v = data.sensor.v_m_per_s;
-        let more: Vec<(usize, Vec<RecordReading>)> = short
-            .par_iter()
-            .map(|&u| {
-                let have = kept.get(&u).map_or(0, Vec::len) as u32;
-                let runs = replicates(engine, model, data, settings, u, have..settings.replicates)?;
-                let features = features_of(data, u, &runs);
-                let readings: Vec<RecordReading> = runs
-                    .iter()
-                    .zip(features)
-                    .map(|(run, features)| RecordReading {
-                        features,
-                        moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
-                    })
-                    .collect();
-                Ok((u, readings))
-            })
-            .collect::<Result<_>>()?;
         let mut added = BTreeMap::new();
-        for (u, readings) in more {
-            let all = kept.entry(u).or_default();
-            all.extend(readings);
-            added.insert(u, all.clone());
+        for ((have, _), group) in short {
+            let numbers = have as u32..settings.replicates;
+            let per_job = engine.record_points_per_job();
+            let read: Vec<Vec<Vec<RecordReading>>> = group
+                .par_chunks(per_job)
+                .map(|units| {
+                    let runs = replicates(engine, model, data, settings, units, numbers.clone())?;
+                    // Read record by record, in parallel: a unit's records
+                    // share its grid.
+                    let records: Vec<(usize, &Run)> =
+                        units.iter().zip(&runs).flat_map(|(&u, runs)| runs.iter().map(move |run| (u, run))).collect();
+                    let mut readings = records
+                        .into_par_iter()
+                        .map(|(u, run)| RecordReading {
+                            features: run_features_on(run, &data.caches.grids.of(u, run)),
+                            moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
+                        })
+                        .collect::<Vec<_>>()
+                        .into_iter();
+                    Ok(runs.iter().map(|r| readings.by_ref().take(r.len()).collect()).collect())
+                })
+                .collect::<Result<_>>()?;
+            for (u, readings) in group.into_iter().zip(read.into_iter().flatten()) {
+                let all = kept.entry(u).or_default();
+                all.extend(readings);
+                added.insert(u, all.clone());
+            }
         }
         data.caches.records.insert(model, settings, added);
     }

@@ -62,8 +62,9 @@ pub struct Job<'a> {
     pub points: &'a [Point],
     /// Realisations per point.
     pub realisations: u32,
-    /// Index of each point's first realisation (realisation `r` has the
-    /// same noise at every point: common random numbers).
+    /// Index of each point's first realisation, before the point's own
+    /// [`Point::realisation_offset`] (realisation `r` has the same noise at
+    /// every point of equal offset: common random numbers).
     pub first_realisation: u32,
     /// The noise seed (Philox key).
     pub seed: u64,
@@ -75,6 +76,13 @@ impl Job<'_> {
     /// Integrated periods × paths, the unit of progress.
     pub fn work(&self) -> u64 {
         self.points.len() as u64 * u64::from(self.realisations) * self.plan.total_cycles()
+    }
+
+    /// The number of point `point`'s realisation `r` (the noise path it
+    /// keys): [`Job::first_realisation`] + the point's
+    /// [`Point::realisation_offset`] + `r`, below 2^32 ([`Job::validate`]).
+    pub fn realisation(&self, point: usize, r: u32) -> u32 {
+        self.first_realisation + self.points[point].realisation_offset + r
     }
 
     /// The derived constants of every point.
@@ -133,7 +141,8 @@ impl Job<'_> {
                 ),
             ));
         }
-        if self.first_realisation.checked_add(self.realisations).is_none() {
+        let highest_offset = self.points.iter().map(|p| p.realisation_offset).max().unwrap_or(0);
+        if self.first_realisation.checked_add(highest_offset).and_then(|f| f.checked_add(self.realisations)).is_none() {
             return Err(Error::setting("realisations", "the realisation indices must stay below 2^32"));
         }
         let paths = self.points.len() as u64 * u64::from(self.realisations);
@@ -387,12 +396,13 @@ pub struct Engine {
     adapter: Option<(gpu::AdapterClass, String)>,
     /// Whether jobs that sample time-series records run on the CPU
     /// reference although a GPU is open (`Auto` on a hardware GPU): a
-    /// diagnosis's replicate jobs are a few records of one condition, far
-    /// too small to fill a GPU, and each pays a dispatch and a read-back;
-    /// on an NVIDIA H100 with 16 CPU threads beside it, an 18-run
-    /// diagnosis took 233 s with its records from the kernel and 26 s from
-    /// the reference, with the same verdict (`benches/RESULTS.md`).
-    /// `--backend gpu` keeps every job on the GPU.
+    /// diagnosis's trial is every unit's replicates, a hundred-odd records
+    /// of 50 s, far too few to fill a GPU, and each record is one long
+    /// chain of steps on one GPU thread; on an NVIDIA H200 with 16 CPU
+    /// threads beside it, an 18-run diagnosis took 56 s with its records
+    /// from the kernel (a job per trial) and 13 s from the reference, with
+    /// the same verdict (`benches/RESULTS.md`). `--backend gpu` keeps
+    /// every job on the GPU.
     records_on_cpu: bool,
 }
 
@@ -462,6 +472,20 @@ impl Engine {
     /// Which integrator runs the jobs.
     pub fn kind(&self) -> BackendKind {
         self.backend.kind()
+    }
+
+    /// How many points a job of time-series records should hold where
+    /// such jobs run side by side on rayon's threads (a diagnosis's
+    /// measured units). One on the CPU reference: the job then runs on the
+    /// thread that asked, and its records are read there while only they
+    /// are in memory (a job of all 18 units of a diagnosis held some 350 MB
+    /// of records at once, and paid about ten times the page faults).
+    /// Every point on a GPU that samples the records itself: its dispatch
+    /// integrates all of a job's realisations at once, and jobs of one unit
+    /// each took turns on it, all but idle (an 18-run diagnosis on an
+    /// NVIDIA H200 took over 240 s so, and 56 s with one job per trial).
+    pub fn record_points_per_job(&self) -> usize {
+        if self.backend.kind() == BackendKind::Cpu || self.records_on_cpu { 1 } else { Job::MAX_POINTS }
     }
 
     /// One line: the backend, its adapter or threads, and why it was chosen.

@@ -54,6 +54,15 @@ pub struct Point {
     pub initial: InitialState,
     /// Where the point's peaks are binned and quantised.
     pub range: PeakRange,
+    /// Where this point's realisation numbers start, past the job's
+    /// [`Job::first_realisation`](crate::engine::Job::first_realisation):
+    /// realisation `r` of the point is number `first_realisation +
+    /// realisation_offset + r`, the noise path that number keys. 0 (the
+    /// default) gives every point of a job the same paths (common random
+    /// numbers across a sweep's grid); points that stand for separate
+    /// experiments (a diagnosis's measured units, simulated in one job)
+    /// are kept apart by it.
+    pub realisation_offset: u32,
 }
 
 impl Point {
@@ -64,6 +73,7 @@ impl Point {
             condition,
             initial: InitialState::steady(model, condition),
             range: PeakRange::for_point(model, condition),
+            realisation_offset: 0,
         }
     }
 }

@@ -33,7 +33,7 @@ pub fn paths(
     plan: RunPlan,
 ) -> Vec<PathResult> {
     let range = PeakRange { lo_m: -0.01, hi_m: 0.01, phase_ref_rad: 0.0 };
-    let points = [Point { condition, initial, range }];
+    let points = [Point { condition, initial, range, realisation_offset: 0 }];
     let job = Job { model, points: &points, realisations, first_realisation: 0, seed, plan, record: Record::Peaks };
     engine.paths(&job).expect("the ensemble runs")
 }

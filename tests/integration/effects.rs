@@ -747,7 +747,7 @@ fn a_gpu_grid_takes_each_points_own_steps() {
     let points: Vec<Point> = [7.0, 9.0]
         .map(|hz| {
             let condition = Condition { excitation_frequency_hz: hz, normal_force_n: 16.39 };
-            Point { condition, initial: InitialState::steady(&m, condition), range }
+            Point { condition, initial: InitialState::steady(&m, condition), range, realisation_offset: 0 }
         })
         .to_vec();
     let steps: Vec<u32> = points.iter().map(|p| Oscillator::new(&m, p.condition).unwrap().steps_per_period).collect();

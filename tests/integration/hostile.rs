@@ -346,6 +346,7 @@ fn non_finite_paths_fail_naming_the_grid_point() {
         condition,
         initial: InitialState { x_m: 1e300, v_m_per_s: 1e300 },
         range: PeakRange::for_point(&model, condition),
+        realisation_offset: 0,
     }];
     let job = Job {
         model: &model,

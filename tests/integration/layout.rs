@@ -102,6 +102,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 harmonic_amplitude_4_n,
                 friction_scale,
                 steps_per_period,
+                realisation_offset,
             }),
             "ensemble.wgsl",
         ),

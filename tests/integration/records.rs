@@ -187,3 +187,45 @@ fn gpu_engine_records_off_the_noise_boundaries_fall_back_to_the_cpu() {
     assert_eq!(cpu[0].len(), 100);
     assert_eq!(gpu, cpu);
 }
+
+/// A point's realisation offset moves its noise paths and nothing else:
+/// point `p`'s record `r` of a job whose points have offsets 0 and 1000 is,
+/// bit for bit, the record of realisation `first + offset_p + r` run alone
+/// at that point, on each engine (so a diagnosis can simulate every
+/// measured unit's replicates in one job, each unit on paths of its own);
+/// and the offset point's records are not those of offset 0.
+#[test]
+fn realisation_offsets_key_each_points_own_paths() {
+    let model = Model::paper_rig(&[]).expect("the paper rig");
+    let points: Vec<Point> = CONDITIONS
+        .iter()
+        .zip([0, 1000])
+        .map(|(&(f, n), offset)| Point {
+            realisation_offset: offset,
+            ..Point::steady(&model, Condition { excitation_frequency_hz: f, normal_force_n: n })
+        })
+        .collect();
+    fn job<'a>(model: &'a Model, points: &'a [Point], first_realisation: u32) -> Job<'a> {
+        Job {
+            model,
+            points,
+            realisations: 2,
+            first_realisation,
+            seed: 11,
+            plan: RunPlan { warmup_cycles: 3, measured_cycles: 0 },
+            record: Record::Samples { interval_s: model.noise.interval_s, duration_s: 0.5, at_noise_boundaries: true },
+        }
+    }
+    for (name, engine) in [("cpu", common::cpu()), ("gpu", common::gpu())] {
+        let run = |job: &Job<'_>| engine.run(job, &mut |_, _| {}).expect("the records run").records;
+        let together = run(&job(&model, &points, 3));
+        assert_eq!(together.len(), 4, "{name}");
+        for (p, point) in points.iter().enumerate() {
+            let at_zero = Point { realisation_offset: 0, ..*point };
+            let alone = run(&job(&model, &[at_zero], 3 + point.realisation_offset));
+            assert_eq!(together[2 * p..2 * p + 2], alone[..], "{name}: point {p}");
+        }
+        let unshifted = run(&job(&model, &[Point { realisation_offset: 0, ..points[1] }], 3));
+        assert_ne!(together[2..4], unshifted[..], "{name}: the offset moved no path");
+    }
+}

@@ -55,7 +55,7 @@ impl Backend for CpuBackend {
         // Tasks (point, realisation) are numbered point-major and made one
         // chunk at a time, so nothing grows with the ensemble but the output.
         let total_paths = job.points.len() * n;
-        let task = |i: usize| (i / n, job.first_realisation + (i % n) as u32);
+        let task = |i: usize| (i / n, job.realisation(i / n, (i % n) as u32));
         let total = job.work();
         let per_path = job.plan.total_cycles();
         let chunk = paths_per_chunk(total_paths);
@@ -314,7 +314,7 @@ fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(us
         let point = i / n;
         let left = end.min((point + 1) * n) - i;
         let group_end = i + LANE_WIDTHS.into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
-        let realisations = (i..group_end).map(|k| job.first_realisation + (k % n) as u32).collect();
+        let realisations = (i..group_end).map(|k| job.realisation(point, (k % n) as u32)).collect();
         groups.push((point, realisations));
         i = group_end;
     }

@@ -355,7 +355,8 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
                             friction_force_n: f64::from(friction),
                         };
                         if ![x, v, normal, friction].iter().all(|value| value.is_finite()) {
-                            let realisation = job.first_realisation + (n as u64 % rpp) as u32;
+                            let realisation =
+                                job.first_realisation + chunk[p].realisation_offset + (n as u64 % rpp) as u32;
                             return Err(Error::Diverged {
                                 point: chunk[p].condition.describe(),
                                 message: format!(

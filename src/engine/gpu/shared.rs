@@ -220,6 +220,9 @@ pub struct GridPoint {
     /// Integration steps per period at this point (the model's, raised by
     /// frequency where a friction memory needs it: `Oscillator`).
     pub steps_per_period: u32,
+    /// Added to `Params::realisation_offset` for this point's realisation
+    /// numbers (`Point::realisation_offset`).
+    pub realisation_offset: u32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -328,6 +331,7 @@ impl GridPoint {
             harmonic_amplitude_4_n: o.effects.harmonic_amplitudes_n[3] as f32,
             friction_scale: o.effects.friction_scale as f32,
             steps_per_period: o.steps_per_period,
+            realisation_offset: point.realisation_offset,
         }
     }
 }
