@@ -399,8 +399,8 @@ pub struct Engine {
     /// diagnosis's trial is every unit's replicates, a hundred-odd records
     /// of 50 s, far too few to fill a GPU, and each record is one long
     /// chain of steps on one GPU thread; on an NVIDIA H200 with 16 CPU
-    /// threads beside it, an 18-run diagnosis took 56 s with its records
-    /// from the kernel (a job per trial) and 13 s from the reference, with
+    /// threads beside it, an 18-run diagnosis took 51 s with its records
+    /// from the kernel (a job per trial) and 11 s from the reference, with
     /// the same verdict (`benches/RESULTS.md`). `--backend gpu` keeps
     /// every job on the GPU.
     records_on_cpu: bool,
@@ -483,7 +483,7 @@ impl Engine {
     /// Every point on a GPU that samples the records itself: its dispatch
     /// integrates all of a job's realisations at once, and jobs of one unit
     /// each took turns on it, all but idle (an 18-run diagnosis on an
-    /// NVIDIA H200 took over 240 s so, and 56 s with one job per trial).
+    /// NVIDIA H200 took over 240 s so, and 51 s with one job per trial).
     pub fn record_points_per_job(&self) -> usize {
         if self.backend.kind() == BackendKind::Cpu || self.records_on_cpu { 1 } else { Job::MAX_POINTS }
     }

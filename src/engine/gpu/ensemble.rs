@@ -14,7 +14,7 @@ use wgpu::util::DeviceExt;
 use crate::engine::gpu::shared::{EffectParams, GridPoint, Params, PathState};
 use crate::engine::gpu::source::ACCUMULATOR_WORDS;
 use crate::engine::gpu::{
-    GpuContext, LOOP_ITERATIONS_PER_DISPATCH, loop_iterations_per_cycle, read_back, storage_buffer, workgroups,
+    GpuContext, loop_iterations_per_cycle, loop_iterations_per_dispatch, read_back, storage_buffer, workgroups,
 };
 use crate::engine::oscillator::{Oscillator, PathResult, PeakRange, RunPlan, Sample};
 use crate::engine::reduce::{HISTOGRAM_BINS, PointAccumulator};
@@ -202,7 +202,7 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
         let invocations = (chunk.len() as u64 * rpp) as u32;
         let loop_bound = chunk_oscillators.iter().map(loop_iterations_per_cycle).max().unwrap_or(1);
         let mut cycles_per_dispatch = (options.steps_per_dispatch / (u64::from(invocations) * steps))
-            .min(LOOP_ITERATIONS_PER_DISPATCH / loop_bound)
+            .min(loop_iterations_per_dispatch(ctx.adapter_class()) / loop_bound)
             .clamp(1, u64::from(total_cycles.max(1)))
             .min(binding_limit / (8 * u64::from(invocations)));
         if record.is_some() {

@@ -34,6 +34,26 @@ pub const MAX_WORKGROUPS_PER_DIMENSION: u32 = 65_535;
 /// dispatch with a short count.
 pub const LOOP_ITERATIONS_PER_DISPATCH: u64 = 8_192;
 
+/// The same bound on a hardware adapter, which runs loops to their end:
+/// it only keeps one invocation's chain of steps short of desktop drivers'
+/// watchdogs (about 2 s). 65 536 estimated iterations (an upper estimate,
+/// [`loop_iterations_per_cycle`]) are about 90 periods at 6 Hz, so a
+/// diagnosis's trial (every unit's replicates, 360 periods each) takes a
+/// few dispatches where the software bound cut it into some thirty, each
+/// waited for and read back (an 18-run diagnosis with its records from
+/// the kernel on an NVIDIA H200: 51 s, against 56 s with the software
+/// bound). Larger jobs are bounded by [`DEFAULT_STEPS_PER_DISPATCH`] first.
+pub const HARDWARE_LOOP_ITERATIONS_PER_DISPATCH: u64 = 65_536;
+
+/// The loop iterations one invocation may run per dispatch on an adapter
+/// of class `class`.
+pub fn loop_iterations_per_dispatch(class: AdapterClass) -> u64 {
+    match class {
+        AdapterClass::Software => LOOP_ITERATIONS_PER_DISPATCH,
+        AdapterClass::Hardware => HARDWARE_LOOP_ITERATIONS_PER_DISPATCH,
+    }
+}
+
 /// Upper estimate of one invocation's loop iterations per excitation period:
 /// the step loop and the segment loop run once per step and per noise
 /// boundary, plus root finding at a few stick/slip events.
