@@ -478,12 +478,12 @@ impl Engine {
     /// such jobs run side by side on rayon's threads (a diagnosis's
     /// measured units). One on the CPU reference: the job then runs on the
     /// thread that asked, and its records are read there while only they
-    /// are in memory (a job of all 18 units of a diagnosis held some 350 MB
-    /// of records at once, and paid about ten times the page faults).
+    /// are in memory (one job of every unit holds all of a trial's records
+    /// at once, hundreds of megabytes, and pays for them in page faults).
     /// Every point on a GPU that samples the records itself: its dispatch
-    /// integrates all of a job's realisations at once, and jobs of one unit
-    /// each took turns on it, all but idle (an 18-run diagnosis on an
-    /// NVIDIA H200 took over 240 s so, and 51 s with one job per trial).
+    /// integrates all of a job's realisations at once, where jobs of one
+    /// unit each would take turns on it, all but idle
+    /// (`benches/RESULTS.md`).
     pub fn record_points_per_job(&self) -> usize {
         if self.backend.kind() == BackendKind::Cpu || self.records_on_cpu { 1 } else { Job::MAX_POINTS }
     }

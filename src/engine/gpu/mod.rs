@@ -40,9 +40,8 @@ pub const LOOP_ITERATIONS_PER_DISPATCH: u64 = 8_192;
 /// [`loop_iterations_per_cycle`]) are about 90 periods at 6 Hz, so a
 /// diagnosis's trial (every unit's replicates, 360 periods each) takes a
 /// few dispatches where the software bound cut it into some thirty, each
-/// waited for and read back (an 18-run diagnosis with its records from
-/// the kernel on an NVIDIA H200: 51 s, against 56 s with the software
-/// bound). Larger jobs are bounded by [`DEFAULT_STEPS_PER_DISPATCH`] first.
+/// waited for and read back. Larger jobs are bounded by
+/// [`DEFAULT_STEPS_PER_DISPATCH`] first.
 pub const HARDWARE_LOOP_ITERATIONS_PER_DISPATCH: u64 = 65_536;
 
 /// The loop iterations one invocation may run per dispatch on an adapter
