@@ -4,12 +4,13 @@
 //! noise), and per-path peak statistics of small ensembles.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
-use crate::diagnose::features::{RunFeatures, run_features_on};
+use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
 use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
@@ -30,8 +31,8 @@ const REPLICATE_STRIDE: u32 = 1000;
 const REPLICATE_STEPS_PER_PERIOD: u32 = 32;
 
 /// Replicates `numbers` (of `0..settings.replicates`, say) of each unit of
-/// `units` under `model`, all in one engine job (a point per unit, so the
-/// backend fills its cores or the GPU with every unit's records at once):
+/// `units` under `model`, in one engine job (a point per unit; how many
+/// units a job should hold is the engine's [`Engine::record_points_per_job`]):
 /// records as long as the unit's, sampled like the data (at the noise
 /// boundaries, the noise interval being the data's sample interval), with
 /// the measurement noise estimated on the data added. Every unit of `units`
@@ -156,14 +157,21 @@ fn readings_of(
                 .par_chunks(per_job)
                 .map(|units| {
                     let runs = replicates(engine, model, data, settings, units, numbers.clone())?;
-                    // Read record by record, in parallel: a unit's records
-                    // share its grid.
-                    let records: Vec<(usize, &Run)> =
-                        units.iter().zip(&runs).flat_map(|(&u, runs)| runs.iter().map(move |run| (u, run))).collect();
+                    // Read record by record, in parallel, each on its unit's
+                    // grid (made once per diagnosis: every model's records of
+                    // a unit are sampled at the same times, and the grid's
+                    // base trigonometry and normal-force design cost several
+                    // percent of a diagnosis when made for every model).
+                    let records: Vec<(Arc<SampleGrid>, &Run)> = units
+                        .iter()
+                        .zip(&runs)
+                        .filter_map(|(&u, runs)| Some((data.caches.grids.of(u, runs.first()?), runs)))
+                        .flat_map(|(grid, runs)| runs.iter().map(move |run| (Arc::clone(&grid), run)))
+                        .collect();
                     let mut readings = records
                         .into_par_iter()
-                        .map(|(u, run)| RecordReading {
-                            features: run_features_on(run, &data.caches.grids.of(u, run)),
+                        .map(|(grid, run)| RecordReading {
+                            features: run_features_on(run, &grid),
                             moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
                         })
                         .collect::<Vec<_>>()
