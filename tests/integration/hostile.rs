@@ -405,6 +405,14 @@ fn bounded_memory_and_work() {
         assert_eq!(cpu, gpu, "both backends refuse with the same message");
         assert!(cpu.contains("limit"), "{cpu}");
     }
+    // A point's realisation offset counts as well: numbers past 2^32 are
+    // refused by both, with one message.
+    let shifted = [Point { realisation_offset: u32::MAX - 2, ..points[0] }];
+    let job = Job { points: &shifted, ..base };
+    let cpu = common::cpu().run(&job, &mut |_, _| {}).expect_err("the CPU refuses").to_string();
+    let gpu = common::gpu().run(&job, &mut |_, _| {}).expect_err("the GPU refuses").to_string();
+    assert_eq!(cpu, gpu, "both backends refuse with the same message");
+    assert!(cpu.contains("realisation") && cpu.contains("2^32"), "{cpu}");
     let many: Vec<Point> = (0..Job::MAX_POINTS + 1).map(|_| points[0]).collect();
     let err = Job { points: &many, ..base }.validate().unwrap_err().to_string();
     assert!(err.contains("grid") && err.contains("limit"), "{err}");
