@@ -149,10 +149,10 @@ fn readings_of(
     if !short.is_empty() {
         let c = data.law_c;
         let sensor_v = data.sensor.v_m_per_s;
+        let per_job = engine.record_points_per_job();
         let mut added = BTreeMap::new();
         for ((have, _), group) in short {
             let numbers = have as u32..settings.replicates;
-            let per_job = engine.record_points_per_job();
             let read: Vec<Vec<Vec<RecordReading>>> = group
                 .par_chunks(per_job)
                 .map(|units| {

@@ -198,7 +198,9 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
     let work_total = total_invocations * u64::from(total_cycles);
     let mut work_done = 0u64;
     let chunk_len = points_per_chunk as usize;
-    for (chunk, chunk_oscillators) in job.points.chunks(chunk_len).zip(oscillators.chunks(chunk_len)) {
+    for (chunk_index, (chunk, chunk_oscillators)) in
+        job.points.chunks(chunk_len).zip(oscillators.chunks(chunk_len)).enumerate()
+    {
         let invocations = (chunk.len() as u64 * rpp) as u32;
         let loop_bound = chunk_oscillators.iter().map(loop_iterations_per_cycle).max().unwrap_or(1);
         let mut cycles_per_dispatch = (options.steps_per_dispatch / (u64::from(invocations) * steps))
@@ -355,8 +357,7 @@ pub fn run(ctx: &GpuContext, options: GpuOptions, job: &Job<'_>, progress: &mut 
                             friction_force_n: f64::from(friction),
                         };
                         if ![x, v, normal, friction].iter().all(|value| value.is_finite()) {
-                            let realisation =
-                                job.first_realisation + chunk[p].realisation_offset + (n as u64 % rpp) as u32;
+                            let realisation = job.realisation(chunk_index * chunk_len + p, (n as u64 % rpp) as u32);
                             return Err(Error::Diverged {
                                 point: chunk[p].condition.describe(),
                                 message: format!(
