@@ -63,7 +63,8 @@ fn dwell_excess(excess: f32, dwell_s: f32, ageing_s: f32) -> f32 {
     return excess * (1.0 - exp(-max(dwell_s, 0.0) / ageing_s));
 }
 
-fn hysteresis_factor(slipped_m: f32) -> f32 {
+// `start`: φ₀ of `dahl` (–), unused by the other forms.
+fn hysteresis_factor(slipped_m: f32, start: f32) -> f32 {
     let length = effects.hysteresis_length_m;
     if (length == 0.0) {
         return 1.0;
@@ -74,6 +75,9 @@ fn hysteresis_factor(slipped_m: f32) -> f32 {
     }
     if (effects.hysteresis_form == HYSTERESIS_FORM_RATIONAL) {
         return r / (r + 1.0);
+    }
+    if (effects.hysteresis_form == HYSTERESIS_FORM_DAHL) {
+        return 1.0 - (1.0 - start) * exp(-r);
     }
     if (effects.hysteresis_form == HYSTERESIS_FORM_LAG || effects.hysteresis_form == HYSTERESIS_FORM_SLIP
         || effects.hysteresis_form == HYSTERESIS_FORM_AGEING) {

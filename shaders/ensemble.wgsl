@@ -217,7 +217,7 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
         start_stick(0.0);
     } else if (memory_form() != MEMORY_AGEING) {
         // The contact age starts at 0 whether the block sticks or slips.
-        path.memory = lag_start_coefficient();
+        path.memory = breakaway_memory();
     }
     store_path(n);
 }

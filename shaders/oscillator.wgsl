@@ -31,7 +31,8 @@ struct Path {
     colour_state_1: f32,
     colour_state_2: f32,
     // μ_f of hysteresis `lag` and `slip` (–), the contact age θ of `ageing`
-    // (s; while stuck, θ when the stick began).
+    // (s; while stuck, θ when the stick began), the factor φ₀ the slip's
+    // friction turned from under `dahl` (–).
     memory: f32,
     stick_since_s: f32,
     // The static coefficient's contact-age term of `ageing`, –.
@@ -242,15 +243,18 @@ fn friction_coefficient(speed_m_per_s: f32, v_m_per_s: f32, x_m: f32, memory: f3
     var mu = memory + path.friction_noise;
     if (form == MEMORY_AGEING) {
         mu = ageing_coefficient(speed_m_per_s, v_m_per_s, memory);
+    } else if (dahl()) {
+        mu = max(steady_law(speed_m_per_s, v_m_per_s), 0.0) * hysteresis_factor(slipped_m, memory);
     } else if (form == MEMORY_NONE) {
-        mu = steady_law(speed_m_per_s, v_m_per_s) * hysteresis_factor(slipped_m);
+        mu = steady_law(speed_m_per_s, v_m_per_s) * hysteresis_factor(slipped_m, memory);
     }
     if (effects.stiction_form == STICTION_FORM_DECAYING) {
         mu += path.stiction_excess * exp(-slipped_m / STICTION_DECAY_M);
     } else if (effects.stiction_form == STICTION_FORM_CONSTANT && effects.stiction_release_m > 0.0) {
         mu += path.stiction_excess * max(1.0 - slipped_m / effects.stiction_release_m, 0.0);
     }
-    return max(mu, 0.0);
+    // Dahl's friction may point along the motion just after a reversal.
+    return select(max(mu, 0.0), mu, dahl());
 }
 
 // μN plus the adhesion force (the sum clipped at 0), N: the CPU's
@@ -277,6 +281,31 @@ fn ageing_coefficient(speed_m_per_s: f32, v_m_per_s: f32, age_s: f32) -> f32 {
 fn static_coefficient() -> f32 {
     return max(law_a + point.friction_offset + law_b + path.friction_noise + path.stiction_excess
         + path.ageing_excess, 0.0);
+}
+
+// Whether hysteresis `dahl` is on (δ > 0; the CPU's Path::dahl).
+fn dahl() -> bool {
+    return effects.hysteresis_form == HYSTERESIS_FORM_DAHL && effects.hysteresis_length_m != 0.0;
+}
+
+// The friction memory a slip starts with at a breakaway: lag_start_coefficient, or φ₀ = 1
+// under `dahl` (the CPU's Path::breakaway_memory).
+fn breakaway_memory() -> f32 {
+    if (dahl()) {
+        return 1.0;
+    }
+    return lag_start_coefficient();
+}
+
+// The friction memory a slip starts with where the block slips on at a velocity zero
+// (`reversed`: the other way): as at a breakaway, but ±φ of the ended slip under `dahl`,
+// − where it reversed (the CPU's Path::reversal_memory). Read before slip_start_x_m moves.
+fn reversal_memory(reversed: bool) -> f32 {
+    if (!dahl()) {
+        return lag_start_coefficient();
+    }
+    let end = hysteresis_factor(abs(path.x_m - path.slip_start_x_m), path.memory);
+    return select(end, -end, reversed);
 }
 
 // Where the friction memory of `lag` and `slip` starts at a breakaway: the static one less
@@ -514,7 +543,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                     // The slip starts from the contact age the breakaway was judged by.
                     path.memory = contact_age_at(f32(path.interval) * effects.noise_interval_s);
                 } else {
-                    path.memory = lag_start_coefficient();
+                    path.memory = breakaway_memory();
                 }
             }
             t_a = t_end;
@@ -555,6 +584,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                 // At rest the static coefficient reads the contact age the slip reached.
                 path.ageing_excess = contact_age_excess(path.memory);
             }
+            let slid = path.mode;
             if (events < MAX_EVENTS_PER_SEGMENT) {
                 path.mode = stick_or_slip(start);
             } else {
@@ -564,8 +594,9 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                 start_stick(period_start_s + t_a);
             } else if (memory_form() != MEMORY_AGEING) {
                 // A slip from rest is a breakaway: μ_f starts at the static
-                // coefficient; the contact age goes on from where the slip left it.
-                path.memory = lag_start_coefficient();
+                // coefficient; the contact age goes on from where the slip left it;
+                // Dahl's friction turns over from where it was.
+                path.memory = reversal_memory(path.mode != slid);
             }
             path.slip_start_x_m = path.x_m;
             events += 1u;

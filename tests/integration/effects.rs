@@ -13,7 +13,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 40] = [
+const ZERO: [&[&str]; 41] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -35,6 +35,7 @@ const ZERO: [&[&str]; 40] = [
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"rational\""],
     &["friction_hysteresis.time_constant_s=0.0", "friction_hysteresis.form=\"lag\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"slip\""],
+    &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"dahl\""],
     // Ageing is off at B = 0 whatever its slip distance, and at L = 0
     // whatever its B (no state, no raised steps).
     &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.0", "friction_hysteresis.form=\"ageing\""],
@@ -71,7 +72,7 @@ const ZERO: [&[&str]; 40] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 41] = [
+const ON: [&[&str]; 42] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -107,6 +108,7 @@ const ON: [&[&str]; 41] = [
     &["friction_hysteresis.time_constant_s=0.01", "friction_hysteresis.form=\"lag\""],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"slip\""],
     &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.05", "friction_hysteresis.form=\"ageing\""],
+    &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"dahl\""],
     &["coloured_friction_noise.correlation_time_s=0.05"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"hold\""],
@@ -522,6 +524,76 @@ fn the_slip_law_relaxes_friction_over_a_slip_distance_whatever_the_speed() {
         assert!((time / lag_s - 1.0).abs() < 0.02, "lag: e-fold time {time} s, τ_m = {lag_s} s");
     }
     assert!(fast.0 > 1.5 * slow.0, "lag: at twice the speed τ_m took {} m against {} m", fast.0, slow.0);
+}
+
+/// Hysteresis `dahl`: friction is continuous through a reversal. With a
+/// law that does not depend on speed (b = d = 0, no noise) and a light load
+/// (2 N: the block slides through its reversals without sticking), the
+/// friction it slid against points along the new motion at first and turns
+/// over the displacement δ: its component against the motion is
+/// a (1 − 2 e^(−d/δ)) after a slide much longer than δ, −a at the reversal
+/// and 0 after δ ln 2 (within 1%). Hysteresis `exponential` over the same
+/// δ starts from 0 and never points along the motion.
+#[test]
+fn dahls_friction_turns_over_a_displacement_through_a_reversal() {
+    let length_m = 2e-4;
+    // Per reversal: the friction coefficient against the motion at the
+    // first sample after it, and the distance from the reversal at which
+    // that coefficient crosses 0 (interpolated; None where it never is
+    // below 0).
+    let turns = |form: &str| -> Vec<(f64, Option<f64>)> {
+        let sets = [
+            format!("friction_hysteresis.form=\"{form}\""),
+            format!("friction_hysteresis.length_m={length_m}"),
+            "friction.b=0".into(),
+            "friction.d=0".into(),
+        ];
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 2.0 };
+        let (_, r) = noiseless_record(&sets, condition, 2.0, 50_000.0);
+        let against = |s: &Sample| -s.friction_force_n * s.v_m_per_s.signum() / s.normal_force_n;
+        let mut out = Vec::new();
+        let mut i = 1;
+        while i < r.len() {
+            if r[i - 1].v_m_per_s * r[i].v_m_per_s < 0.0 {
+                let x0 = if r[i].v_m_per_s > 0.0 { r[i - 1].x_m.min(r[i].x_m) } else { r[i - 1].x_m.max(r[i].x_m) };
+                let first = against(&r[i]);
+                let mut crossing = None;
+                let mut j = i + 1;
+                while j < r.len() && r[j].v_m_per_s * r[i].v_m_per_s > 0.0 {
+                    let (m0, m1) = (against(&r[j - 1]), against(&r[j]));
+                    if m0 < 0.0 && m1 >= 0.0 {
+                        let (d0, d1) = ((r[j - 1].x_m - x0).abs(), (r[j].x_m - x0).abs());
+                        crossing = Some(d0 + (d1 - d0) * (-m0) / (m1 - m0));
+                        break;
+                    }
+                    j += 1;
+                }
+                out.push((first, crossing));
+                i = j;
+            } else {
+                i += 1;
+            }
+        }
+        out
+    };
+    let a = Model::default().friction.a;
+    let dahl = turns("dahl");
+    assert!(dahl.len() >= 20, "{} reversals without a stick", dahl.len());
+    let crossings: Vec<f64> = dahl.iter().filter_map(|t| t.1).collect();
+    assert_eq!(crossings.len(), dahl.len(), "every reversal's friction turns over");
+    let (first, crossing) = (mean(dahl.iter().map(|t| t.0)), mean(crossings.iter().copied()));
+    let expected = length_m * 2f64.ln();
+    println!(
+        "dahl: friction against the motion just after a reversal {first:.4} (−a = {:.4}), 0 after {crossing:.4e} m \
+         (δ ln 2 = {expected:.4e} m), over {} reversals",
+        -a,
+        dahl.len()
+    );
+    assert!(first < -0.9 * a, "dahl: {first} against the motion just after a reversal, a = {a}");
+    assert!((crossing / expected - 1.0).abs() < 0.01, "dahl: turned over after {crossing} m, δ ln 2 = {expected} m");
+    let build_up = turns("exponential");
+    assert!(build_up.len() >= 20 && build_up.iter().all(|t| t.0 >= 0.0 && t.1.is_none()), "exponential: {build_up:?}");
 }
 
 /// Hysteresis `ageing`, the rate-and-state ageing law: the contact age θ

@@ -68,8 +68,9 @@ pub fn dwell_excess(excess: f64, dwell_s: f64, ageing_s: f64) -> f64 {
 /// Build-up of sliding friction with displacement `d` (m) since slip start,
 /// over the characteristic displacement `length` (m); 1 when `length` is 0
 /// and for the `lag`, `slip` and `ageing` forms (which act through the
-/// friction memory state).
-pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
+/// friction memory state). `dahl` starts from `start` (φ₀, –: −φ at a
+/// reversal, 1 after a stick) and turns to 1, `1 − (1 − φ₀) e^(−d/δ)`.
+pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64, start: f64) -> f64 {
     if length == 0.0 {
         return 1.0;
     }
@@ -78,6 +79,7 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64) -> f64 {
         HysteresisForm::Tanh => r.tanh(),
         HysteresisForm::Rational => r / (r + 1.0),
         HysteresisForm::Exponential => 1.0 - (-r).exp(),
+        HysteresisForm::Dahl => 1.0 - (1.0 - start) * (-r).exp(),
         HysteresisForm::Lag | HysteresisForm::Slip | HysteresisForm::Ageing => 1.0,
     }
 }

@@ -126,7 +126,8 @@ impl Form for NonGaussianForm {
 
 /// Friction that depends on the motion's history, so accelerating and
 /// decelerating branches differ: after each slip start the sliding friction
-/// builds up over a displacement (Dahl-like pre-sliding), lags behind the
+/// builds up over a displacement, or turns over one through a reversal
+/// (Dahl's pre-sliding friction), lags behind the
 /// steady law in time (Hess & Soom's frictional memory), relaxes to it over a
 /// slip distance (rate-and-state slip law), or carries a contact age that
 /// heals while stuck (rate-and-state ageing law).
@@ -139,6 +140,17 @@ pub struct FrictionHysteresis {
     /// Build-up φ(d) of the sliding friction with displacement d since slip
     /// start: `exponential` 1 − e^(−d/δ); `tanh` tanh(d/δ); `rational`
     /// d/(d+δ) (δ = `length_m`).
+    ///
+    /// `dahl`: Dahl's pre-sliding law (Dahl 1968; the bristle state of
+    /// LuGre, Canudas de Wit et al. 1995, without its damping), whose
+    /// friction is continuous through a reversal: after the block reverses
+    /// without sticking, the friction it slid against, now pointing along
+    /// the new motion, turns over the displacement δ (`length_m`),
+    /// φ(d) = 1 − (1 − φ₀) e^(−d/δ) with φ₀ = −φ at the reversal (−1 after
+    /// steady sliding: the friction passes from −μ to +μ over a few δ, and
+    /// for a while helps the block along). After a breakaway from a stick
+    /// the static friction that held the block already acts, φ₀ = 1, and
+    /// there is no build-up. Off (the baseline) when δ = 0.
     ///
     /// `lag`: the friction coefficient μ_f follows the steady law μ_ss(v)
     /// with a first-order lag in time, dμ_f/dt = (μ_ss(v) − μ_f)/τ_m
@@ -200,6 +212,7 @@ pub enum HysteresisForm {
     Lag = 3,
     Slip = 4,
     Ageing = 5,
+    Dahl = 6,
 }
 
 impl Form for HysteresisForm {
@@ -210,6 +223,7 @@ impl Form for HysteresisForm {
         HysteresisForm::Lag,
         HysteresisForm::Slip,
         HysteresisForm::Ageing,
+        HysteresisForm::Dahl,
     ];
 
     fn code(self) -> u32 {

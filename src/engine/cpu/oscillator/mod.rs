@@ -200,7 +200,9 @@ pub(crate) struct Path<'a> {
     /// Static-friction excess in the current interval, –.
     stiction_excess: f64,
     /// The friction memory: μ_f of hysteresis `lag` and `slip` (–), the
-    /// contact age θ of `ageing` (s; while stuck, θ when the stick began).
+    /// contact age θ of `ageing` (s; while stuck, θ when the stick began),
+    /// the factor φ₀ the current slip's friction turned from under `dahl`
+    /// (–; held through the slip, as no memory rate moves it).
     memory: f64,
     /// The static coefficient's contact-age term B ln((θ + θ_0)/(θ_c + θ_0)) of
     /// hysteresis `ageing`, with θ at the current interval's start while
@@ -219,6 +221,9 @@ pub(crate) struct Path<'a> {
     history: bool,
     /// Which friction memory is on ([`Memory::form`] of the effects).
     memory_form: Memory,
+    /// Whether hysteresis `dahl` is on (δ > 0): friction continuous
+    /// through a reversal, so its coefficient may be negative for a while.
+    dahl: bool,
     /// The law's a, b (–) and d (s²/m²) at this point's load: times
     /// (N0/Nref)^k under load dependence `scaled`, themselves otherwise.
     law_a: f64,
@@ -243,8 +248,11 @@ impl<'a> Path<'a> {
     pub(crate) fn new(osc: &'a Oscillator, seed: u64, realisation: u32, initial: InitialState) -> Self {
         let e = &osc.effects;
         let memory_form = Memory::form(e);
-        let build_up =
-            matches!(e.hysteresis_form, HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational);
+        let build_up = matches!(
+            e.hysteresis_form,
+            HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational | HysteresisForm::Dahl
+        );
+        let dahl = e.hysteresis_form == HysteresisForm::Dahl && e.hysteresis_length_m != 0.0;
         let history = memory_form != Memory::None
             || (e.hysteresis_length_m != 0.0 && build_up)
             || e.adhesion_force_n != 0.0
@@ -273,6 +281,7 @@ impl<'a> Path<'a> {
             drift_walk: 0.0,
             history,
             memory_form,
+            dahl,
             law_a: osc.friction_a * e.friction_scale,
             law_b: osc.friction_b * e.friction_scale,
             law_d: osc.friction_d_s2_per_m2 * e.friction_scale,
@@ -295,7 +304,7 @@ impl<'a> Path<'a> {
             path.start_stick(0.0);
         } else if path.memory_form != Memory::Ageing {
             // The contact age starts at 0 whether the block sticks or slips.
-            path.memory = path.lag_start_coefficient();
+            path.memory = path.breakaway_memory();
         }
         path
     }
@@ -474,9 +483,13 @@ impl<'a> Path<'a> {
         let mut mu = match self.memory_form {
             Memory::Lag | Memory::Slip => memory + self.friction_noise,
             Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
+            Memory::None if self.dahl => {
+                self.steady_law(speed_m_per_s, v_m_per_s).max(0.0)
+                    * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m, memory)
+            }
             Memory::None => {
                 self.steady_law(speed_m_per_s, v_m_per_s)
-                    * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m)
+                    * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m, memory)
             }
         };
         if e.stiction_form == StictionForm::Decaying {
@@ -484,21 +497,25 @@ impl<'a> Path<'a> {
         } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
             mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
         }
-        mu.max(0.0)
+        // Dahl's friction may point along the motion just after a reversal.
+        if self.dahl { mu } else { mu.max(0.0) }
     }
 
     /// The magnitude of the friction force while slipping, the arguments
     /// those of [`Path::friction_coefficient`]: μN, plus the adhesion force
     /// under load dependence `adhesion` (the sum clipped at 0), N. The
     /// adhesion is added on the history path only ([`Path::history`] is set
-    /// with it), so the baseline's stages test nothing more.
+    /// with it), so the baseline's stages test nothing more. Without an
+    /// adhesion force μN is left as it is (negative for a while under
+    /// hysteresis `dahl`), as in the kernel.
     #[inline(always)]
     fn friction_force_n(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
         let friction_n = self.friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * self.normal_force_n;
-        if !self.history {
+        let adhesion_n = self.osc.effects.adhesion_force_n;
+        if !self.history || adhesion_n == 0.0 {
             return friction_n;
         }
-        friction_n + effects::adhesion(friction_n, self.osc.effects.adhesion_force_n)
+        friction_n + effects::adhesion(friction_n, adhesion_n)
     }
 
     /// The sliding coefficient of hysteresis `ageing` with contact age
@@ -536,6 +553,30 @@ impl<'a> Path<'a> {
     /// that broke the block away: it stopped at once and re-slipped, up to
     /// the event limit of every segment (a diagnosis's trials of `lag` on
     /// top of a released stiction took 20–45 s instead of under 1 s), –.
+    /// The friction memory a slip starts with at a breakaway, from a stick
+    /// or from rest: [`Path::lag_start_coefficient`], or φ₀ = 1 under
+    /// hysteresis `dahl` (the static friction that held the block acts at
+    /// once).
+    fn breakaway_memory(&self) -> f64 {
+        if self.dahl { 1.0 } else { self.lag_start_coefficient() }
+    }
+
+    /// The friction memory a slip starts with where the block slips on at
+    /// a velocity zero without sticking (`reversed`: in the other
+    /// direction): as at a breakaway, but under hysteresis `dahl` φ₀ = ±φ
+    /// of the slip that just ended, − where it reversed (the friction it
+    /// slid against now points along the new motion). Read before the
+    /// slip's start moves to the velocity zero.
+    fn reversal_memory(&self, reversed: bool) -> f64 {
+        if !self.dahl {
+            return self.lag_start_coefficient();
+        }
+        let e = &self.osc.effects;
+        let slipped_m = (self.x_m - self.slip_start_x_m).abs();
+        let end = effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m, self.memory);
+        if reversed { -end } else { end }
+    }
+
     fn lag_start_coefficient(&self) -> f64 {
         let e = &self.osc.effects;
         let released = e.stiction_form == StictionForm::Decaying

@@ -356,7 +356,7 @@ impl Path<'_> {
                             // breakaway was judged by.
                             self.contact_age_at(self.interval as f64 * self.osc.noise_interval_s)
                         } else {
-                            self.lag_start_coefficient()
+                            self.breakaway_memory()
                         };
                     }
                     (t_a, start, whole) = (t_end, end, None);
@@ -414,7 +414,8 @@ impl Path<'_> {
                         // not move and re-slipped up to the event limit).
                         // The contact age goes on from where the slip left
                         // it, which the static coefficient just read.
-                        self.memory = self.lag_start_coefficient();
+                        // Dahl's friction turns over from where it was.
+                        self.memory = self.reversal_memory(self.mode != Mode::Slip(s));
                     }
                     self.slip_start_x_m = self.x_m;
                     events += 1;
