@@ -48,6 +48,24 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
             m
         }),
     };
+    // Pre-sliding friction that is continuous through a reversal (Dahl;
+    // the bristles of LuGre and the elasto-plastic models), over the
+    // same displacements.
+    let dahl = Variant {
+        effect,
+        form: SearchedForm::Dahl,
+        params: vec![Param::log("length_m", 1.5e-4, 2.5, 1e-6, 5e-3)],
+        apply: Box::new(|m, p| {
+            let mut m = m.clone();
+            m.effects.friction_hysteresis = Some(FrictionHysteresis {
+                form: HysteresisForm::Dahl,
+                length_m: p[0],
+                time_constant_s: 0.0,
+                strength: 0.0,
+            });
+            m
+        }),
+    };
     // A memory time shorter than one sample interval is not searched:
     // the branches it separates differ by less than μ moves within
     // one sample, which the records cannot resolve, and integrating
@@ -104,9 +122,9 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
         }),
     };
     if ctx.excess(Observable::FrictionHysteresis).unwrap_or(0.0) < 0.0 {
-        vec![lag, slip, build_up, ageing]
+        vec![lag, slip, build_up, dahl, ageing]
     } else {
-        vec![build_up, slip, lag, ageing]
+        vec![build_up, dahl, slip, lag, ageing]
     }
 }
 

@@ -8,7 +8,7 @@
 //! | --- | --- | --- | --- |
 //! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin); a load that follows the block's position, N0 (1 + α x/U0 + β (x/U0)²) | the measured N's harmonics; the regression of N on x | N's harmonics and residual variance |
 //! | non-Gaussian friction | skew; skew and tails set apart (Fleishman's power polynomial); each with a load exponent | the signs of the residual's skew and of its tails' excess | residual quantile skewness and tail weight |
-//! | hysteresis | build-up over a displacement (Dahl), lag in time (Hess & Soom), relaxation over a slip distance (rate-and-state slip law, Ruina), contact ageing (rate-and-state ageing law, Dieterich) | the sign of the branch asymmetry; the slipping speeds | branch asymmetry, low-speed μ, residual memory |
+//! | hysteresis | build-up over a displacement, friction turning over one through a reversal (Dahl), lag in time (Hess & Soom), relaxation over a slip distance (rate-and-state slip law, Ruina), contact ageing (rate-and-state ageing law, Dieterich) | the sign of the branch asymmetry; the slipping speeds | branch asymmetry, low-speed μ, residual memory |
 //! | coloured noise | AR(1) with a coloured share (Lorentzian plus white), two corners | the residual autocorrelation | residual autocorrelation, peak variance |
 //! | stiction | constant (released over a slip length), ageing with dwell time | the breakaway excess (the measured one, released, where the baseline's law absorbed it) | breakaway excess, stick fraction |
 //! | load-dependent friction | linear (bent where three or more loads are fitted), power law of the level, the whole law scaled by a power of N0, two-term adhesion F = μN + A | the slope of μ (or of the peaks, or of the phases) against N0 | mean μ, mean peak and phase across loads |
@@ -94,8 +94,10 @@ pub enum SearchedForm {
     Skew,
     /// Friction noise with its skew and tails set apart (Fleishman's polynomial).
     Polynomial,
-    /// Friction that builds up over a displacement after each reversal (Dahl).
+    /// Friction that builds up over a displacement after each slip start.
     BuildUp,
+    /// Friction continuous through a reversal, turning over a displacement (Dahl).
+    Dahl,
     /// Friction that lags the law in time.
     Lag,
     /// Rate-and-state slip law: relaxation over a slip distance.
@@ -138,6 +140,7 @@ impl SearchedForm {
             SearchedForm::Skew => "skew",
             SearchedForm::Polynomial => "polynomial",
             SearchedForm::BuildUp => "exponential",
+            SearchedForm::Dahl => "dahl",
             SearchedForm::Lag => "lag",
             SearchedForm::Slip => "slip",
             SearchedForm::Ageing => "ageing",
