@@ -183,6 +183,36 @@ pub struct MisfitObservable {
     pub count: usize,
 }
 
+/// A family that led a round of the selection and is not named, and why:
+/// where the verdict is `none` (or stops short) although a family explains
+/// part of the gap, the researcher reads what held it back.
+#[derive(Clone, Debug)]
+pub struct Refusal {
+    pub effect: Effect,
+    /// The form of its best full-data fit.
+    pub form: candidates::SearchedForm,
+    /// The share of what the effects named before it left of the
+    /// explainable out-of-sample gap that its family closed, –.
+    pub share_of_gap: f64,
+    /// How many effects are named before it.
+    pub after_named: usize,
+    pub reason: RefusalReason,
+}
+
+/// Why a leading family is not named.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum RefusalReason {
+    /// Refitted from scratch without each fold, it closed `refitted_share`
+    /// of that gap (–), not beyond the noise.
+    NotBeyondNoise { refitted_share: f64 },
+    /// Refitted without each fold, the model with it predicts these folds
+    /// (their labels) worse than the baseline does, and these worse than
+    /// the model before it, beyond each fold's noise: its form does not
+    /// carry over to the conditions it was not fitted on.
+    WorseFolds { than_baseline: Vec<String>, than_model_before: Vec<String> },
+}
+
 /// Everything a diagnosis found.
 #[derive(Clone, Debug)]
 pub struct Diagnosis {
@@ -218,6 +248,8 @@ pub struct Diagnosis {
     pub folds: Folds,
     /// Where the baseline misfits beyond what the named effects explain.
     pub misfit: Option<Misfit>,
+    /// The first family that led a round and is not named, where one did.
+    pub refused: Option<Refusal>,
     pub conditions: Vec<Condition>,
     /// The baseline and the fitted model refitted without each fold (for
     /// checks against a known truth at a withheld level).
@@ -415,6 +447,23 @@ pub fn diagnose_set(
         let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
         d.mean_over_s = Some([start, start + data.longest_record_s.max(1e-3)]);
     }
+    let labels =
+        |folds: &[usize]| -> Vec<String> { folds.iter().map(|&k| data.folds.folds[k].label.clone()).collect() };
+    let refused = selection.refused.as_ref().map(|r| Refusal {
+        effect: r.effect,
+        form: r.form,
+        share_of_gap: r.share,
+        after_named: r.after,
+        reason: match &r.why {
+            search::verdict::Refused::NotBeyondNoise { share } => {
+                RefusalReason::NotBeyondNoise { refitted_share: *share }
+            }
+            search::verdict::Refused::WorseFolds { than_baseline, than_before } => RefusalReason::WorseFolds {
+                than_baseline: labels(than_baseline),
+                than_model_before: labels(than_before),
+            },
+        },
+    });
     let fitted_folds = selection.fitted_folds();
     let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())
         .map(|k| {
@@ -493,6 +542,7 @@ pub fn diagnose_set(
         noise_threshold: selection.noise,
         folds: data.folds.clone(),
         misfit,
+        refused,
         conditions,
         fold_models,
         notes,

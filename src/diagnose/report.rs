@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
-use crate::diagnose::{Diagnosis, FoldGap, Unexplained, chart, sd};
+use crate::diagnose::{Diagnosis, FoldGap, RefusalReason, Unexplained, chart, sd};
 use crate::error::{Error, Result};
 use crate::io::{OutputSet, owned, write_atomically};
 
@@ -66,6 +66,24 @@ pub struct VerdictReport {
     /// signature still stands out. `null` when it fits.
     #[serde(default)]
     pub misfit: Option<MisfitReport>,
+    /// The first family that led a round of the selection and is not
+    /// named, and why; absent where every leader is named.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused: Option<RefusedReport>,
+}
+
+/// A family that led a round and is not named ([`crate::diagnose::Refusal`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RefusedReport {
+    pub effect: String,
+    /// The form of its best full-data fit, as in the model file.
+    pub form: String,
+    /// The share of what the effects named before it left of the
+    /// explainable out-of-sample gap that its family closed, –.
+    pub share_of_gap: f64,
+    /// How many effects are named before it.
+    pub after_named: usize,
+    pub reason: RefusalReason,
 }
 
 /// One effect of the verdict.
@@ -330,6 +348,13 @@ impl Diagnosis {
                         .collect(),
                     hints: m.hints.clone(),
                 }),
+                refused: self.refused.as_ref().map(|r| RefusedReport {
+                    effect: r.effect.name().to_string(),
+                    form: r.form.to_string(),
+                    share_of_gap: r.share_of_gap,
+                    after_named: r.after_named,
+                    reason: r.reason.clone(),
+                }),
             },
             gap: GapReport {
                 metric: GAP_METRIC.to_string(),
@@ -518,6 +543,43 @@ pub fn readable(observable: &str, v: f64) -> String {
         None => sig(v),
     }
 }
+/// The report's sentence on a family that led a round and is not named.
+fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
+    let lead = format!(
+        "{} ({}) led {}, closing {:.0}% of {} out of sample, and is not named: ",
+        r.effect.name(),
+        r.form.name(),
+        if r.after_named == 0 { "the first round".to_string() } else { format!("round {}", r.after_named + 1) },
+        100.0 * r.share_of_gap,
+        if r.after_named == 0 { "the baseline's gap" } else { "what the effects before it left" }
+    );
+    let why = match &r.reason {
+        RefusalReason::NotBeyondNoise { refitted_share } => format!(
+            "refitted from scratch without each fold it closed {:.0}%, which is within the noise of the replicate records",
+            100.0 * refitted_share
+        ),
+        RefusalReason::WorseFolds { than_baseline, than_model_before } => {
+            let mut parts = Vec::new();
+            if !than_baseline.is_empty() {
+                parts.push(format!("predicts {} worse than the baseline", than_baseline.join(", ")));
+            }
+            if !than_model_before.is_empty() && than_model_before != than_baseline {
+                parts.push(format!("predicts {} worse than the model before it", than_model_before.join(", ")));
+            }
+            if parts.is_empty() {
+                "the verdict's checks at the withheld folds leave it out".to_string()
+            } else {
+                format!(
+                    "refitted without each fold, the model with it {}. Its form does not carry over to conditions it \
+                     was not fitted on: the effect may be there in a shape no candidate has, which more conditions \
+                     around those folds would tell",
+                    parts.join(", and ")
+                )
+            }
+        }
+    };
+    format!("{lead}{why}.")
+}
 
 fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> String {
     let gap = &report.gap;
@@ -559,6 +621,9 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     ));
     if d.effects.is_empty() {
         s.push_str("<p>No unmodelled effect is named: no effect family closed a share of the calibrated baseline's out-of-sample gap beyond the noise while predicting every withheld fold no worse (see <i>Candidates</i> below for what each family closed).</p>");
+        if let Some(r) = &d.refused {
+            s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
+        }
     } else {
         s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed (out of sample)</th><th>form misfit</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
@@ -574,6 +639,9 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
             ));
         }
         s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions that give this verdict (its family closes the largest share of what the model before it left of the out-of-sample gap, beyond the noise, and predicts every withheld fold no worse), times the share of the gap the named effects close (or each one's margin over the best rival family, where smaller) over one half, at most 1: a form that leaves much of the gap unexplained, or a rival that explains nearly as much, makes the verdict less sure. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
+        if let Some(r) = &d.refused {
+            s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
+        }
         for e in report.verdict.effects.iter().filter(|e| !e.friction_at_loads.is_empty()) {
             s.push_str(&format!("<p>{} in physical terms: the friction coefficient at rest, μ(0), at each measured load.</p><table><tr><th>normal force (N)</th><th>baseline μ(0)</th><th>fitted μ(0)</th><th>± over the folds' refits</th></tr>", escape(&e.effect)));
             for f in &e.friction_at_loads {

@@ -125,9 +125,27 @@ pub(crate) struct FoldResult {
     pub(crate) gap_after: f64,
 }
 
+/// A round's leader the verdict does not name, and why: what a researcher
+/// reads where a family explains part of the gap yet is not named.
+#[derive(Clone, Debug)]
+pub(crate) struct RefusedLeader {
+    pub(crate) effect: Effect,
+    /// The form of its best full-data fit.
+    pub(crate) form: SearchedForm,
+    /// The share of the current model's explainable out-of-sample gap its
+    /// family closed in the contest (each fold predicted by the member that
+    /// fits the other folds best), –.
+    pub(crate) share: f64,
+    /// How many effects are named before it.
+    pub(crate) after: usize,
+    pub(crate) why: verdict::Refused,
+}
+
 /// What the selection found.
 pub(crate) struct Selection {
     pub(crate) steps: Vec<Step>,
+    /// The first leader not named, where one led.
+    pub(crate) refused: Option<RefusedLeader>,
     /// Every family of the first round, best (most wins) first.
     pub(crate) first_round: Vec<Candidate>,
     /// How sure "the baseline explains the data" is where nothing was
@@ -196,6 +214,7 @@ pub(crate) fn select(
     let mut first_round = Vec::new();
     let mut none_confidence = 1.0;
     let mut noise: f64 = 0.0;
+    let mut refused = None;
     let seed = settings.seed ^ 0xC0_47E5;
     let null = NullLoss::for_replicates(search.replicates);
     while rounds.len() < MAX_EFFECTS && !units.is_empty() {
@@ -258,6 +277,13 @@ pub(crate) fn select(
             );
         }
         if !beyond {
+            refused = Some(RefusedLeader {
+                effect: family.effect,
+                form: family.form,
+                share: pooled.shares[top],
+                after: steps.len(),
+                why: verdict::Refused::NotBeyondNoise { share },
+            });
             break;
         }
         let folds: Vec<FoldResult> = (0..views.len())
@@ -297,6 +323,11 @@ pub(crate) fn select(
     if tracing() {
         eprintln!("verdict: {count} of {} leaders named, confidence {confidence:.3}, each {each:?}", rounds.len());
     }
+    if count < rounds.len() {
+        let c = &steps[count].candidate;
+        let why = verdict::refusal(&rounds[count], &fold_units, &units, null);
+        refused = Some(RefusedLeader { effect: c.effect, form: c.form, share: c.cv_share, after: count, why });
+    }
     steps.truncate(count);
     for (step, c) in steps.iter_mut().zip(&each) {
         step.confidence = *c;
@@ -318,7 +349,7 @@ pub(crate) fn select(
         let m = ((gap - null.mean) / point.noise(n)).max(1.0);
         none_confidence = confidence / m.sqrt();
     }
-    Ok(Selection { steps, first_round, none_confidence, baseline_folds, noise, null })
+    Ok(Selection { steps, refused, first_round, none_confidence, baseline_folds, noise, null })
 }
 
 /// Orders the named effects by how much the fitted model's response (the

@@ -76,6 +76,34 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
     n
 }
 
+/// Why a leader of the selection was not named, as the unweighted data
+/// judge it (the first of the reasons [`named`] checks that holds).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Refused {
+    /// Refitted without each fold, it closed `share` of what the model
+    /// before it left out of sample, not beyond the noise.
+    NotBeyondNoise { share: f64 },
+    /// The model with it, refitted without each fold, predicts these folds
+    /// (indices into the folds) worse than the baseline does, and these
+    /// worse than the model before it, beyond each fold's noise.
+    WorseFolds { than_baseline: Vec<usize>, than_before: Vec<usize> },
+}
+
+/// Why `round`'s leader is not named where the unweighted data leave it
+/// out (`folds`: each fold's held-out units).
+pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null: NullLoss) -> Refused {
+    let ones = vec![1.0; units.len()];
+    let point = Weights { units, w: &ones, null };
+    let (share, beyond) = point.share(&round.refitted.1, &round.refitted.0);
+    if !(share > 0.0 && beyond) {
+        return Refused::NotBeyondNoise { share };
+    }
+    let worse = |pair: &(UnitLosses, UnitLosses)| -> Vec<usize> {
+        (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, &folds[k..=k], &point)).collect()
+    };
+    Refused::WorseFolds { than_baseline: worse(&round.joint), than_before: worse(&round.refitted) }
+}
+
 /// Whether a model refitted without each fold predicts every fold that
 /// carries weight no worse than another (`pair`: the other and the model,
 /// at each fold's units; the model before a leader and after it, or the
@@ -254,6 +282,26 @@ mod tests {
         second.refitted.1 = at(&(0..12).map(|u| if u < 6 { 1.5 } else { 7.0 }).collect::<Vec<f64>>());
         let rounds = [round(10.0, 6.0, 7.0, 10.0), second];
         assert_eq!(judge(&rounds, &halves(), &units, NULL, 1).0, 1);
+    }
+
+    #[test]
+    fn a_refused_leader_says_which_folds_it_predicts_worse() {
+        let units: Vec<usize> = (0..12).collect();
+        // The second fold predicted worse than the baseline (and than the
+        // model before it, here the baseline).
+        let mut r = round(10.0, 2.0, 9.0, 10.0);
+        let after: Vec<f64> = (0..12).map(|u| if u < 6 { 2.0 } else { 12.0 }).collect();
+        r.refitted.1 = at(&after);
+        r.joint.1 = at(&after);
+        assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
+        let expected = Refused::WorseFolds { than_baseline: vec![1], than_before: vec![1] };
+        assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
+        // Nothing closed beyond the noise: that is the reason, with the share.
+        let r = round(10.0, 9.95, 9.97, 10.0);
+        match refusal(&r, &halves(), &units, NULL) {
+            Refused::NotBeyondNoise { share } => assert!(share > 0.0 && share < 0.01, "{share}"),
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]
