@@ -12,6 +12,7 @@ mod hostile;
 mod independent;
 mod layout;
 mod measure;
+mod memory;
 mod props;
 mod records;
 mod reliability;
