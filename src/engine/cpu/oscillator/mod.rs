@@ -221,9 +221,6 @@ pub(crate) struct Path<'a> {
     history: bool,
     /// Which friction memory is on ([`Memory::form`] of the effects).
     memory_form: Memory,
-    /// Whether hysteresis `dahl` is on (δ > 0): friction continuous
-    /// through a reversal, so its coefficient may be negative for a while.
-    dahl: bool,
     /// The law's a, b (–) and d (s²/m²) at this point's load: times
     /// (N0/Nref)^k under load dependence `scaled`, themselves otherwise.
     law_a: f64,
@@ -252,7 +249,6 @@ impl<'a> Path<'a> {
             e.hysteresis_form,
             HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational | HysteresisForm::Dahl
         );
-        let dahl = e.hysteresis_form == HysteresisForm::Dahl && e.hysteresis_length_m != 0.0;
         let history = memory_form != Memory::None
             || (e.hysteresis_length_m != 0.0 && build_up)
             || e.adhesion_force_n != 0.0
@@ -281,7 +277,6 @@ impl<'a> Path<'a> {
             drift_walk: 0.0,
             history,
             memory_form,
-            dahl,
             law_a: osc.friction_a * e.friction_scale,
             law_b: osc.friction_b * e.friction_scale,
             law_d: osc.friction_d_s2_per_m2 * e.friction_scale,
@@ -483,7 +478,7 @@ impl<'a> Path<'a> {
         let mut mu = match self.memory_form {
             Memory::Lag | Memory::Slip => memory + self.friction_noise,
             Memory::Ageing => self.ageing_coefficient(speed_m_per_s, v_m_per_s, memory),
-            Memory::None if self.dahl => {
+            Memory::None if self.dahl() => {
                 self.steady_law(speed_m_per_s, v_m_per_s).max(0.0)
                     * effects::hysteresis_factor(e.hysteresis_form, slipped_m, e.hysteresis_length_m, memory)
             }
@@ -498,7 +493,7 @@ impl<'a> Path<'a> {
             mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
         }
         // Dahl's friction may point along the motion just after a reversal.
-        if self.dahl { mu } else { mu.max(0.0) }
+        if self.dahl() { mu } else { mu.max(0.0) }
     }
 
     /// The magnitude of the friction force while slipping, the arguments
@@ -553,12 +548,20 @@ impl<'a> Path<'a> {
     /// that broke the block away: it stopped at once and re-slipped, up to
     /// the event limit of every segment (a diagnosis's trials of `lag` on
     /// top of a released stiction took 20–45 s instead of under 1 s), –.
+    /// Whether hysteresis `dahl` is on (δ > 0): friction continuous
+    /// through a reversal, so its coefficient may be negative for a while.
+    #[inline(always)]
+    fn dahl(&self) -> bool {
+        let e = &self.osc.effects;
+        e.hysteresis_form == HysteresisForm::Dahl && e.hysteresis_length_m != 0.0
+    }
+
     /// The friction memory a slip starts with at a breakaway, from a stick
     /// or from rest: [`Path::lag_start_coefficient`], or φ₀ = 1 under
     /// hysteresis `dahl` (the static friction that held the block acts at
     /// once).
     fn breakaway_memory(&self) -> f64 {
-        if self.dahl { 1.0 } else { self.lag_start_coefficient() }
+        if self.dahl() { 1.0 } else { self.lag_start_coefficient() }
     }
 
     /// The friction memory a slip starts with where the block slips on at
@@ -568,7 +571,7 @@ impl<'a> Path<'a> {
     /// slid against now points along the new motion). Read before the
     /// slip's start moves to the velocity zero.
     fn reversal_memory(&self, reversed: bool) -> f64 {
-        if !self.dahl {
+        if !self.dahl() {
             return self.lag_start_coefficient();
         }
         let e = &self.osc.effects;
