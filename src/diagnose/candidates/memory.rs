@@ -30,42 +30,30 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     if !friction {
         return Vec::new();
     }
+    let memory = |form: HysteresisForm, length_m: f64, strength: f64| FrictionHysteresis {
+        form,
+        length_m,
+        time_constant_s: 0.0,
+        strength,
+    };
     // Friction that builds up after each slip start is lower while
     // the block speeds up; friction that lags a falling law in time
-    // is higher then. Both are searched, the likelier first.
-    let build_up = Variant {
+    // is higher then. Both are searched, the likelier first. Beside the
+    // build-up, pre-sliding friction that is continuous through a
+    // reversal (Dahl; the bristles of LuGre and the elasto-plastic
+    // models), over the same displacements.
+    let over_displacement = |searched: SearchedForm, form: HysteresisForm| Variant {
         effect,
-        form: SearchedForm::BuildUp,
+        form: searched,
         params: vec![Param::log("length_m", 1.5e-4, 2.5, 1e-6, 5e-3)],
-        apply: Box::new(|m, p| {
+        apply: Box::new(move |m, p| {
             let mut m = m.clone();
-            m.effects.friction_hysteresis = Some(FrictionHysteresis {
-                form: HysteresisForm::Exponential,
-                length_m: p[0],
-                time_constant_s: 0.0,
-                strength: 0.0,
-            });
+            m.effects.friction_hysteresis = Some(memory(form, p[0], 0.0));
             m
         }),
     };
-    // Pre-sliding friction that is continuous through a reversal (Dahl;
-    // the bristles of LuGre and the elasto-plastic models), over the
-    // same displacements.
-    let dahl = Variant {
-        effect,
-        form: SearchedForm::Dahl,
-        params: vec![Param::log("length_m", 1.5e-4, 2.5, 1e-6, 5e-3)],
-        apply: Box::new(|m, p| {
-            let mut m = m.clone();
-            m.effects.friction_hysteresis = Some(FrictionHysteresis {
-                form: HysteresisForm::Dahl,
-                length_m: p[0],
-                time_constant_s: 0.0,
-                strength: 0.0,
-            });
-            m
-        }),
-    };
+    let build_up = over_displacement(SearchedForm::BuildUp, HysteresisForm::Exponential);
+    let dahl = over_displacement(SearchedForm::Dahl, HysteresisForm::Dahl);
     // A memory time shorter than one sample interval is not searched:
     // the branches it separates differ by less than μ moves within
     // one sample, which the records cannot resolve, and integrating
@@ -92,12 +80,6 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     // speed.
     let median_speed = ctx.data.measured_law.map_or(0.1, |l| l.anchors_m_per_s[5]).max(1e-3);
     let length = (6.0e-3 * median_speed).clamp(SLIP_MEMORY_MIN_M, 1e-2);
-    let memory = |form: HysteresisForm, length_m: f64, strength: f64| FrictionHysteresis {
-        form,
-        length_m,
-        time_constant_s: 0.0,
-        strength,
-    };
     let slip = Variant {
         effect,
         form: SearchedForm::Slip,

@@ -539,15 +539,6 @@ impl<'a> Path<'a> {
             .max(0.0)
     }
 
-    /// Where the friction memory μ_f of hysteresis `lag` and `slip` starts
-    /// when the block breaks away: the static coefficient the breakaway was judged by, less
-    /// the stiction excess that [`Path::friction_coefficient`] adds on top
-    /// while it is released (`decaying`, or `constant` with a release
-    /// length), so that sliding starts at exactly the static coefficient.
-    /// Counted twice, friction at the start of a slip exceeded the force
-    /// that broke the block away: it stopped at once and re-slipped, up to
-    /// the event limit of every segment (a diagnosis's trials of `lag` on
-    /// top of a released stiction took 20–45 s instead of under 1 s), –.
     /// Whether hysteresis `dahl` is on (δ > 0): friction continuous
     /// through a reversal, so its coefficient may be negative for a while.
     #[inline(always)]
@@ -580,6 +571,15 @@ impl<'a> Path<'a> {
         if reversed { -end } else { end }
     }
 
+    /// Where the friction memory μ_f of hysteresis `lag` and `slip` starts
+    /// when the block breaks away: the static coefficient the breakaway was judged by, less
+    /// the stiction excess that [`Path::friction_coefficient`] adds on top
+    /// while it is released (`decaying`, or `constant` with a release
+    /// length), so that sliding starts at exactly the static coefficient.
+    /// Counted twice, friction at the start of a slip exceeded the force
+    /// that broke the block away: it stopped at once and re-slipped, up to
+    /// the event limit of every segment (a diagnosis's trials of `lag` on
+    /// top of a released stiction took 20–45 s instead of under 1 s), –.
     fn lag_start_coefficient(&self) -> f64 {
         let e = &self.osc.effects;
         let released = e.stiction_form == StictionForm::Decaying
