@@ -447,23 +447,6 @@ pub fn diagnose_set(
         let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
         d.mean_over_s = Some([start, start + data.longest_record_s.max(1e-3)]);
     }
-    let labels =
-        |folds: &[usize]| -> Vec<String> { folds.iter().map(|&k| data.folds.folds[k].label.clone()).collect() };
-    let refused = selection.refused.as_ref().map(|r| Refusal {
-        effect: r.effect,
-        form: r.form,
-        share_of_gap: r.share,
-        after_named: r.after,
-        reason: match &r.why {
-            search::verdict::Refused::NotBeyondNoise { share } => {
-                RefusalReason::NotBeyondNoise { refitted_share: *share }
-            }
-            search::verdict::Refused::WorseFolds { than_baseline, than_before } => RefusalReason::WorseFolds {
-                than_baseline: labels(than_baseline),
-                than_model_before: labels(than_before),
-            },
-        },
-    });
     let fitted_folds = selection.fitted_folds();
     let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())
         .map(|k| {
@@ -542,7 +525,7 @@ pub fn diagnose_set(
         noise_threshold: selection.noise,
         folds: data.folds.clone(),
         misfit,
-        refused,
+        refused: selection.refused,
         conditions,
         fold_models,
         notes,

@@ -621,9 +621,6 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     ));
     if d.effects.is_empty() {
         s.push_str("<p>No unmodelled effect is named: no effect family closed a share of the calibrated baseline's out-of-sample gap beyond the noise while predicting every withheld fold no worse (see <i>Candidates</i> below for what each family closed).</p>");
-        if let Some(r) = &d.refused {
-            s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
-        }
     } else {
         s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed (out of sample)</th><th>form misfit</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
@@ -639,9 +636,6 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
             ));
         }
         s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions that give this verdict (its family closes the largest share of what the model before it left of the out-of-sample gap, beyond the noise, and predicts every withheld fold no worse), times the share of the gap the named effects close (or each one's margin over the best rival family, where smaller) over one half, at most 1: a form that leaves much of the gap unexplained, or a rival that explains nearly as much, makes the verdict less sure. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
-        if let Some(r) = &d.refused {
-            s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
-        }
         for e in report.verdict.effects.iter().filter(|e| !e.friction_at_loads.is_empty()) {
             s.push_str(&format!("<p>{} in physical terms: the friction coefficient at rest, μ(0), at each measured load.</p><table><tr><th>normal force (N)</th><th>baseline μ(0)</th><th>fitted μ(0)</th><th>± over the folds' refits</th></tr>", escape(&e.effect)));
             for f in &e.friction_at_loads {
@@ -655,6 +649,9 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
             }
             s.push_str("</table>");
         }
+    }
+    if let Some(r) = &d.refused {
+        s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
     }
     s.push_str(&format!(
         "<p>Left unexplained: {:.0}% of the baseline's out-of-sample gap above the noise floor. Folds: {}.</p>",

@@ -39,7 +39,7 @@ use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{Scope, Score, score};
-use crate::diagnose::{Candidate, DiagnoseSettings, Unexplained};
+use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexplained};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::{Error, Result};
 use cv::{
@@ -125,27 +125,11 @@ pub(crate) struct FoldResult {
     pub(crate) gap_after: f64,
 }
 
-/// A round's leader the verdict does not name, and why: what a researcher
-/// reads where a family explains part of the gap yet is not named.
-#[derive(Clone, Debug)]
-pub(crate) struct RefusedLeader {
-    pub(crate) effect: Effect,
-    /// The form of its best full-data fit.
-    pub(crate) form: SearchedForm,
-    /// The share of the current model's explainable out-of-sample gap its
-    /// family closed in the contest (each fold predicted by the member that
-    /// fits the other folds best), –.
-    pub(crate) share: f64,
-    /// How many effects are named before it.
-    pub(crate) after: usize,
-    pub(crate) why: verdict::Refused,
-}
-
 /// What the selection found.
 pub(crate) struct Selection {
     pub(crate) steps: Vec<Step>,
     /// The first leader not named, where one led.
-    pub(crate) refused: Option<RefusedLeader>,
+    pub(crate) refused: Option<Refusal>,
     /// Every family of the first round, best (most wins) first.
     pub(crate) first_round: Vec<Candidate>,
     /// How sure "the baseline explains the data" is where nothing was
@@ -277,12 +261,12 @@ pub(crate) fn select(
             );
         }
         if !beyond {
-            refused = Some(RefusedLeader {
+            refused = Some(Refusal {
                 effect: family.effect,
                 form: family.form,
-                share: pooled.shares[top],
-                after: steps.len(),
-                why: verdict::Refused::NotBeyondNoise { share },
+                share_of_gap: pooled.shares[top],
+                after_named: steps.len(),
+                reason: RefusalReason::NotBeyondNoise { refitted_share: share },
             });
             break;
         }
@@ -325,8 +309,16 @@ pub(crate) fn select(
     }
     if count < rounds.len() {
         let c = &steps[count].candidate;
-        let why = verdict::refusal(&rounds[count], &fold_units, &units, null);
-        refused = Some(RefusedLeader { effect: c.effect, form: c.form, share: c.cv_share, after: count, why });
+        let labels = |folds: Vec<usize>| folds.into_iter().map(|k| data.folds.folds[k].label.clone()).collect();
+        let reason = match verdict::refusal(&rounds[count], &fold_units, &units, null) {
+            verdict::Refused::NotBeyondNoise { share } => RefusalReason::NotBeyondNoise { refitted_share: share },
+            verdict::Refused::WorseFolds { than_baseline, than_before } => RefusalReason::WorseFolds {
+                than_baseline: labels(than_baseline),
+                than_model_before: labels(than_before),
+            },
+        };
+        refused =
+            Some(Refusal { effect: c.effect, form: c.form, share_of_gap: c.cv_share, after_named: count, reason });
     }
     steps.truncate(count);
     for (step, c) in steps.iter_mut().zip(&each) {
