@@ -414,6 +414,14 @@ pub fn diagnose_set(
         notes.push(note);
         baseline_scores.retain(|s| data.measured[s.unit].contains_key(&s.observable));
     }
+    if !data.folds.any() {
+        notes.push(
+            "nothing could be held out (one run of one condition), so no effect can be tested out of sample \
+             and none is named: the confidence of `none` says only how well the baseline fits the data in \
+             sample; more runs, frequencies or loads let effects be tested"
+                .into(),
+        );
+    }
     let selection = search::select(&baseline, slope, &data, settings, engine, progress)?;
     let effects: Vec<NamedEffect> = selection
         .steps

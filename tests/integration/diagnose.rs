@@ -328,3 +328,38 @@ fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// One run of one condition: nothing can be held out, so no effect can be
+/// tested and none is named. "None" is then only as sure as the
+/// baseline's fit in sample: sure on a record the baseline model made, not
+/// on one with a friction memory the baseline lacks (its gap in sample
+/// about 1.5, against about 0.2 for the baseline's own record on six seeds
+/// each), and the report says why nothing was named.
+#[test]
+fn one_record_alone_names_nothing_and_is_sure_of_none_only_where_the_baseline_fits() {
+    let root = scratch("one-record");
+    let confidence_of = |name: &str, set: &[&str]| -> (f64, Vec<String>) {
+        let (data, out) = (root.join(name), root.join(format!("{name}-out")));
+        let mut args = vec!["-q", "simulate", "--realisations", "1", "--duration", "20", "--out"];
+        args.push(data.to_str().unwrap());
+        for s in set {
+            args.extend(["--set", s]);
+        }
+        let (ok, _, err) = stickslip(&args);
+        assert!(ok, "{err}");
+        let (ok, _, err) =
+            stickslip(&["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+        assert!(ok, "{err}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["verdict"]["effect"], "none", "{name}");
+        let notes = report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap().to_string()).collect();
+        (report["verdict"]["confidence"].as_f64().unwrap(), notes)
+    };
+    let (null, notes) = confidence_of("baseline", &[]);
+    assert!(null >= 0.9, "the baseline's own record: none at {null}");
+    assert!(notes.iter().any(|n| n.contains("nothing could be held out")), "{notes:?}");
+    let (memory, _) = confidence_of("memory", &["friction_hysteresis.length_m=0.0005"]);
+    assert!(memory <= 0.1, "a record with a friction memory: none at {memory}");
+    std::fs::remove_dir_all(&root).unwrap();
+}

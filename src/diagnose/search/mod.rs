@@ -201,6 +201,20 @@ pub(crate) fn select(
     let mut refused = None;
     let seed = settings.seed ^ 0xC0_47E5;
     let null = NullLoss::for_replicates(search.replicates);
+    if units.is_empty() {
+        // Nothing can be held out (one condition, say), so no effect can
+        // be tested, and "none" is only as sure as the baseline's fit in
+        // sample: the share of resamples of its units within the noise of
+        // the floor, divided by √m where its gap stands m noise thresholds
+        // above it (as for a `none` beside a gap nothing explains, below).
+        let losses = own_losses(&current.scores, data);
+        let all: Vec<usize> = losses.keys().copied().collect();
+        if !all.is_empty() {
+            let idle = contest(&losses, &[], &all, null, seed);
+            noise = idle.noise;
+            none_confidence = idle.fits / ((idle.gap - null.mean) / idle.noise).max(1.0).sqrt();
+        }
+    }
     while rounds.len() < MAX_EFFECTS && !units.is_empty() {
         let current_losses = own_losses(&current.scores, data);
         // Nothing above the noise to explain: no family can lead.
