@@ -207,10 +207,17 @@ pub enum RefusalReason {
     /// of that gap (–), not beyond the noise.
     NotBeyondNoise { refitted_share: f64 },
     /// Refitted without each fold, the model with it predicts these folds
-    /// (their labels) worse than the baseline does, and these worse than
-    /// the model before it, beyond each fold's noise: its form does not
-    /// carry over to the conditions it was not fitted on.
-    WorseFolds { than_baseline: Vec<String>, than_model_before: Vec<String> },
+    /// (their labels) worse than the baseline does, these worse than the
+    /// model before it, and the response (the peaks' and the phase's mean
+    /// and variance) at these worse than the baseline does, beyond each
+    /// fold's noise: its form does not carry over to the conditions it was
+    /// not fitted on.
+    WorseFolds {
+        than_baseline: Vec<String>,
+        than_model_before: Vec<String>,
+        #[serde(default)]
+        response_than_baseline: Vec<String>,
+    },
 }
 
 /// Everything a diagnosis found.

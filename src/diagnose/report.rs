@@ -42,7 +42,7 @@ pub struct Report {
 }
 
 /// How the confidence is defined, as `report.json` states it.
-pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample";
+pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline, over every observable and over the response's (peaks and phase) alone (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample";
 
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -558,13 +558,22 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
             "refitted from scratch without each fold it closed {:.0}%, which is within the noise of the replicate records",
             100.0 * refitted_share
         ),
-        RefusalReason::WorseFolds { than_baseline, than_model_before } => {
+        RefusalReason::WorseFolds { than_baseline, than_model_before, response_than_baseline } => {
             let mut parts = Vec::new();
             if !than_baseline.is_empty() {
                 parts.push(format!("predicts {} worse than the baseline", than_baseline.join(", ")));
             }
             if !than_model_before.is_empty() && than_model_before != than_baseline {
                 parts.push(format!("predicts {} worse than the model before it", than_model_before.join(", ")));
+            }
+            let response: Vec<&String> = response_than_baseline.iter().filter(|f| !than_baseline.contains(f)).collect();
+            if !response.is_empty() {
+                let labels: Vec<&str> = response.iter().map(|s| s.as_str()).collect();
+                parts.push(format!(
+                    "predicts the response (the peaks' and the phase's mean and variance) at {} worse than the \
+                     baseline",
+                    labels.join(", ")
+                ));
             }
             if parts.is_empty() {
                 "the verdict's checks at the withheld folds leave it out".to_string()

@@ -120,6 +120,16 @@ pub(crate) type UnitLosses = BTreeMap<usize, (f64, usize)>;
 /// a model that cannot produce that value at all. A measured observable
 /// without a score counts [`missing_loss`].
 pub(crate) fn pair_losses(before: &[Score], after: &[Score], data: &Data<'_>) -> (UnitLosses, UnitLosses) {
+    pair_losses_of(before, after, data, |_| true)
+}
+
+/// [`pair_losses`] over the observables `keep` selects alone.
+pub(crate) fn pair_losses_of(
+    before: &[Score],
+    after: &[Score],
+    data: &Data<'_>,
+    keep: fn(Observable) -> bool,
+) -> (UnitLosses, UnitLosses) {
     let key = |s: &Score| (s.unit, s.observable);
     let scale_before: BTreeMap<(usize, Observable), f64> = before.iter().map(|s| (key(s), s.scale)).collect();
     let scale_after: BTreeMap<(usize, Observable), f64> = after.iter().map(|s| (key(s), s.scale)).collect();
@@ -137,20 +147,21 @@ pub(crate) fn pair_losses(before: &[Score], after: &[Score], data: &Data<'_>) ->
             })
             .collect()
     };
-    (per_unit(&losses(before), data), per_unit(&losses(after), data))
+    (per_unit(&losses(before), data, keep), per_unit(&losses(after), data, keep))
 }
 
 /// The losses of a model's `scores` in its own scales (its z-scores).
 pub(crate) fn own_losses(scores: &[Score], data: &Data<'_>) -> UnitLosses {
-    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), loss(s.z))).collect(), data)
+    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), loss(s.z))).collect(), data, |_| true)
 }
 
-/// Per-score losses summed by unit over the unit's measured observables.
-fn per_unit(by: &BTreeMap<(usize, Observable), f64>, data: &Data<'_>) -> UnitLosses {
+/// Per-score losses summed by unit over the unit's measured observables
+/// that `keep` selects.
+fn per_unit(by: &BTreeMap<(usize, Observable), f64>, data: &Data<'_>, keep: fn(Observable) -> bool) -> UnitLosses {
     (0..data.units.len())
         .map(|u| {
             let (mut sum, mut n) = (0.0, 0usize);
-            for &o in data.measured[u].keys() {
+            for &o in data.measured[u].keys().filter(|&&o| keep(o)) {
                 sum += by.get(&(u, o)).copied().unwrap_or_else(missing_loss);
                 n += 1;
             }

@@ -38,13 +38,14 @@ use std::collections::BTreeMap;
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
+use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexplained};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::{Error, Result};
 use cv::{
     Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses, pair_losses,
-    pool_predictions,
+    pair_losses_of, pool_predictions,
 };
 use fit::{Trial, coordinate_search, evaluate, polish, search_settings, tracing};
 
@@ -263,6 +264,7 @@ pub(crate) fn select(
         };
         let refitted = fold_pair_losses(&current_folds, &refits, data);
         let joint = fold_pair_losses(&baseline_folds, &refits, data);
+        let joint_response = fold_pair_losses_of(&baseline_folds, &refits, data, Observable::is_response);
         let ones = vec![1.0; units.len()];
         let point = cv::Weights { units: &units, w: &ones, null };
         let (share, beyond) = point.share(&refitted.1, &refitted.0);
@@ -297,6 +299,7 @@ pub(crate) fn select(
             leader: top,
             refitted,
             joint,
+            joint_response,
         });
         progress(&format!("{} leads; polishing its model on every replicate", family.effect));
         let polished = polish(&family.best, slope, data, settings, engine)?.unwrap_or_else(|| family.best.clone());
@@ -326,10 +329,13 @@ pub(crate) fn select(
         let labels = |folds: Vec<usize>| folds.into_iter().map(|k| data.folds.folds[k].label.clone()).collect();
         let reason = match verdict::refusal(&rounds[count], &fold_units, &units, null) {
             verdict::Refused::NotBeyondNoise { share } => RefusalReason::NotBeyondNoise { refitted_share: share },
-            verdict::Refused::WorseFolds { than_baseline, than_before } => RefusalReason::WorseFolds {
-                than_baseline: labels(than_baseline),
-                than_model_before: labels(than_before),
-            },
+            verdict::Refused::WorseFolds { than_baseline, than_before, response_than_baseline } => {
+                RefusalReason::WorseFolds {
+                    than_baseline: labels(than_baseline),
+                    than_model_before: labels(than_before),
+                    response_than_baseline: labels(response_than_baseline),
+                }
+            }
         };
         refused =
             Some(Refusal { effect: c.effect, form: c.form, share_of_gap: c.cv_share, after_named: count, reason });
@@ -371,16 +377,13 @@ fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettin
     let Some(last) = steps.last() else { return Ok(()) };
     let fitted = last.candidate.model.clone();
     let fitted_scores = score(engine, &fitted, data, search, Scope::All)?;
-    let response =
-        |scores: &[Score]| -> Vec<Score> { scores.iter().filter(|s| s.observable.is_response()).cloned().collect() };
-    let kept = response(&fitted_scores);
     let mut weights = Vec::new();
     for step in steps.iter() {
         let mut without = fitted.clone();
         without.effects.remove(step.candidate.effect);
         let weight = match score(engine, &without, data, search, Scope::All) {
             Ok(scores) => {
-                let (with, wout) = pair_losses(&response(&scores), &kept, data);
+                let (with, wout) = pair_losses_of(&scores, &fitted_scores, data, Observable::is_response);
                 let all = || with.keys().copied();
                 // Both in the fitted model's yardstick: `with` is the model
                 // without the effect, `wout` the fitted one.
@@ -748,8 +751,18 @@ fn refit_folds(
 /// without each fold (`before[k]`, `after[k]`): the losses at each fold's
 /// units, both in one yardstick ([`pair_losses`]).
 fn fold_pair_losses(before: &[Fitted], after: &[Fitted], data: &Data<'_>) -> (UnitLosses, UnitLosses) {
+    fold_pair_losses_of(before, after, data, |_| true)
+}
+
+/// [`fold_pair_losses`] over the observables `keep` selects alone.
+fn fold_pair_losses_of(
+    before: &[Fitted],
+    after: &[Fitted],
+    data: &Data<'_>,
+    keep: fn(Observable) -> bool,
+) -> (UnitLosses, UnitLosses) {
     let (b, a): (Vec<UnitLosses>, Vec<UnitLosses>) =
-        before.iter().zip(after).map(|(x, y)| pair_losses(&x.scores, &y.scores, data)).unzip();
+        before.iter().zip(after).map(|(x, y)| pair_losses_of(&x.scores, &y.scores, data, keep)).unzip();
     (fold_predictions(&b, &data.folds), fold_predictions(&a, &data.folds))
 }
 

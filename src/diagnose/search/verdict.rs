@@ -10,7 +10,10 @@
 //!
 //! - predicts every withheld fold no worse than the baseline does, up to
 //!   that fold's noise (the verdict holds in every fold, not on average),
-//!   and
+//!   over every observable and over the response's alone (the peaks' and
+//!   the phase's mean and variance: what a fitted model is used to
+//!   predict, and a handful of scores beside the friction and
+//!   normal-force features that dominate the first), and
 //! - whose last effect predicts every fold no worse than the model before
 //!   it.
 //!
@@ -52,6 +55,9 @@ pub(crate) struct Round {
     /// The baseline and the models after the leader, refitted without each
     /// fold, at each fold's units, in the latter's yardstick.
     pub(crate) joint: (UnitLosses, UnitLosses),
+    /// `joint` over the response's observables alone (the peaks' and the
+    /// phase's mean and variance): what a fitted model is used to predict.
+    pub(crate) joint_response: (UnitLosses, UnitLosses),
 }
 
 /// How many of `rounds`' leaders one weighting of the units names (0:
@@ -69,7 +75,10 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
         if !(refitted > 0.0 && beyond) {
             break;
         }
-        if every_fold_no_worse(&r.joint, folds, weights) && every_fold_no_worse(&r.refitted, folds, weights) {
+        if every_fold_no_worse(&r.joint, folds, weights)
+            && every_fold_no_worse(&r.joint_response, folds, weights)
+            && every_fold_no_worse(&r.refitted, folds, weights)
+        {
             n = j + 1;
         }
     }
@@ -84,9 +93,10 @@ pub(crate) enum Refused {
     /// before it left out of sample, not beyond the noise.
     NotBeyondNoise { share: f64 },
     /// The model with it, refitted without each fold, predicts these folds
-    /// (indices into the folds) worse than the baseline does, and these
-    /// worse than the model before it, beyond each fold's noise.
-    WorseFolds { than_baseline: Vec<usize>, than_before: Vec<usize> },
+    /// (indices into the folds) worse than the baseline does, these
+    /// worse than the model before it, and the response at these worse
+    /// than the baseline does, beyond each fold's noise.
+    WorseFolds { than_baseline: Vec<usize>, than_before: Vec<usize>, response_than_baseline: Vec<usize> },
 }
 
 /// Why `round`'s leader is not named where the unweighted data leave it
@@ -101,7 +111,11 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
     let worse = |pair: &(UnitLosses, UnitLosses)| -> Vec<usize> {
         (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, &folds[k..=k], &point)).collect()
     };
-    Refused::WorseFolds { than_baseline: worse(&round.joint), than_before: worse(&round.refitted) }
+    Refused::WorseFolds {
+        than_baseline: worse(&round.joint),
+        than_before: worse(&round.refitted),
+        response_than_baseline: worse(&round.joint_response),
+    }
 }
 
 /// Whether a model refitted without each fold predicts every fold that
@@ -198,6 +212,7 @@ mod tests {
             leader: 0,
             refitted: (at(&vec![before; n]), at(&vec![after; n])),
             joint: (at(&vec![baseline; n]), at(&vec![after; n])),
+            joint_response: (at(&vec![baseline; n]), at(&vec![after; n])),
         }
     }
 
@@ -294,7 +309,8 @@ mod tests {
         r.refitted.1 = at(&after);
         r.joint.1 = at(&after);
         assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
-        let expected = Refused::WorseFolds { than_baseline: vec![1], than_before: vec![1] };
+        let expected =
+            Refused::WorseFolds { than_baseline: vec![1], than_before: vec![1], response_than_baseline: vec![] };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         // Nothing closed beyond the noise: that is the reason, with the share.
         let r = round(10.0, 9.95, 9.97, 10.0);
@@ -302,6 +318,24 @@ mod tests {
             Refused::NotBeyondNoise { share } => assert!(share > 0.0 && share < 0.01, "{share}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A model that predicts every fold's observables together better than
+    /// the baseline but the response (peaks and phase) at one fold worse,
+    /// beyond its noise, is not named: the response is what it would be
+    /// used to predict. One that leaves that fold's response as it was, up
+    /// to the noise, is.
+    #[test]
+    fn an_effect_that_predicts_one_folds_response_worse_is_not_named() {
+        let units: Vec<usize> = (0..12).collect();
+        let mut r = round(10.0, 2.0, 9.0, 10.0);
+        r.joint_response = (at(&[1.0; 12]), at(&(0..12).map(|u| if u < 6 { 1.0 } else { 3.0 }).collect::<Vec<_>>()));
+        assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
+        let expected =
+            Refused::WorseFolds { than_baseline: vec![], than_before: vec![], response_than_baseline: vec![1] };
+        assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
+        r.joint_response.1 = at(&(0..12).map(|u| if u < 6 { 1.0 } else { 1.05 }).collect::<Vec<_>>());
+        assert_eq!(judge(&[r], &halves(), &units, NULL, 1).0, 1);
     }
 
     #[test]
