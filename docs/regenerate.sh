@@ -159,7 +159,12 @@ if mode == "write":
         model = re.search(r"Model name:\s*(.+)", lscpu).group(1).strip()
         family = re.search(r"CPU family:\s*(.+)", lscpu)
         cores = os.cpu_count()
-        timed["machine"] = f"a {cores}-core {model}" + (f" (CPU family {family.group(1).strip()})" if family else "")
+        # The CPU reference's speed follows its widest vectors: name them.
+        flags = re.search(r"Flags:\s*(.+)", lscpu)
+        flags = flags.group(1).split() if flags else []
+        vectors = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "no AVX2"
+        about = ([f"CPU family {family.group(1).strip()}"] if family else []) + [vectors]
+        timed["machine"] = f"a {cores}-core {model} ({', '.join(about)})"
     except Exception:
         timed["machine"] = f"a {os.cpu_count()}-core machine"
     # A machine shared with other work makes every timing longer: say so.
