@@ -566,13 +566,13 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
             if !than_model_before.is_empty() && than_model_before != than_baseline {
                 parts.push(format!("predicts {} worse than the model before it", than_model_before.join(", ")));
             }
-            let response: Vec<&String> = response_than_baseline.iter().filter(|f| !than_baseline.contains(f)).collect();
+            let response: Vec<&str> =
+                response_than_baseline.iter().filter(|f| !than_baseline.contains(f)).map(String::as_str).collect();
             if !response.is_empty() {
-                let labels: Vec<&str> = response.iter().map(|s| s.as_str()).collect();
                 parts.push(format!(
                     "predicts the response (the peaks' and the phase's mean and variance) at {} worse than the \
                      baseline",
-                    labels.join(", ")
+                    response.join(", ")
                 ));
             }
             if parts.is_empty() {

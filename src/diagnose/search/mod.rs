@@ -213,7 +213,7 @@ pub(crate) fn select(
         if !all.is_empty() {
             let idle = contest(&losses, &[], &all, null, seed);
             noise = idle.noise;
-            none_confidence = idle.fits / ((idle.gap - null.mean) / idle.noise).max(1.0).sqrt();
+            none_confidence = idle.fits / noise_thresholds_above(idle.gap, idle.noise, null).sqrt();
         }
     }
     while rounds.len() < MAX_EFFECTS && !units.is_empty() {
@@ -358,8 +358,7 @@ pub(crate) fn select(
         let ones = vec![1.0; units.len()];
         let point = cv::Weights { units: &units, w: &ones, null };
         let (gap, n) = point.gap(&first.current);
-        let m = ((gap - null.mean) / point.noise(n)).max(1.0);
-        none_confidence = confidence / m.sqrt();
+        none_confidence = confidence / noise_thresholds_above(gap, point.noise(n), null).sqrt();
     }
     Ok(Selection { steps, refused, first_round, none_confidence, baseline_folds, noise, null })
 }
@@ -402,6 +401,13 @@ fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettin
     let reordered: Vec<Step> = order.iter().map(|&i| steps[i].clone()).collect();
     steps.clone_from_slice(&reordered);
     Ok(())
+}
+
+/// How many noise thresholds (`noise`, –) a model's `gap` (–) stands above
+/// the floor of a model that is right, at least 1: what a `none`'s
+/// confidence is divided by the square root of.
+fn noise_thresholds_above(gap: f64, noise: f64, null: NullLoss) -> f64 {
+    ((gap - null.mean) / noise).max(1.0)
 }
 
 /// Prints a round's families, their picks and shares (`STICKSLIP_DEBUG`).
