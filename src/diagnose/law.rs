@@ -354,6 +354,21 @@ impl SlipSamples {
     }
 }
 
+/// How far the friction level of `runs` stands from `law`: the mean of
+/// μ − law(|v|) over their slipping samples ([`slipping_samples`], with
+/// velocity sensor noise `v_noise_m_per_s`, m/s), –, and how many samples
+/// there are; `None` with fewer than [`MIN_SLIP_SAMPLES`] (records of a
+/// block that barely slips say nothing about its sliding friction).
+pub(crate) fn level_against(runs: &[&Run], v_noise_m_per_s: f64, law: &FrictionLaw) -> Option<(f64, usize)> {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for r in runs {
+        let (speed, mu) = slipping_samples(r, v_noise_m_per_s);
+        sum += speed.iter().zip(&mu).map(|(&v, &m)| m - law.mu(v)).sum::<f64>();
+        count += mu.len();
+    }
+    (count >= MIN_SLIP_SAMPLES).then(|| (sum / count as f64, count))
+}
+
 /// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`])
 /// on the slipping samples of `runs`, whose velocity sensor noise is
 /// `v_noise_m_per_s` (m/s); `None` without force channels or with fewer
@@ -440,6 +455,24 @@ mod tests {
         // The level is the two records' mean (they hold about as many
         // slipping samples each).
         assert!((mu(&law, 0.1) - mu(&truth, 0.1)).abs() < 0.01, "{law:?}");
+    }
+
+    /// The level of records against a law is their friction's mean
+    /// distance from it while slipping, whatever the speeds they slip at,
+    /// and a record that barely slips gives none: the load dependence's
+    /// signature reads each load's level so, and a load at which the block
+    /// sticks says nothing about it.
+    #[test]
+    fn the_level_against_a_law_is_the_mean_offset_of_the_slipping_friction() {
+        let law = FrictionLaw { a: 0.22, b: 0.1, c: 20.0, d: 0.0, sigma: 0.03, anchors_m_per_s: [0.0; 10] };
+        for (offset, v0, seed) in [(0.0, 0.4, 1), (0.03, 0.1, 2), (-0.02, 0.25, 3)] {
+            let run = record_at(0.22 + offset, 0.1, 20.0, 0.0, 0.03, seed, v0);
+            let (level, count) = level_against(&[&run], 0.0, &law).unwrap();
+            assert!(count > 5_000, "{count} slipping samples");
+            assert!((level - offset).abs() < 0.002, "level {level} against an offset of {offset}");
+        }
+        let stuck = record_at(0.3, 0.1, 20.0, 0.0, 0.03, 4, 0.0);
+        assert_eq!(level_against(&[&stuck], 0.0, &law), None);
     }
 
     /// The law from moments summed record by record (as the diagnosis sums

@@ -1,6 +1,8 @@
 //! The load: friction that depends on the normal force, and a normal force that drifts.
 
 use super::*;
+use crate::diagnose::law;
+use crate::measure::Run;
 
 impl Context<'_> {
     /// The slope of μ against N0 (1/N) that the fitting units' phase means
@@ -40,18 +42,55 @@ impl Context<'_> {
         let amplitude_m = self.model.excitation.amplitude_m;
         phase_implied_slope(units, reference_n, |hz| law.mu(std::f64::consts::TAU * hz * amplitude_m))
     }
+
+    /// The slope of the sliding friction level against N0 (1/N) that the
+    /// force channels give: each fitting unit's mean of μ − the model's law
+    /// over its slipping samples, fitted against its N0 by least squares
+    /// weighted by how many samples slip. Read from the records alone, not
+    /// from simulated features: a load at which the block sticks for most
+    /// of each cycle has a mean |F|/N set by the spring, not by the law, in
+    /// the data and in the simulation alike, and says nothing about how
+    /// friction changes with load, while a weighting by slipping samples
+    /// lets it count only for what it slips. `None` without force channels
+    /// or with fewer than two loads that slip.
+    fn slope_from_law(&self) -> Option<f64> {
+        let law = FrictionLaw::of(self.model);
+        let points: Vec<(f64, f64, f64)> = self
+            .data
+            .units
+            .iter()
+            .filter(|u| !u.heldout && !u.runs.is_empty())
+            .filter_map(|u| {
+                let runs: Vec<&Run> = u.runs.iter().map(|&r| &self.data.set.runs[r]).collect();
+                let (level, count) = law::level_against(&runs, self.data.sensor.v_m_per_s, &law)?;
+                let n0 = self.data.simulated_condition(u, self.model, 0).normal_force_n;
+                Some((n0, level, count as f64))
+            })
+            .collect();
+        if levels(points.iter().map(|p| p.0)).len() < 2 {
+            return None;
+        }
+        weighted_slope(&points)
+    }
 }
 
 /// Least-squares slope of y against x; `None` without spread in x.
 fn slope(points: &[(f64, f64)]) -> Option<f64> {
-    if points.len() < 2 {
+    weighted_slope(&points.iter().map(|&(x, y)| (x, y, 1.0)).collect::<Vec<_>>())
+}
+
+/// Least-squares slope of y against x with each point (x, y, w) weighted
+/// by w; `None` without spread in x.
+fn weighted_slope(points: &[(f64, f64, f64)]) -> Option<f64> {
+    let total: f64 = points.iter().map(|p| p.2).sum();
+    if points.len() < 2 || total <= 0.0 {
         return None;
     }
-    let (mx, my) =
-        (mean(&points.iter().map(|p| p.0).collect::<Vec<_>>()), mean(&points.iter().map(|p| p.1).collect::<Vec<_>>()));
-    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 1e-12 * mx.abs().max(1.0)).then(|| sxy / sxx)
+    let mx = points.iter().map(|p| p.2 * p.0).sum::<f64>() / total;
+    let my = points.iter().map(|p| p.2 * p.1).sum::<f64>() / total;
+    let sxx: f64 = points.iter().map(|p| p.2 * (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| p.2 * (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 1e-12 * total * mx.abs().max(1.0)).then(|| sxy / sxx)
 }
 
 /// A fitting unit's phase mean, as [`phase_implied_slope`] reads it.
@@ -179,15 +218,19 @@ pub(crate) fn bent(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Con
 /// The forms of a load-dependent friction searched, started where the data point.
 pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
     let mean_n0 = ctx.mean_load();
-    // The slope of measured minus simulated mean μ against N0 (1/N);
-    // without friction channels, from the relative misfit of the mean
-    // peaks against N0 (more friction lowers the peaks).
+    // The slope of the sliding friction level against N0 (1/N) from the
+    // force channels; where too few samples slip for that, the slope of
+    // measured minus simulated mean μ; without friction channels, from
+    // the relative misfit of the mean peaks against N0 (more friction
+    // lowers the peaks).
     let from_mu: Vec<(f64, f64)> =
         ctx.by_load(Observable::FrictionMuMean).iter().map(|&(n, m, s)| (n, m - s)).collect();
     let from_peaks: Vec<(f64, f64)> =
         ctx.by_load(Observable::PeakMeanM).iter().map(|&(n, m, s)| (n, (s - m) / m.abs().max(1e-12))).collect();
     let mu_at_rest = (ctx.model.friction.a + ctx.model.friction.b).max(0.02);
-    let start = slope(&from_mu)
+    let start = ctx
+        .slope_from_law()
+        .or_else(|| slope(&from_mu))
         .or_else(|| slope(&from_peaks).map(|s| s * mu_at_rest))
         .or_else(|| ctx.slope_from_phase(mean_n0))
         .filter(|s| s.is_finite() && s.abs() > 1e-5)
@@ -343,6 +386,21 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A load weighted by how little it slips barely moves the slope: two
+    /// loads that slip give a friction level rising by 0.0255 per newton
+    /// (a transition between 4 and 8 N), and a third at which the block
+    /// sticks, whose mean |F|/N the spring sets far below, counts for its
+    /// few slipping samples alone.
+    #[test]
+    fn a_load_that_barely_slips_barely_moves_the_weighted_slope() {
+        let points = [(4.0, -0.07, 30_000.0), (8.0, 0.032, 30_000.0), (16.0, -0.2, 60.0)];
+        let k = weighted_slope(&points).unwrap();
+        assert!((k / 0.0255 - 1.0).abs() < 0.1, "slope {k}");
+        let unweighted = slope(&points.map(|(x, y, _)| (x, y))).unwrap();
+        assert!(unweighted < 0.0, "unweighted, the stuck load turns the slope over: {unweighted}");
+        assert_eq!(weighted_slope(&[(4.0, 0.1, 1.0), (4.0, 0.2, 1.0)]), None);
+    }
 
     /// Phase tables of a rig whose phase depends on the friction force μN
     /// through `phase_of(f, μN)`, measured where μ = μ̄ + δ0 + k (N0 − 50 N)
