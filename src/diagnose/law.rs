@@ -360,13 +360,9 @@ impl SlipSamples {
 /// there are; `None` with fewer than [`MIN_SLIP_SAMPLES`] (records of a
 /// block that barely slips say nothing about its sliding friction).
 pub(crate) fn level_against(runs: &[&Run], v_noise_m_per_s: f64, law: &FrictionLaw) -> Option<(f64, usize)> {
-    let (mut sum, mut count) = (0.0, 0usize);
-    for r in runs {
-        let (speed, mu) = slipping_samples(r, v_noise_m_per_s);
-        sum += speed.iter().zip(&mu).map(|(&v, &m)| m - law.mu(v)).sum::<f64>();
-        count += mu.len();
-    }
-    (count >= MIN_SLIP_SAMPLES).then(|| (sum / count as f64, count))
+    let samples = SlipSamples::of(runs, v_noise_m_per_s)?;
+    let sum: f64 = samples.speed.iter().zip(&samples.mu).map(|(&v, &m)| m - law.mu(v)).sum();
+    Some((sum / samples.mu.len() as f64, samples.mu.len()))
 }
 
 /// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`])
