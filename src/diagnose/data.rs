@@ -142,6 +142,11 @@ pub enum FoldKind {
     AlternateConditions,
     /// Nothing is held out (too little data).
     Nothing,
+    /// Conditions crossed over load levels and frequencies: the k-th fold
+    /// holds out, at the j-th frequency, the load level group (k + j) mod
+    /// K, so every fold holds out some conditions at every load and every
+    /// frequency (see [`Folds::crossed`]).
+    Crossed,
 }
 
 /// One fold: the units it holds out, and what they are in words.
@@ -174,7 +179,47 @@ impl Folds {
             FoldKind::AlternateRuns => "alternate runs of every condition, each half in turn".into(),
             FoldKind::AlternateConditions => format!("alternate conditions, each half in turn ({labels})"),
             FoldKind::Nothing => "nothing (too little data to hold any out)".into(),
+            FoldKind::Crossed => format!("conditions crossed over loads and frequencies ({labels})"),
         }
+    }
+
+    /// These load-level folds crossed with the frequencies (`conditions[i]`
+    /// of unit i): with K level groups, the j-th lowest frequency's units of
+    /// level group g go to fold (g + j) mod K. Each fold then holds out
+    /// conditions at every load and at every frequency, and a unit is
+    /// predicted from the other frequencies at its own load. An effect seen
+    /// at one load alone (stiction where the block sticks only under the
+    /// heaviest load) can be learned out of sample in these folds, and in
+    /// no level fold, where a model fitted to the loads that never stick is
+    /// asked about the one that does. `None` for folds of another kind or
+    /// at one frequency.
+    pub(crate) fn crossed(&self, conditions: &[Condition]) -> Option<Folds> {
+        let k = self.folds.len();
+        let units = || self.folds.iter().flat_map(|f| f.units.iter().copied());
+        let frequencies = levels(units().map(|i| conditions[i].excitation_frequency_hz));
+        if self.kind != FoldKind::LoadLevels || k < 2 || frequencies.len() < 2 {
+            return None;
+        }
+        let mut held = vec![Vec::new(); k];
+        for (g, fold) in self.folds.iter().enumerate() {
+            for &i in &fold.units {
+                let f = conditions[i].excitation_frequency_hz;
+                let j = frequencies.iter().position(|&x| same_level(x, f)).unwrap_or(0);
+                held[(g + j) % k].push(i);
+            }
+        }
+        let folds = held
+            .into_iter()
+            .enumerate()
+            .filter(|(_, u)| !u.is_empty())
+            .map(|(n, mut units)| {
+                units.sort_unstable();
+                let mut at: Vec<Condition> = units.iter().map(|&i| conditions[i]).collect();
+                at.dedup_by_key(|c| condition_key(*c));
+                Fold { label: format!("crossed set {} of {k}", n + 1), units, conditions: at }
+            })
+            .collect();
+        Some(Folds { kind: FoldKind::Crossed, folds })
     }
 
     /// Whether there is anything to cross-validate.
@@ -471,6 +516,21 @@ impl<'a> Data<'a> {
         view
     }
 
+    /// The data cut into [`Folds::crossed`] where the set's folds are load
+    /// levels at several frequencies (else as it is): the weaker test a
+    /// family is judged on where none predicts a withheld level beyond the
+    /// noise, whether it predicts conditions it was not fitted to within
+    /// the loads it was. A model named on it must still predict every
+    /// withheld level no worse than the baseline.
+    pub(crate) fn attribution(&self) -> Data<'a> {
+        let conditions: Vec<Condition> = self.units.iter().map(|u| u.condition).collect();
+        let mut out = self.clone();
+        if let Some(crossed) = self.folds.crossed(&conditions) {
+            out.folds = crossed;
+        }
+        out
+    }
+
     /// Every fold's view, in fold order.
     pub(crate) fn fold_views(&self) -> Vec<Data<'a>> {
         (0..self.folds.folds.len()).map(|k| self.view(Some(k))).collect()
@@ -569,5 +629,35 @@ mod tests {
         assert_eq!(folds.kind, FoldKind::AlternateRuns);
         assert_eq!(folds.folds.iter().map(|f| f.units.clone()).collect::<Vec<_>>(), vec![vec![0, 2], vec![1, 3]]);
         assert_eq!(choose_folds(&grid(&[(7.0, 8.0)]), None).kind, FoldKind::Nothing);
+    }
+
+    /// Crossed folds hold out every unit once; each holds out every
+    /// frequency once and every load twice (three loads, six
+    /// frequencies), and a held-out unit's load is fitted at the other
+    /// frequencies. Folds of other kinds are not crossed.
+    #[test]
+    fn crossed_folds_hold_out_every_load_and_frequency() {
+        let freqs = [5.0, 6.0, 7.0, 8.0, 9.0, 10.0];
+        let c = grid(&freqs.iter().flat_map(|&f| [4.0, 8.0, 16.0].map(|n| (f, n))).collect::<Vec<_>>());
+        let crossed = choose_folds(&c, None).crossed(&c).expect("crossed");
+        assert_eq!(crossed.kind, FoldKind::Crossed);
+        assert_eq!(crossed.folds.len(), 3);
+        let mut all: Vec<usize> = crossed.folds.iter().flat_map(|f| f.units.clone()).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..c.len()).collect::<Vec<_>>());
+        for fold in &crossed.folds {
+            let at = |f: f64| fold.units.iter().filter(|&&i| c[i].excitation_frequency_hz == f).count();
+            assert!(freqs.iter().all(|&f| at(f) == 1), "{fold:?}");
+            for n in [4.0, 8.0, 16.0] {
+                assert_eq!(fold.units.iter().filter(|&&i| c[i].normal_force_n == n).count(), 2, "{fold:?}");
+                let fitted = (0..c.len()).filter(|i| !fold.units.contains(i) && c[*i].normal_force_n == n).count();
+                assert_eq!(fitted, 4);
+            }
+        }
+        // One frequency, or folds of frequencies: nothing to cross.
+        let one = grid(&[(7.0, 4.0), (7.0, 8.0), (7.0, 16.0)]);
+        assert_eq!(choose_folds(&one, None).crossed(&one), None);
+        let two_loads = grid(&[(6.0, 4.0), (6.0, 8.0), (7.0, 4.0), (7.0, 8.0)]);
+        assert_eq!(choose_folds(&two_loads, None).crossed(&two_loads), None);
     }
 }

@@ -253,6 +253,11 @@ pub struct Diagnosis {
     pub noise_threshold: f64,
     /// How the set was cut into folds.
     pub folds: Folds,
+    /// The folds the first round's families were judged on: `folds`, or
+    /// folds crossed over loads and frequencies where no family predicts a
+    /// withheld level beyond the noise and the set holds out load levels
+    /// at several frequencies.
+    pub attribution_folds: Folds,
     /// Where the baseline misfits beyond what the named effects explain.
     pub misfit: Option<Misfit>,
     /// The first family that led a round and is not named, where one did.
@@ -539,6 +544,7 @@ pub fn diagnose_set(
         candidates: selection.first_round,
         noise_threshold: selection.noise,
         folds: data.folds.clone(),
+        attribution_folds: selection.attribution_folds.clone(),
         misfit,
         refused: selection.refused,
         conditions,

@@ -209,6 +209,13 @@ pub struct GapReport {
     /// How the units were cut into folds.
     #[serde(default)]
     pub heldout_units: String,
+    /// The folds each family's out-of-sample share (`candidates[].cv_share`)
+    /// was measured on: the same as `heldout_units`, or, where no family
+    /// predicts a withheld level beyond the noise and the units are load
+    /// levels at several frequencies, conditions crossed over loads and
+    /// frequencies (so that an effect seen at one load can be learned).
+    #[serde(default)]
+    pub attribution_units: String,
 }
 
 /// One place the baseline departs from the data.
@@ -368,6 +375,7 @@ impl Diagnosis {
                 heldout_shrink_sd: (fold_shrinks.len() >= 2).then(|| sd(&fold_shrinks)),
                 noise_threshold: self.noise_threshold,
                 heldout_units: self.folds.describe(),
+                attribution_units: self.attribution_folds.describe(),
             },
             locations: locations
                 .iter()

@@ -14,7 +14,11 @@
 //! conditions drawn with replacement) and in each resample asks which family
 //! closes the largest share of the current model's explainable
 //! out-of-sample gap; it leads when that share is the largest and beyond
-//! the noise and the gap stands above its noise. Which leaders are named,
+//! the noise and the gap stands above its noise. A fall is a paired
+//! difference (both models scored against the same measured values), so
+//! its noise is carried by the scores the change moved ([`moved`]): an
+//! effect that shows at a few conditions is judged against their noise,
+//! not diluted by every score it left alone. Which leaders are named,
 //! and how sure that is, is [`super::verdict`]'s: the share of resamples
 //! that give the same verdict, a probability over the conditions the data
 //! happened to hold, discounted by what the named forms leave unexplained.
@@ -97,11 +101,62 @@ impl NullLoss {
     pub(crate) fn noise(&self, k: usize) -> f64 {
         3.0 * self.sd * (2.0 / k.max(1) as f64).sqrt()
     }
+
+    /// The noise a fall in the mean of `scores` losses must exceed when a
+    /// change moved `moved` of them ([`moved`]): three standard deviations
+    /// of a sum of that many paired differences (each as wide as
+    /// [`NullLoss::noise`] counts a score), over `scores`. With every score
+    /// moved it is [`NullLoss::noise`]; never below that of one whole
+    /// score, –.
+    pub(crate) fn fall_noise(&self, scores: f64, moved: f64) -> f64 {
+        let scores = scores.max(1.0);
+        3.0 * self.sd * (2.0 * moved.clamp(1.0, scores)).sqrt() / scores
+    }
 }
 
-/// A model's loss at each unit: the sum of its scores' losses over the
-/// unit's measured observables ([`score_loss`]), and how many there are.
-pub(crate) type UnitLosses = BTreeMap<usize, (f64, usize)>;
+/// A model's loss at one unit: the sum of its scores' losses over the
+/// unit's measured observables ([`loss`]), how many there are, and, where
+/// it is one of a pair of models measured in one yardstick
+/// ([`pair_losses`]), how many of them the change between the two moved
+/// ([`moved`]; all of them otherwise).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct UnitLoss {
+    pub(crate) sum: f64,
+    pub(crate) scores: usize,
+    pub(crate) moved: f64,
+}
+
+impl UnitLoss {
+    /// `scores` scores whose losses add to `sum`, every one counted as moved.
+    pub(crate) fn whole(sum: f64, scores: usize) -> UnitLoss {
+        UnitLoss { sum, scores, moved: scores as f64 }
+    }
+}
+
+/// A model's loss at each unit.
+pub(crate) type UnitLosses = BTreeMap<usize, UnitLoss>;
+
+/// `losses` with every score counted as moved: a fall between them and
+/// another model's is then judged against the noise of every score
+/// ([`NullLoss::noise`]), as an effect that matters across the set must
+/// stand out at the set's scale.
+pub(crate) fn unpaired(losses: &UnitLosses) -> UnitLosses {
+    losses.iter().map(|(&u, l)| (u, UnitLoss::whole(l.sum, l.scores))).collect()
+}
+
+/// How much one score counts towards the noise of a fall in loss when a
+/// change moves its prediction by `shift` standard errors: the square of
+/// the shift, up to 1. The two models' losses at a score see the same
+/// measured value, so the difference between them carries that value's
+/// noise only in proportion to how far the prediction moved (the loss's
+/// slope is at most 1/3 per standard error): a score the change left where
+/// it was adds no noise to the fall, and one moved by a standard error or
+/// more adds about what an unpaired difference of losses would. An effect
+/// that shows at a few conditions is then judged against the noise of the
+/// scores it moved, not diluted by every score it left alone.
+pub(crate) fn moved(shift: f64) -> f64 {
+    if shift.is_finite() { (shift * shift).min(1.0) } else { 1.0 }
+}
 
 /// The losses at every unit of `data` of a model before a change
 /// (`before`) and after it (`after`), measured in one yardstick: each
@@ -137,43 +192,58 @@ pub(crate) fn pair_losses_of(
         let before = scale_before.get(k).copied().unwrap_or(0.0);
         scale_after.get(k).copied().unwrap_or(before).max(0.1 * before)
     };
-    let losses = |scores: &[Score]| -> BTreeMap<(usize, Observable), f64> {
+    let zs = |scores: &[Score]| -> BTreeMap<(usize, Observable), f64> {
         scores
             .iter()
             .map(|s| {
                 let r = ruler(&key(s));
-                let z = if r > 0.0 && s.scale > 0.0 { s.z * s.scale / r } else { s.z };
-                (key(s), loss(z))
+                (key(s), if r > 0.0 && s.scale > 0.0 { s.z * s.scale / r } else { s.z })
             })
             .collect()
     };
-    (per_unit(&losses(before), data, keep), per_unit(&losses(after), data, keep))
+    let (z_before, z_after) = (zs(before), zs(after));
+    // Per score: how much the change moved it (a score one model gives no
+    // value counts as moved).
+    let shift = |k: &(usize, Observable)| match (z_before.get(k), z_after.get(k)) {
+        (Some(b), Some(a)) => moved(b - a),
+        _ => 1.0,
+    };
+    let losses = |z: &BTreeMap<(usize, Observable), f64>| -> BTreeMap<(usize, Observable), (f64, f64)> {
+        z.iter().map(|(k, &z)| (*k, (loss(z), shift(k)))).collect()
+    };
+    (per_unit(&losses(&z_before), data, keep), per_unit(&losses(&z_after), data, keep))
 }
 
 /// The losses of a model's `scores` in its own scales (its z-scores).
 pub(crate) fn own_losses(scores: &[Score], data: &Data<'_>) -> UnitLosses {
-    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), loss(s.z))).collect(), data, |_| true)
+    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), (loss(s.z), 1.0))).collect(), data, |_| true)
 }
 
-/// Per-score losses summed by unit over the unit's measured observables
-/// that `keep` selects.
-fn per_unit(by: &BTreeMap<(usize, Observable), f64>, data: &Data<'_>, keep: fn(Observable) -> bool) -> UnitLosses {
+/// Per-score losses (with how much each was moved) summed by unit over the
+/// unit's measured observables that `keep` selects.
+fn per_unit(
+    by: &BTreeMap<(usize, Observable), (f64, f64)>,
+    data: &Data<'_>,
+    keep: fn(Observable) -> bool,
+) -> UnitLosses {
     (0..data.units.len())
         .map(|u| {
-            let (mut sum, mut n) = (0.0, 0usize);
+            let mut at = UnitLoss::whole(0.0, 0);
             for &o in data.measured[u].keys().filter(|&&o| keep(o)) {
-                sum += by.get(&(u, o)).copied().unwrap_or_else(missing_loss);
-                n += 1;
+                let (l, m) = by.get(&(u, o)).copied().unwrap_or_else(|| (missing_loss(), 1.0));
+                at.sum += l;
+                at.scores += 1;
+                at.moved += m;
             }
-            (u, (sum, n))
+            (u, at)
         })
-        .filter(|(_, (_, n))| *n > 0)
+        .filter(|(_, at)| at.scores > 0)
         .collect()
 }
 
 /// The mean loss over `units` of `losses` (0 for none).
 pub(crate) fn mean_loss(losses: &UnitLosses, units: impl Iterator<Item = usize>) -> f64 {
-    let (sum, n) = units.filter_map(|u| losses.get(&u)).fold((0.0, 0usize), |(s, n), (l, k)| (s + l, n + k));
+    let (sum, n) = units.filter_map(|u| losses.get(&u)).fold((0.0, 0usize), |(s, n), l| (s + l.sum, n + l.scores));
     if n == 0 { 0.0 } else { sum / n as f64 }
 }
 
@@ -231,16 +301,19 @@ pub(crate) fn fold_predictions(per_fold: &[UnitLosses], folds: &Folds) -> UnitLo
     out
 }
 
-/// Gaps out of sample with the units weighted by `w` (a resample's counts).
-fn weighted_gap(losses: &UnitLosses, units: &[usize], w: &[f64]) -> (f64, f64) {
-    let (mut sum, mut n) = (0.0, 0.0);
+/// Gaps out of sample with the units weighted by `w` (a resample's
+/// counts): the mean loss, the weighted number of scores behind it, and how
+/// many of them were moved.
+fn weighted_gap(losses: &UnitLosses, units: &[usize], w: &[f64]) -> (f64, f64, f64) {
+    let (mut sum, mut n, mut moved) = (0.0, 0.0, 0.0);
     for (&u, &wu) in units.iter().zip(w) {
-        if let Some(&(l, k)) = losses.get(&u) {
-            sum += wu * l;
-            n += wu * k as f64;
+        if let Some(l) = losses.get(&u) {
+            sum += wu * l.sum;
+            n += wu * l.scores as f64;
+            moved += wu * l.moved;
         }
     }
-    (if n > 0.0 { sum / n } else { 0.0 }, n)
+    (if n > 0.0 { sum / n } else { 0.0 }, n, moved)
 }
 
 /// One family in a round: its out-of-sample losses, and the current
@@ -262,7 +335,15 @@ pub(crate) struct Weights<'a> {
 impl Weights<'_> {
     /// A model's mean loss and the weighted number of scores behind it.
     pub(crate) fn gap(&self, losses: &UnitLosses) -> (f64, f64) {
-        weighted_gap(losses, self.units, self.w)
+        let (gap, n, _) = weighted_gap(losses, self.units, self.w);
+        (gap, n)
+    }
+
+    /// How many scores a pair's `losses` hold and how many of them the
+    /// change moved ([`moved`]), weighted.
+    pub(crate) fn moved(&self, losses: &UnitLosses) -> (f64, f64) {
+        let (_, n, moved) = weighted_gap(losses, self.units, self.w);
+        (moved, n)
     }
 
     /// The noise threshold of a gap over `n` weighted scores.
@@ -277,11 +358,13 @@ impl Weights<'_> {
     }
 
     /// The share of `reference`'s explainable gap (above the null loss)
-    /// that `losses` close, and whether that fall is beyond the noise.
+    /// that `losses` close, and whether that fall is beyond the noise of a
+    /// paired difference ([`NullLoss::fall_noise`]: the scores the change
+    /// moved carry it).
     pub(crate) fn share(&self, losses: &UnitLosses, reference: &UnitLosses) -> (f64, bool) {
         let (r, n) = self.gap(reference);
-        let l = self.gap(losses).0;
-        ((r - l) / (r - self.null.mean).max(1e-12), r - l > self.noise(n))
+        let (l, _, moved) = weighted_gap(losses, self.units, self.w);
+        ((r - l) / (r - self.null.mean).max(1e-12), r - l > self.null.fall_noise(n, moved))
     }
 
     /// The entrant that closes the largest share of the current model's
@@ -375,7 +458,7 @@ mod tests {
 
     /// Losses of `k` scores per unit at z-score `z` for units 0..n.
     fn at(z: &[f64]) -> UnitLosses {
-        z.iter().enumerate().map(|(u, &z)| (u, (10.0 * loss(z), 10))).collect()
+        z.iter().enumerate().map(|(u, &z)| (u, UnitLoss::whole(10.0 * loss(z), 10))).collect()
     }
 
     const NULL: NullLoss = NullLoss { mean: 0.18, sd: 0.32 };
@@ -414,6 +497,39 @@ mod tests {
         assert!(c.fits > 0.99, "{c:?}");
     }
 
+    /// A change that lowers the loss at two units of twelve and leaves the
+    /// rest where they were: against the noise of every score the fall is
+    /// noise, against that of the scores it moved it is not. The same fall
+    /// spread as a small shift of every score is not beyond the noise.
+    #[test]
+    fn a_fall_at_the_few_scores_a_change_moved_is_judged_against_their_noise() {
+        let units: Vec<usize> = (0..12).collect();
+        let ones = vec![1.0; 12];
+        let w = Weights { units: &units, w: &ones, null: NULL };
+        let reference: UnitLosses =
+            (0..12).map(|u| (u, UnitLoss { moved: 0.0, ..UnitLoss::whole(10.0 * 0.5, 10) })).collect();
+        // Units 0 and 1 fall from 0.5 to 0.1 per score, every score moved;
+        // the others are untouched.
+        let local: UnitLosses = (0..12)
+            .map(|u| {
+                (u, if u < 2 { UnitLoss::whole(10.0 * 0.1, 10) } else { UnitLoss { moved: 0.0, ..reference[&u] } })
+            })
+            .collect();
+        let fall = 2.0 * 10.0 * 0.4 / 120.0;
+        assert!(fall < NULL.noise(120), "{fall} {}", NULL.noise(120));
+        let (share, beyond) = w.share(&local, &reference);
+        assert!(beyond && share > 0.0, "{share}");
+        // The same fall everywhere as a shift of every score by a standard
+        // error or more: judged against every score's noise.
+        let everywhere: UnitLosses = (0..12).map(|u| (u, UnitLoss::whole(10.0 * (0.5 - fall), 10))).collect();
+        assert!(!w.share(&everywhere, &reference).1);
+        // Fully moved, the paired noise is the unpaired one.
+        assert!((NULL.fall_noise(120.0, 120.0) - NULL.noise(120)).abs() < 1e-12);
+        assert_eq!(moved(0.0), 0.0);
+        assert_eq!(moved(0.5), 0.25);
+        assert_eq!(moved(-3.0), 1.0);
+    }
+
     #[test]
     fn two_families_that_close_about_as_much_share_the_lead() {
         let units: Vec<usize> = (0..12).collect();
@@ -447,8 +563,8 @@ mod tests {
         let (predicted, reference, picks) = pool_predictions(&pool, &folds);
         // Fold a (unit 0 held out) trains on unit 1: member 1, which misses unit 0.
         assert_eq!(picks, vec![1, 0]);
-        assert_eq!(predicted[&0].0, pool[1].0[&0].0);
-        assert_eq!(predicted[&1].0, pool[0].0[&1].0);
-        assert_eq!(reference[&0].0, current[&0].0);
+        assert_eq!(predicted[&0], pool[1].0[&0]);
+        assert_eq!(predicted[&1], pool[0].0[&1]);
+        assert_eq!(reference[&0], current[&0]);
     }
 }

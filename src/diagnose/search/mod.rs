@@ -20,6 +20,13 @@
 //!    scratch on each fold's own units, friction law included
 //!    ([`refit_folds`]), and must close a share beyond the noise that way
 //!    too, and predict no withheld fold worse than the model before it.
+//!    Where no family predicts a withheld level beyond the noise in the
+//!    first round, an effect seen at one load alone may be why (fitted
+//!    without that load, it was never seen): the contest is held again on
+//!    folds crossed over loads and frequencies
+//!    ([`crate::diagnose::data::Data::attribution`]), each fall judged
+//!    against the noise of the scores the family moved, and a leader named
+//!    there must still predict every withheld level no worse.
 //!    [`verdict::judge`] says which leaders are named and how sure that is.
 //! 4. The named family's best fit on the full data is polished on every
 //!    replicate ([`fit::polish`]) and becomes the model the next round
@@ -45,7 +52,7 @@ use crate::engine::{Effect, Engine, Model};
 use crate::error::{Error, Result};
 use cv::{
     Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses, pair_losses,
-    pair_losses_of, pool_predictions,
+    pair_losses_of, pool_predictions, unpaired,
 };
 use fit::{Trial, coordinate_search, evaluate, polish, search_settings, tracing};
 
@@ -101,6 +108,13 @@ struct Family {
     refined: bool,
 }
 
+impl Family {
+    /// Each member's losses and the current model's in the same yardstick.
+    fn pool_losses(&self) -> Vec<(UnitLosses, UnitLosses)> {
+        self.pool.iter().map(|m| (m.losses.clone(), m.reference.clone())).collect()
+    }
+}
+
 /// One step of the selection: a named effect.
 #[derive(Clone, Debug)]
 pub(crate) struct Step {
@@ -146,6 +160,10 @@ pub(crate) struct Selection {
     /// The loss of a model that is right, on the replicates models are
     /// compared on.
     pub(crate) null: NullLoss,
+    /// The folds the first effect's family was judged on: the set's own,
+    /// or folds crossed over loads and frequencies where no family predicts
+    /// a withheld level beyond the noise ([`crate::diagnose::data::Data::attribution`]).
+    pub(crate) attribution_folds: crate::diagnose::data::Folds,
 }
 
 impl Selection {
@@ -158,24 +176,135 @@ impl Selection {
     }
 }
 
-/// The baseline refitted without each fold: its law carried to each fold's
-/// measured law from the full-data baseline's, on search replicates,
-/// scored on every unit.
-fn baseline_folds(
-    baseline: &Model,
-    slope: f64,
-    views: &[Data<'_>],
-    search: &DiagnoseSettings,
-    engine: &Engine,
-) -> Result<Vec<Fitted>> {
-    views
-        .iter()
-        .map(|view| {
-            let (m, s, _) = calibrate_and_score(baseline, view, search, engine, Some(slope), 2, Scope::Fitting)?;
-            let (model, scores) = converge_law(m, s, view, search, engine)?;
-            Ok(Fitted { model, scores })
-        })
-        .collect()
+/// One cut of the data into folds, with each fold's view and the models
+/// fitted without it: the baseline's and the current model's.
+struct FoldSet<'a> {
+    data: Data<'a>,
+    views: Vec<Data<'a>>,
+    baseline: Vec<Fitted>,
+    current: Vec<Fitted>,
+}
+
+impl<'a> FoldSet<'a> {
+    /// The folds of `data`, with the baseline refitted without each: its
+    /// law carried to each fold's measured law from the full-data
+    /// baseline's, on search replicates, scored on every unit.
+    fn new(
+        data: Data<'a>,
+        baseline: &Model,
+        slope: f64,
+        search: &DiagnoseSettings,
+        engine: &Engine,
+    ) -> Result<FoldSet<'a>> {
+        let views = data.fold_views();
+        let fitted = views
+            .iter()
+            .map(|view| {
+                let (m, s, _) = calibrate_and_score(baseline, view, search, engine, Some(slope), 2, Scope::Fitting)?;
+                let (model, scores) = converge_law(m, s, view, search, engine)?;
+                Ok(Fitted { model, scores })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(FoldSet { data, views, baseline: fitted.clone(), current: fitted })
+    }
+}
+
+/// A round as the contest judges it: its families, the current model's
+/// own losses, the held-out units and the null loss.
+struct Judged<'r> {
+    families: &'r [Family],
+    current: &'r UnitLosses,
+    units: &'r [usize],
+    null: NullLoss,
+    seed: u64,
+    round: usize,
+}
+
+/// A round's contest on one cut of the data into folds, and its leader
+/// refitted without each of them.
+struct Attribution {
+    /// Per family: its out-of-sample losses, the current model's in the
+    /// same yardsticks, and the member each fold was predicted by.
+    predictions: Vec<(UnitLosses, UnitLosses, Vec<usize>)>,
+    pooled: Contest,
+    led: Option<Led>,
+}
+
+/// The leader of a contest, refitted without each fold.
+struct Led {
+    /// Its index among the round's families.
+    top: usize,
+    refits: Vec<Fitted>,
+    /// The models before and after it, refitted without each fold, at the
+    /// folds' units.
+    refitted: (UnitLosses, UnitLosses),
+    /// The share of what the model before it left that the refits close,
+    /// and whether that is beyond the noise.
+    share: f64,
+    beyond: bool,
+}
+
+impl Judged<'_> {
+    /// The contest on `folds` ([`cv::contest`]) and its leader, if any,
+    /// refitted without each of them ([`refit_folds`]); no leader where a
+    /// fold's model cannot be built or run. With `local`, a fall is judged
+    /// against the noise of the scores the family moved
+    /// ([`cv::NullLoss::fall_noise`]: the question is whether an effect
+    /// seen at a few conditions is there); else against that of every
+    /// score ([`cv::unpaired`]): an effect that matters across the set must
+    /// stand out at its scale, and with long records a family that
+    /// compensates some of the named forms' misfit moves a few scores far
+    /// beyond their own noise.
+    #[allow(clippy::too_many_arguments)]
+    fn attribute(
+        &self,
+        folds: &FoldSet<'_>,
+        local: bool,
+        slope: f64,
+        search: &DiagnoseSettings,
+        engine: &Engine,
+        progress: &mut dyn FnMut(&str),
+    ) -> Result<Attribution> {
+        let pair = |p: (UnitLosses, UnitLosses)| if local { p } else { (unpaired(&p.0), unpaired(&p.1)) };
+        let predictions: Vec<(UnitLosses, UnitLosses, Vec<usize>)> = self
+            .families
+            .iter()
+            .map(|f| {
+                let (losses, reference, picks) = pool_predictions(&f.pool_losses(), &folds.data.folds);
+                let (losses, reference) = pair((losses, reference));
+                (losses, reference, picks)
+            })
+            .collect();
+        let entrants: Vec<Entrant<'_>> =
+            predictions.iter().map(|(losses, reference, _)| Entrant { losses, reference }).collect();
+        let pooled = contest(self.current, &entrants, self.units, self.null, self.seed);
+        if tracing() {
+            eprintln!("round {}: judged on {}", self.round, folds.data.folds.describe());
+            trace_round(self.round, self.families, &predictions, &pooled, self.units);
+        }
+        let led = match pooled.leader {
+            None => None,
+            Some(top) => {
+                let family = &self.families[top];
+                progress(&format!("refitting {} without each fold", family.effect));
+                refit_folds(family, &predictions[top].2, folds, slope, search, engine)?.map(|refits| {
+                    let refitted = pair(fold_pair_losses(&folds.current, &refits, &folds.data));
+                    let ones = vec![1.0; self.units.len()];
+                    let point = cv::Weights { units: self.units, w: &ones, null: self.null };
+                    let (share, beyond) = point.share(&refitted.1, &refitted.0);
+                    if tracing() {
+                        let (moved, n) = point.moved(&refitted.1);
+                        eprintln!(
+                            "round {}: {} refitted without each fold closes {share:.3} of what was left (beyond noise {beyond}; moved {moved:.1} of {n} scores)",
+                            self.round, family.effect,
+                        );
+                    }
+                    Led { top, refits, refitted, share, beyond }
+                })
+            }
+        };
+        Ok(Attribution { predictions, pooled, led })
+    }
 }
 
 /// Forward selection from the calibrated baseline (see the module).
@@ -188,12 +317,14 @@ pub(crate) fn select(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Selection> {
     let search = search_settings(settings);
-    let views = data.fold_views();
     let units = held_units(&data.folds);
-    progress(&format!("refitting the baseline without each fold ({} folds)", views.len()));
-    let baseline_folds = baseline_folds(baseline, slope, &views, &search, engine)?;
+    progress(&format!("refitting the baseline without each fold ({} folds)", data.folds.folds.len()));
+    let mut levels = FoldSet::new(data.clone(), baseline, slope, &search, engine)?;
+    let baseline_folds = levels.baseline.clone();
+    let crossed_data = data.attribution();
+    let mut crossed: Option<FoldSet<'_>> = None;
+    let mut attribution_folds = data.folds.clone();
     let mut current = Fitted { model: baseline.clone(), scores: score(engine, baseline, data, &search, Scope::All)? };
-    let mut current_folds = baseline_folds.clone();
     let mut rounds: Vec<verdict::Round> = Vec::new();
     let mut steps: Vec<Step> = Vec::new();
     let mut first_round = Vec::new();
@@ -202,6 +333,8 @@ pub(crate) fn select(
     let mut refused = None;
     let seed = settings.seed ^ 0xC0_47E5;
     let null = NullLoss::for_replicates(search.replicates);
+    let ones = vec![1.0; units.len()];
+    let point = cv::Weights { units: &units, w: &ones, null };
     if units.is_empty() {
         // Nothing can be held out (one condition, say), so no effect can
         // be tested, and "none" is only as sure as the baseline's fit in
@@ -237,45 +370,40 @@ pub(crate) fn select(
         }
         let named: Vec<Effect> = steps.iter().map(|s| s.candidate.effect).collect();
         let families = round(&current, &named, slope, data, &search, engine, progress)?;
-        let predictions: Vec<(UnitLosses, UnitLosses, Vec<usize>)> = families
-            .iter()
-            .map(|f| {
-                let pool: Vec<(UnitLosses, UnitLosses)> =
-                    f.pool.iter().map(|m| (m.losses.clone(), m.reference.clone())).collect();
-                pool_predictions(&pool, &data.folds)
-            })
-            .collect();
-        let entrants: Vec<Entrant<'_>> =
-            predictions.iter().map(|(losses, reference, _)| Entrant { losses, reference }).collect();
-        let pooled = contest(&current_losses, &entrants, &units, null, seed);
-        if tracing() {
-            trace_round(rounds.len(), &families, &predictions, &pooled, &units);
+        let on =
+            Judged { families: &families, current: &current_losses, units: &units, null, seed, round: rounds.len() };
+        let mut attributed = on.attribute(&levels, false, slope, &search, engine, progress)?;
+        let mut on_crossed = false;
+        if rounds.is_empty() && crossed_data.folds != data.folds && !attributed.led.as_ref().is_some_and(|l| l.beyond) {
+            // No family predicts a withheld level beyond the noise. An
+            // effect seen at one load alone cannot: fitted without that
+            // load it was never seen. The weaker question, whether a family
+            // predicts conditions it was not fitted to within the loads it
+            // was, is then asked on folds crossed over loads and
+            // frequencies; a family named on it must still predict every
+            // withheld level no worse than the baseline.
+            if crossed.is_none() {
+                progress(&format!(
+                    "refitting the baseline without each crossed fold ({} folds)",
+                    crossed_data.folds.folds.len()
+                ));
+                crossed = Some(FoldSet::new(crossed_data.clone(), baseline, slope, &search, engine)?);
+            }
+            let folds = crossed.as_ref().expect("made just above");
+            let other = on.attribute(folds, true, slope, &search, engine, progress)?;
+            if other.led.as_ref().is_some_and(|l| l.beyond) {
+                attributed = other;
+                on_crossed = true;
+                attribution_folds = crossed_data.folds.clone();
+            }
         }
+        let Attribution { predictions, pooled, led } = attributed;
         if rounds.is_empty() {
             first_round = candidates_of(&families, &pooled, &current, data, null);
         }
         // The leader, where it closes a share beyond the noise.
-        let Some(top) = pooled.leader else { break };
+        let Some(Led { top, refits, refitted, share, beyond }) = led else { break };
         let family = &families[top];
-        progress(&format!("refitting {} without each fold", family.effect));
-        let Some(refits) = refit_folds(family, &predictions[top].2, &current_folds, slope, &views, &search, engine)?
-        else {
-            break;
-        };
-        let refitted = fold_pair_losses(&current_folds, &refits, data);
-        let joint = fold_pair_losses(&baseline_folds, &refits, data);
-        let joint_response = fold_pair_losses_of(&baseline_folds, &refits, data, Observable::is_response);
-        let ones = vec![1.0; units.len()];
-        let point = cv::Weights { units: &units, w: &ones, null };
-        let (share, beyond) = point.share(&refitted.1, &refitted.0);
-        if tracing() {
-            eprintln!(
-                "round {}: {} refitted without each fold closes {share:.3} of what was left (beyond noise {beyond}), {:.3} of the baseline's gap",
-                rounds.len(),
-                family.effect,
-                point.share(&joint.1, &joint.0).0
-            );
-        }
         if !beyond {
             refused = Some(Refusal {
                 effect: family.effect,
@@ -286,11 +414,28 @@ pub(crate) fn select(
             });
             break;
         }
-        let folds: Vec<FoldResult> = (0..views.len())
+        let level_refits = if on_crossed {
+            let picks = pool_predictions(&family.pool_losses(), &data.folds).2;
+            refit_folds(family, &picks, &levels, slope, &search, engine)?
+        } else {
+            Some(refits)
+        };
+        let Some(level_refits) = level_refits else { break };
+        let refitted_levels = fold_pair_losses(&levels.current, &level_refits, data);
+        let joint = fold_pair_losses(&baseline_folds, &level_refits, data);
+        let joint_response = fold_pair_losses_of(&baseline_folds, &level_refits, data, Observable::is_response);
+        if tracing() {
+            eprintln!(
+                "round {}: refitted without each level it closes {:.3} of the baseline's gap",
+                rounds.len(),
+                point.share(&joint.1, &joint.0).0
+            );
+        }
+        let folds: Vec<FoldResult> = (0..levels.views.len())
             .map(|k| {
                 let held = data.folds.folds[k].units.iter().copied();
-                let (before, after) = pair_gaps(&current_folds[k].scores, &refits[k].scores, data, held);
-                FoldResult { gap_before: before, gap_after: after, after: refits[k].clone() }
+                let (before, after) = pair_gaps(&levels.current[k].scores, &level_refits[k].scores, data, held);
+                FoldResult { gap_before: before, gap_after: after, after: level_refits[k].clone() }
             })
             .collect();
         rounds.push(verdict::Round {
@@ -298,8 +443,10 @@ pub(crate) fn select(
             entrants: predictions.iter().map(|(l, r, _)| (l.clone(), r.clone())).collect(),
             leader: top,
             refitted,
+            refitted_levels,
             joint,
             joint_response,
+            local: on_crossed,
         });
         progress(&format!("{} leads; polishing its model on every replicate", family.effect));
         let polished = polish(&family.best, slope, data, settings, engine)?.unwrap_or_else(|| family.best.clone());
@@ -317,7 +464,7 @@ pub(crate) fn select(
             model: polished.model.clone(),
             scores: score(engine, &polished.model, data, &search, Scope::All)?,
         };
-        current_folds = refits;
+        levels.current = level_refits;
     }
     let fold_units: Vec<Vec<usize>> = data.folds.folds.iter().map(|f| f.units.clone()).collect();
     let (count, confidence, each) = verdict::judge(&rounds, &fold_units, &units, null, seed);
@@ -355,12 +502,10 @@ pub(crate) fn select(
         // m noise thresholds above the floor and nothing explains it, the
         // misfit may be an effect no candidate has, and the share
         // of resamples that name nothing is divided by √m.
-        let ones = vec![1.0; units.len()];
-        let point = cv::Weights { units: &units, w: &ones, null };
         let (gap, n) = point.gap(&first.current);
         none_confidence = confidence / noise_thresholds_above(gap, point.noise(n), null).sqrt();
     }
-    Ok(Selection { steps, refused, first_round, none_confidence, baseline_folds, noise, null })
+    Ok(Selection { steps, refused, first_round, none_confidence, baseline_folds, noise, null, attribution_folds })
 }
 
 /// Orders the named effects by how much the fitted model's response (the
@@ -422,8 +567,8 @@ fn trace_round(
         let per_unit: Vec<String> = units
             .iter()
             .map(|u| {
-                let l = losses.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
-                let r = reference.get(u).map_or(f64::NAN, |x| x.0 / x.1 as f64);
+                let l = losses.get(u).map_or(f64::NAN, |x| x.sum / x.scores as f64);
+                let r = reference.get(u).map_or(f64::NAN, |x| x.sum / x.scores as f64);
                 format!("{u}: {r:.2}->{l:.2}")
             })
             .collect();
@@ -705,16 +850,15 @@ fn refine(
 fn refit_folds(
     family: &Family,
     picks: &[usize],
-    current_folds: &[Fitted],
+    folds: &FoldSet<'_>,
     slope: f64,
-    views: &[Data<'_>],
     search: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<Option<Vec<Fitted>>> {
     let mut out = Vec::new();
-    for (k, view) in views.iter().enumerate() {
+    for (k, view) in folds.views.iter().enumerate() {
         let member = &family.pool[picks[k]];
-        let base = &current_folds[k];
+        let base = &folds.current[k];
         let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
         let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else { return Ok(None) };
         let Some(mut start) =

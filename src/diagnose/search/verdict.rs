@@ -49,15 +49,24 @@ pub(crate) struct Round {
     pub(crate) entrants: Vec<(UnitLosses, UnitLosses)>,
     /// Which entrant led.
     pub(crate) leader: usize,
-    /// The models before and after the leader, refitted without each fold,
-    /// at each fold's units, in the latter's yardstick.
+    /// The models before and after the leader, refitted without each fold
+    /// the families were judged on (crossed over loads and frequencies
+    /// where there are such folds), at each fold's units, in the latter's
+    /// yardstick: what the leader explains out of sample.
     pub(crate) refitted: (UnitLosses, UnitLosses),
+    /// The same, refitted without each withheld level (or whatever
+    /// [`crate::diagnose::data::Folds`] the set holds out).
+    pub(crate) refitted_levels: (UnitLosses, UnitLosses),
     /// The baseline and the models after the leader, refitted without each
     /// fold, at each fold's units, in the latter's yardstick.
     pub(crate) joint: (UnitLosses, UnitLosses),
     /// `joint` over the response's observables alone (the peaks' and the
     /// phase's mean and variance): what a fitted model is used to predict.
     pub(crate) joint_response: (UnitLosses, UnitLosses),
+    /// Whether the leader was judged as an effect seen at a few conditions
+    /// (on crossed folds, each fall against the noise of the scores it
+    /// moved): a rise at a withheld level is then judged so too.
+    pub(crate) local: bool,
 }
 
 /// How many of `rounds`' leaders one weighting of the units names (0:
@@ -75,9 +84,9 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
         if !(refitted > 0.0 && beyond) {
             break;
         }
-        if every_fold_no_worse(&r.joint, folds, weights)
-            && every_fold_no_worse(&r.joint_response, folds, weights)
-            && every_fold_no_worse(&r.refitted, folds, weights)
+        if every_fold_no_worse(&r.joint, folds, weights, r.local)
+            && every_fold_no_worse(&r.joint_response, folds, weights, r.local)
+            && every_fold_no_worse(&r.refitted_levels, folds, weights, r.local)
         {
             n = j + 1;
         }
@@ -109,11 +118,11 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
         return Refused::NotBeyondNoise { share };
     }
     let worse = |pair: &(UnitLosses, UnitLosses)| -> Vec<usize> {
-        (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, &folds[k..=k], &point)).collect()
+        (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, &folds[k..=k], &point, round.local)).collect()
     };
     Refused::WorseFolds {
         than_baseline: worse(&round.joint),
-        than_before: worse(&round.refitted),
+        than_before: worse(&round.refitted_levels),
         response_than_baseline: worse(&round.joint_response),
     }
 }
@@ -121,17 +130,25 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
 /// Whether a model refitted without each fold predicts every fold that
 /// carries weight no worse than another (`pair`: the other and the model,
 /// at each fold's units; the model before a leader and after it, or the
-/// baseline and the model after it): its mean loss
-/// there rises by no more than the noise of a mean over that many scores.
-/// A fold the effect leaves untouched is then not held against it for the
-/// replicates' noise.
-fn every_fold_no_worse(pair: &(UnitLosses, UnitLosses), folds: &[Vec<usize>], weights: &Weights<'_>) -> bool {
+/// baseline and the model after it): its mean loss there rises by no more
+/// than the noise of a mean over that many scores (with `local`, of the
+/// scores the change moved there, [`crate::diagnose::search::cv::NullLoss::fall_noise`]:
+/// an effect judged at the few conditions it shows at is held to their
+/// noise where it makes a prediction worse as well). A fold the effect
+/// leaves untouched is then not held against it for the replicates' noise.
+fn every_fold_no_worse(
+    pair: &(UnitLosses, UnitLosses),
+    folds: &[Vec<usize>],
+    weights: &Weights<'_>,
+    local: bool,
+) -> bool {
     folds.iter().all(|fold| {
         let (units, w): (Vec<usize>, Vec<f64>) =
             weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
         let at_fold = Weights { units: &units, w: &w, null: weights.null };
         let ((before, n), (after, _)) = (at_fold.gap(&pair.0), at_fold.gap(&pair.1));
-        n == 0.0 || after - before <= at_fold.noise(n)
+        let noise = if local { weights.null.fall_noise(n, at_fold.moved(&pair.1).0) } else { at_fold.noise(n) };
+        n == 0.0 || after - before <= noise
     })
 }
 
@@ -193,12 +210,12 @@ pub(crate) fn judge(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::search::cv::loss;
+    use crate::diagnose::search::cv::{UnitLoss, loss};
 
     const NULL: NullLoss = NullLoss { mean: 0.18, sd: 0.32 };
 
     fn at(z: &[f64]) -> UnitLosses {
-        z.iter().enumerate().map(|(u, &z)| (u, (10.0 * loss(z), 10))).collect()
+        z.iter().enumerate().map(|(u, &z)| (u, UnitLoss::whole(10.0 * loss(z), 10))).collect()
     }
 
     /// A round whose current model misses by `before` everywhere, whose
@@ -211,8 +228,10 @@ mod tests {
             entrants: vec![(at(&vec![after; n]), at(&vec![before; n])), (at(&vec![rival; n]), at(&vec![before; n]))],
             leader: 0,
             refitted: (at(&vec![before; n]), at(&vec![after; n])),
+            refitted_levels: (at(&vec![before; n]), at(&vec![after; n])),
             joint: (at(&vec![baseline; n]), at(&vec![after; n])),
             joint_response: (at(&vec![baseline; n]), at(&vec![after; n])),
+            local: false,
         }
     }
 
@@ -265,12 +284,14 @@ mod tests {
         let mut r = round(10.0, 2.0, 9.0, 10.0);
         let after: Vec<f64> = (0..12).map(|u| if u < 6 { 2.0 } else { 12.0 }).collect();
         r.refitted.1 = at(&after);
+        r.refitted_levels.1 = r.refitted.1.clone();
         assert_eq!(judge(&[r], &halves(), &units, NULL, 1).0, 0);
         // A fold the effect leaves as it was, up to the noise (10 → 10.1),
         // is no objection.
         let mut r = round(10.0, 2.0, 9.0, 10.0);
         let after: Vec<f64> = (0..12).map(|u| if u < 6 { 2.0 } else { 10.1 }).collect();
         r.refitted.1 = at(&after);
+        r.refitted_levels.1 = r.refitted.1.clone();
         assert_eq!(judge(&[r], &halves(), &units, NULL, 1).0, 1);
     }
 
@@ -295,6 +316,7 @@ mod tests {
         // A second that predicts one withheld fold worse is not named.
         let mut second = round(6.0, 1.5, 5.5, 10.0);
         second.refitted.1 = at(&(0..12).map(|u| if u < 6 { 1.5 } else { 7.0 }).collect::<Vec<f64>>());
+        second.refitted_levels.1 = second.refitted.1.clone();
         let rounds = [round(10.0, 6.0, 7.0, 10.0), second];
         assert_eq!(judge(&rounds, &halves(), &units, NULL, 1).0, 1);
     }
@@ -307,6 +329,7 @@ mod tests {
         let mut r = round(10.0, 2.0, 9.0, 10.0);
         let after: Vec<f64> = (0..12).map(|u| if u < 6 { 2.0 } else { 12.0 }).collect();
         r.refitted.1 = at(&after);
+        r.refitted_levels.1 = r.refitted.1.clone();
         r.joint.1 = at(&after);
         assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
         let expected =
@@ -348,9 +371,11 @@ mod tests {
         let split: Vec<f64> = (0..12).map(|u| if u < 6 { 4.0 } else { 12.0 }).collect();
         let mut first = round(10.0, 7.0, 9.0, 10.0);
         first.refitted.1 = at(&split);
+        first.refitted_levels.1 = first.refitted.1.clone();
         first.joint.1 = at(&split);
         let mut second = round(7.0, 1.5, 6.5, 10.0);
         second.refitted.0 = at(&split);
+        second.refitted_levels.0 = second.refitted.0.clone();
         let rounds = [first, second];
         assert_eq!(judge(&rounds, &halves(), &units, NULL, 1).0, 2);
         // Alone, the first is not named.
@@ -360,6 +385,7 @@ mod tests {
         let [first, mut second] = rounds;
         let still: Vec<f64> = (0..12).map(|u| if u < 6 { 1.5 } else { 11.0 }).collect();
         second.refitted.1 = at(&still);
+        second.refitted_levels.1 = second.refitted.1.clone();
         second.joint.1 = at(&still);
         assert_eq!(judge(&[first, second], &halves(), &units, NULL, 1).0, 0);
     }
