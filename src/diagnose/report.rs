@@ -670,10 +670,21 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     if let Some(r) = &d.refused {
         s.push_str(&format!("<p>{}</p>", escape(&refusal_sentence(r))));
     }
+    let judged = if d.attribution_folds == d.folds {
+        String::new()
+    } else {
+        // An effect seen at one load alone: named on the weaker test.
+        format!(
+            " No family predicted a withheld level beyond the noise, so the families were compared on {}, \
+             each fall judged against the noise of the scores the family moved.",
+            d.attribution_folds.describe()
+        )
+    };
     s.push_str(&format!(
-        "<p>Left unexplained: {:.0}% of the baseline's out-of-sample gap above the noise floor. Folds: {}.</p>",
+        "<p>Left unexplained: {:.0}% of the baseline's out-of-sample gap above the noise floor. Folds: {}.{}</p>",
         100.0 * d.unexplained_share,
-        escape(&d.folds.describe())
+        escape(&d.folds.describe()),
+        escape(&judged)
     ));
     if !d.notes.is_empty() {
         s.push_str("<h2>How the data were read</h2><ul>");
