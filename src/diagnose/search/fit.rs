@@ -53,6 +53,19 @@ pub(crate) fn search_settings(settings: &DiagnoseSettings) -> DiagnoseSettings {
     }
 }
 
+/// A model with its scores.
+#[derive(Clone, Debug)]
+pub(crate) struct Fitted {
+    pub(crate) model: Model,
+    pub(crate) scores: Vec<Score>,
+}
+
+impl From<Trial> for Fitted {
+    fn from(t: Trial) -> Fitted {
+        Fitted { model: t.model, scores: t.scores }
+    }
+}
+
 /// Whether tracing is on (`STICKSLIP_DEBUG` set): every trial and decision
 /// is printed to stderr.
 pub(crate) fn tracing() -> bool {

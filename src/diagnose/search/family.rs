@@ -1,0 +1,248 @@
+//! A round's families: every form of each effect fitted on top of the
+//! current model, coarsely for every family and in full for the closest
+//! ones, each trial kept in its family's pool for cross-validation.
+
+use std::collections::BTreeMap;
+
+use crate::diagnose::DiagnoseSettings;
+use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
+use crate::diagnose::data::Data;
+use crate::diagnose::search::cv::{UnitLosses, pair_losses};
+use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate};
+use crate::engine::{Effect, Engine, Model};
+use crate::error::Result;
+
+/// Families searched in full in a round, after every family's coarse fit:
+/// those whose coarse fit came closest to the data.
+const REFINED_FAMILIES: usize = 2;
+
+/// One member of a family's pool: a form at some parameter values, its
+/// losses at every unit and the current model's in the same yardstick
+/// ([`pair_losses`]).
+#[derive(Clone, Debug)]
+pub(super) struct Member {
+    pub(super) form: SearchedForm,
+    pub(super) values: Vec<f64>,
+    pub(super) losses: UnitLosses,
+    pub(super) reference: UnitLosses,
+}
+
+impl Member {
+    /// A member made of a trial of `form` on top of `current`.
+    fn of(form: SearchedForm, trial: &Trial, current: &Fitted, data: &Data<'_>) -> Member {
+        let (reference, losses) = pair_losses(&current.scores, &trial.scores, data);
+        Member { form, values: trial.values.clone(), losses, reference }
+    }
+}
+
+/// What one effect's fits gave in a round.
+pub(super) struct Family {
+    pub(super) effect: Effect,
+    /// The best full-data trial and its form.
+    pub(super) best: Trial,
+    pub(super) form: SearchedForm,
+    pub(super) parameters: BTreeMap<String, f64>,
+    /// Every trial, any form.
+    pub(super) pool: Vec<Member>,
+    /// Whether it was searched in full (else only its coarse fit).
+    pub(super) refined: bool,
+}
+
+impl Family {
+    /// Each member's losses and the current model's in the same yardstick.
+    pub(super) fn pool_losses(&self) -> Vec<(UnitLosses, UnitLosses)> {
+        self.pool.iter().map(|m| (m.losses.clone(), m.reference.clone())).collect()
+    }
+}
+
+/// The form `form` of `effect` as the context `ctx` builds it (the bent
+/// load dependence from the linear one at `values`), if there is one.
+pub(super) fn variant_named(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
+    variants(effect, ctx)
+        .into_iter()
+        .find(|v| v.form == form)
+        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form))
+}
+
+/// Every family's coarse fit on the full data (each form at the start the
+/// data point to), then a full search of every form of the
+/// [`REFINED_FAMILIES`] whose coarse fits came closest; every trial joins
+/// its family's pool.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn round(
+    current: &Fitted,
+    named: &[Effect],
+    slope: f64,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Family>> {
+    let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles);
+    let mut families: Vec<(Family, Vec<Option<Trial>>)> = Vec::new();
+    for effect in Effect::ALL.into_iter().filter(|e| !named.contains(e)) {
+        let forms = variants(effect, &ctx);
+        if forms.is_empty() {
+            continue;
+        }
+        progress(&format!("trying {effect} (a coarse fit of each of its {} forms)", forms.len()));
+        let mut starts: Vec<Option<Trial>> = Vec::new();
+        let mut pool = Vec::new();
+        for v in &forms {
+            let coarse = coarse_fit(v, current, slope, data, search, engine)?;
+            pool.extend(coarse.iter().map(|t| Member::of(v.form, t, current, data)));
+            starts.push(coarse.into_iter().min_by(|a, b| a.objective.total_cmp(&b.objective)));
+        }
+        let objective = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
+        let best = (0..forms.len()).min_by(|&a, &b| objective(a).total_cmp(&objective(b)));
+        let Some((best, Some(trial))) = best.map(|i| (i, starts[i].clone())) else { continue };
+        let (form, parameters) = (forms[best].form, forms[best].describe(&trial.values));
+        families.push((Family { effect, best: trial, form, parameters, pool, refined: false }, starts));
+    }
+    families.sort_by(|a, b| a.0.best.objective.total_cmp(&b.0.best.objective));
+    // Every round searches every form of the closest family and the best
+    // form of the next: a further effect is judged as the first is, so it
+    // is fitted as closely.
+    for (rank, (family, starts)) in families.iter_mut().take(REFINED_FAMILIES).enumerate() {
+        progress(&format!("searching {} in full", family.effect));
+        let mut starts = std::mem::take(starts);
+        if rank > 0 {
+            // Only the form whose coarse fit came closest.
+            let best = (0..starts.len())
+                .min_by(|&a, &b| {
+                    let o = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
+                    o(a).total_cmp(&o(b))
+                })
+                .unwrap_or(0);
+            for (i, s) in starts.iter_mut().enumerate() {
+                if i != best {
+                    *s = None;
+                }
+            }
+            refine(family, starts, true, current, slope, &ctx, data, search, engine)?;
+        } else {
+            refine(family, starts, false, current, slope, &ctx, data, search, engine)?;
+        }
+    }
+    Ok(families.into_iter().map(|(f, _)| f).collect())
+}
+
+/// A form's coarse fit: its start (the parameters the data point to) at the
+/// current model's friction law and with the law stepped once with it (a
+/// law step reads the measured law against the simulated one as if the
+/// form were the data's, and a form of another shape can move the law the
+/// wrong way: both are tried), then from the better of the two its first
+/// parameter two steps either way (a start that overshoots or falls short
+/// by a factor of a few is not taken for the form's best). Every trial.
+fn coarse_fit(
+    v: &Variant,
+    current: &Fitted,
+    slope: f64,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Vec<Trial>> {
+    let start = v.start();
+    let mut out = Vec::new();
+    let mut best: Option<(Model, f64)> = None;
+    for steps in [0, 1] {
+        if steps == 0 && data.measured_law.is_none() {
+            continue;
+        }
+        if let Some(t) = evaluate(v, &start, &current.model, &current.scores, steps, slope, data, search, engine)? {
+            // The base the moves below start from: the unstepped law, or
+            // the stepped one carried on.
+            let base = if steps == 0 { current.model.clone() } else { t.carry.clone() };
+            if best.as_ref().is_none_or(|b| t.objective < b.1) {
+                best = Some((base, t.objective));
+            }
+            out.push(t);
+        }
+    }
+    let (Some((base, _)), Some(p)) = (best, v.params.first()) else { return Ok(out) };
+    for k in [-2.0, 2.0] {
+        let mut values = start.clone();
+        values[0] = p.moved(values[0], k);
+        if values[0] == start[0] {
+            continue;
+        }
+        if let Some(t) = evaluate(v, &values, &base, &current.scores, 0, slope, data, search, engine)? {
+            out.push(t);
+        }
+    }
+    Ok(out)
+}
+
+/// The full search of every form of a family from its coarse fit
+/// (`starts`, one trial per form in the order of its variants; with
+/// `given_only`, only the forms that have one; a linear load dependence
+/// that fitted is then bent), every trial joining the pool.
+#[allow(clippy::too_many_arguments)]
+fn refine(
+    family: &mut Family,
+    starts: Vec<Option<Trial>>,
+    given_only: bool,
+    current: &Fitted,
+    slope: f64,
+    ctx: &Context<'_>,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<()> {
+    let forms = variants(family.effect, ctx);
+    let starts_len = starts.len();
+    let mut queue: Vec<(Variant, Option<Trial>)> = forms.into_iter().zip(starts).collect();
+    let mut i = 0;
+    while i < queue.len() {
+        let start = queue[i].1.take();
+        let variant = &queue[i].0;
+        // Where only the given starts are searched, a form without one is
+        // passed over (its bent form, queued below, has none and is
+        // searched from its own start).
+        if given_only && start.is_none() && i < queue.len().min(starts_len) {
+            i += 1;
+            continue;
+        }
+        let start = match start {
+            Some(t) => t,
+            None => match evaluate(
+                variant,
+                &variant.start(),
+                &current.model,
+                &current.scores,
+                1,
+                slope,
+                data,
+                search,
+                engine,
+            )? {
+                Some(t) => t,
+                None => {
+                    i += 1;
+                    continue;
+                }
+            },
+        };
+        let mut seen: Vec<Member> = Vec::new();
+        let mut record = |t: &Trial| seen.push(Member::of(variant.form, t, current, data));
+        let best = coordinate_search(
+            &variant.params,
+            start,
+            |b: &Trial, v: &[f64]| evaluate(variant, v, &b.carry, &current.scores, 0, slope, data, search, engine),
+            &mut record,
+        )?;
+        family.pool.extend(seen);
+        let bend = (best.objective < 1.0).then(|| bent(family.effect, variant.form, &best.values, ctx)).flatten();
+        if best.objective < family.best.objective {
+            family.parameters = variant.describe(&best.values);
+            family.form = variant.form;
+            family.best = best;
+        }
+        if let Some(b) = bend {
+            queue.push((b, None));
+        }
+        i += 1;
+    }
+    family.refined = true;
+    Ok(())
+}
