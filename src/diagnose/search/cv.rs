@@ -106,11 +106,14 @@ impl NullLoss {
     /// change moved `moved` of them ([`moved`]): three standard deviations
     /// of a sum of that many paired differences (each as wide as
     /// [`NullLoss::noise`] counts a score), over `scores`. With every score
-    /// moved it is [`NullLoss::noise`]; never below that of one whole
-    /// score, –.
+    /// moved it is [`NullLoss::noise`] itself; never below that of one
+    /// whole score, –.
     pub(crate) fn fall_noise(&self, scores: f64, moved: f64) -> f64 {
         let scores = scores.max(1.0);
-        3.0 * self.sd * (2.0 * moved.clamp(1.0, scores)).sqrt() / scores
+        if moved >= scores {
+            return self.noise(scores.round() as usize);
+        }
+        3.0 * self.sd * (2.0 * moved.max(1.0)).sqrt() / scores
     }
 }
 
@@ -524,7 +527,7 @@ mod tests {
         let everywhere: UnitLosses = (0..12).map(|u| (u, UnitLoss::whole(10.0 * (0.5 - fall), 10))).collect();
         assert!(!w.share(&everywhere, &reference).1);
         // Fully moved, the paired noise is the unpaired one.
-        assert!((NULL.fall_noise(120.0, 120.0) - NULL.noise(120)).abs() < 1e-12);
+        assert_eq!(NULL.fall_noise(120.0, 120.0), NULL.noise(120));
         assert_eq!(moved(0.0), 0.0);
         assert_eq!(moved(0.5), 0.25);
         assert_eq!(moved(-3.0), 1.0);
