@@ -516,19 +516,16 @@ impl<'a> Data<'a> {
         view
     }
 
-    /// The data cut into [`Folds::crossed`] where the set's folds are load
-    /// levels at several frequencies (else as it is): the weaker test a
+    /// The data cut into [`Folds::crossed`], where the set's folds are load
+    /// levels at several frequencies (`None` otherwise): the weaker test a
     /// family is judged on where none predicts a withheld level beyond the
     /// noise, whether it predicts conditions it was not fitted to within
     /// the loads it was. A model named on it must still predict every
     /// withheld level no worse than the baseline.
-    pub(crate) fn attribution(&self) -> Data<'a> {
+    pub(crate) fn crossed(&self) -> Option<Data<'a>> {
         let conditions: Vec<Condition> = self.units.iter().map(|u| u.condition).collect();
-        let mut out = self.clone();
-        if let Some(crossed) = self.folds.crossed(&conditions) {
-            out.folds = crossed;
-        }
-        out
+        let folds = self.folds.crossed(&conditions)?;
+        Some(Data { folds, ..self.clone() })
     }
 
     /// Every fold's view, in fold order.

@@ -24,7 +24,7 @@
 //!    first round, an effect seen at one load alone may be why (fitted
 //!    without that load, it was never seen): the contest is held again on
 //!    folds crossed over loads and frequencies
-//!    ([`crate::diagnose::data::Data::attribution`]), each fall judged
+//!    ([`crate::diagnose::data::Data::crossed`]), each fall judged
 //!    against the noise of the scores the family moved, and a leader named
 //!    there must still predict every withheld level no worse.
 //!    [`verdict::judge`] says which leaders are named and how sure that is.
@@ -107,7 +107,7 @@ pub(crate) struct Selection {
     pub(crate) null: NullLoss,
     /// The folds the first effect's family was judged on: the set's own,
     /// or folds crossed over loads and frequencies where no family predicts
-    /// a withheld level beyond the noise ([`crate::diagnose::data::Data::attribution`]).
+    /// a withheld level beyond the noise ([`crate::diagnose::data::Data::crossed`]).
     pub(crate) attribution_folds: crate::diagnose::data::Folds,
 }
 
@@ -121,17 +121,17 @@ impl Selection {
     }
 }
 
-/// One cut of the data into folds, with each fold's view and the models
-/// fitted without it: the baseline's and the current model's.
+/// One cut of the data into folds, with each fold's view and the current
+/// model fitted without it (at first the baseline).
 struct FoldSet<'a> {
     data: Data<'a>,
     views: Vec<Data<'a>>,
-    baseline: Vec<Fitted>,
     current: Vec<Fitted>,
 }
 
 impl<'a> FoldSet<'a> {
-    /// The folds of `data`, with the baseline refitted without each: its
+    /// The folds of `data`, with the baseline refitted without each as the
+    /// current model: its
     /// law carried to each fold's measured law from the full-data
     /// baseline's, on search replicates, scored on every unit.
     fn new(
@@ -150,7 +150,7 @@ impl<'a> FoldSet<'a> {
                 Ok(Fitted { model, scores })
             })
             .collect::<Result<Vec<_>>>()?;
-        Ok(FoldSet { data, views, baseline: fitted.clone(), current: fitted })
+        Ok(FoldSet { data, views, current: fitted })
     }
 }
 
@@ -265,9 +265,7 @@ pub(crate) fn select(
     let units = held_units(&data.folds);
     progress(&format!("refitting the baseline without each fold ({} folds)", data.folds.folds.len()));
     let mut levels = FoldSet::new(data.clone(), baseline, slope, &search, engine)?;
-    let baseline_folds = levels.baseline.clone();
-    let crossed_data = data.attribution();
-    let mut crossed: Option<FoldSet<'_>> = None;
+    let baseline_folds = levels.current.clone();
     let mut attribution_folds = data.folds.clone();
     let mut current = Fitted { model: baseline.clone(), scores: score(engine, baseline, data, &search, Scope::All)? };
     let mut rounds: Vec<verdict::Round> = Vec::new();
@@ -319,27 +317,26 @@ pub(crate) fn select(
             Judged { families: &families, current: &current_losses, units: &units, null, seed, round: rounds.len() };
         let mut attributed = on.attribute(&levels, false, slope, &search, engine, progress)?;
         let mut on_crossed = false;
-        if rounds.is_empty() && crossed_data.folds != data.folds && !attributed.led.as_ref().is_some_and(|l| l.beyond) {
-            // No family predicts a withheld level beyond the noise. An
-            // effect seen at one load alone cannot: fitted without that
-            // load it was never seen. The weaker question, whether a family
-            // predicts conditions it was not fitted to within the loads it
-            // was, is then asked on folds crossed over loads and
-            // frequencies; a family named on it must still predict every
-            // withheld level no worse than the baseline.
-            if crossed.is_none() {
-                progress(&format!(
-                    "refitting the baseline without each crossed fold ({} folds)",
-                    crossed_data.folds.folds.len()
-                ));
-                crossed = Some(FoldSet::new(crossed_data.clone(), baseline, slope, &search, engine)?);
-            }
-            let folds = crossed.as_ref().expect("made just above");
-            let other = on.attribute(folds, true, slope, &search, engine, progress)?;
+        // No family predicts a withheld level beyond the noise. An effect
+        // seen at one load alone cannot: fitted without that load it was
+        // never seen. The weaker question, whether a family predicts
+        // conditions it was not fitted to within the loads it was, is then
+        // asked on folds crossed over loads and frequencies; a family named
+        // on it must still predict every withheld level no worse than the
+        // baseline.
+        let crossed =
+            (rounds.is_empty() && !attributed.led.as_ref().is_some_and(|l| l.beyond)).then(|| data.crossed()).flatten();
+        if let Some(crossed) = crossed {
+            progress(&format!(
+                "refitting the baseline without each crossed fold ({} folds)",
+                crossed.folds.folds.len()
+            ));
+            let folds = FoldSet::new(crossed, baseline, slope, &search, engine)?;
+            let other = on.attribute(&folds, true, slope, &search, engine, progress)?;
             if other.led.as_ref().is_some_and(|l| l.beyond) {
                 attributed = other;
                 on_crossed = true;
-                attribution_folds = crossed_data.folds.clone();
+                attribution_folds = folds.data.folds;
             }
         }
         let Attribution { predictions, pooled, led } = attributed;
