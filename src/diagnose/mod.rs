@@ -210,13 +210,17 @@ pub enum RefusalReason {
     /// (their labels) worse than the baseline does, these worse than the
     /// model before it, and the response (the peaks' and the phase's mean
     /// and variance) at these worse than the baseline does, beyond each
-    /// fold's noise: its form does not carry over to the conditions it was
-    /// not fitted on.
+    /// fold's noise; `response_over_every_fold`: the response over every
+    /// withheld fold together worse than the baseline, beyond the noise of
+    /// that pooled mean. Its form does not carry over to the conditions it
+    /// was not fitted on.
     WorseFolds {
         than_baseline: Vec<String>,
         than_model_before: Vec<String>,
         #[serde(default)]
         response_than_baseline: Vec<String>,
+        #[serde(default)]
+        response_over_every_fold: bool,
     },
 }
 

@@ -566,7 +566,12 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
             "refitted from scratch without each fold it closed {:.0}%, which is within the noise of the replicate records",
             100.0 * refitted_share
         ),
-        RefusalReason::WorseFolds { than_baseline, than_model_before, response_than_baseline } => {
+        RefusalReason::WorseFolds {
+            than_baseline,
+            than_model_before,
+            response_than_baseline,
+            response_over_every_fold,
+        } => {
             let mut parts = Vec::new();
             if !than_baseline.is_empty() {
                 parts.push(format!("predicts {} worse than the baseline", than_baseline.join(", ")));
@@ -582,6 +587,12 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
                      baseline",
                     response.join(", ")
                 ));
+            } else if *response_over_every_fold && than_baseline.is_empty() {
+                parts.push(
+                    "predicts the response (the peaks' and the phase's mean and variance) over the withheld folds \
+                     together worse than the baseline"
+                        .to_string(),
+                );
             }
             if parts.is_empty() {
                 "the verdict's checks at the withheld folds leave it out".to_string()
@@ -777,4 +788,49 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
         d.noise_threshold
     ));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::{Refusal, candidates::SearchedForm};
+    use crate::engine::Effect;
+
+    fn refused(reason: RefusalReason) -> String {
+        refusal_sentence(&Refusal {
+            effect: Effect::Stiction,
+            form: SearchedForm::Position,
+            share_of_gap: 0.4,
+            after_named: 0,
+            reason,
+        })
+    }
+
+    /// A leader refused only because its model predicts the response over
+    /// the withheld folds together worse says so; one refused at a fold
+    /// names the fold, and the pooled reason is not repeated beside it.
+    #[test]
+    fn a_refusal_says_when_the_response_over_every_fold_together_is_worse() {
+        let pooled = refused(RefusalReason::WorseFolds {
+            than_baseline: vec![],
+            than_model_before: vec![],
+            response_than_baseline: vec![],
+            response_over_every_fold: true,
+        });
+        assert!(pooled.contains("over the withheld folds together worse than the baseline"), "{pooled}");
+        let at_fold = refused(RefusalReason::WorseFolds {
+            than_baseline: vec![],
+            than_model_before: vec![],
+            response_than_baseline: vec!["normal force 16 N".into()],
+            response_over_every_fold: true,
+        });
+        assert!(at_fold.contains("at normal force 16 N worse") && !at_fold.contains("together"), "{at_fold}");
+        let none = refused(RefusalReason::WorseFolds {
+            than_baseline: vec![],
+            than_model_before: vec![],
+            response_than_baseline: vec![],
+            response_over_every_fold: false,
+        });
+        assert!(none.contains("leave it out"), "{none}");
+    }
 }

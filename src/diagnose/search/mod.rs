@@ -418,11 +418,12 @@ pub(crate) fn select(
         let labels = |folds: Vec<usize>| folds.into_iter().map(|k| data.folds.folds[k].label.clone()).collect();
         let reason = match verdict::refusal(&rounds[count], &fold_units, &units, null) {
             verdict::Refused::NotBeyondNoise { share } => RefusalReason::NotBeyondNoise { refitted_share: share },
-            verdict::Refused::WorseFolds { than_baseline, than_before, response_than_baseline } => {
+            verdict::Refused::WorseFolds { than_baseline, than_before, response_than_baseline, response_pooled } => {
                 RefusalReason::WorseFolds {
                     than_baseline: labels(than_baseline),
                     than_model_before: labels(than_before),
                     response_than_baseline: labels(response_than_baseline),
+                    response_over_every_fold: response_pooled,
                 }
             }
         };

@@ -13,7 +13,11 @@
 //!   over every observable and over the response's alone (the peaks' and
 //!   the phase's mean and variance: what a fitted model is used to
 //!   predict, and a handful of scores beside the friction and
-//!   normal-force features that dominate the first), and
+//!   normal-force features that dominate the first), and predicts the
+//!   response over every withheld fold together no worse than the baseline,
+//!   up to the noise of that pooled mean (a fold of a few conditions holds
+//!   only a dozen response scores, and its noise alone lets a model that
+//!   predicts the response worse everywhere pass fold by fold), and
 //! - whose last effect predicts every fold no worse than the model before
 //!   it.
 //!
@@ -86,6 +90,7 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
         }
         if every_fold_no_worse(&r.joint, folds, weights, r.local)
             && every_fold_no_worse(&r.joint_response, folds, weights, r.local)
+            && every_fold_no_worse(&r.joint_response, &[weights.units.to_vec()], weights, r.local)
             && every_fold_no_worse(&r.refitted_levels, folds, weights, r.local)
         {
             n = j + 1;
@@ -104,8 +109,15 @@ pub(crate) enum Refused {
     /// The model with it, refitted without each fold, predicts these folds
     /// (indices into the folds) worse than the baseline does, these
     /// worse than the model before it, and the response at these worse
-    /// than the baseline does, beyond each fold's noise.
-    WorseFolds { than_baseline: Vec<usize>, than_before: Vec<usize>, response_than_baseline: Vec<usize> },
+    /// than the baseline does, beyond each fold's noise; and whether it
+    /// predicts the response over every fold together worse than the
+    /// baseline, beyond the noise of that pooled mean.
+    WorseFolds {
+        than_baseline: Vec<usize>,
+        than_before: Vec<usize>,
+        response_than_baseline: Vec<usize>,
+        response_pooled: bool,
+    },
 }
 
 /// Why `round`'s leader is not named where the unweighted data leave it
@@ -124,6 +136,7 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
         than_baseline: worse(&round.joint),
         than_before: worse(&round.refitted_levels),
         response_than_baseline: worse(&round.joint_response),
+        response_pooled: !every_fold_no_worse(&round.joint_response, &[units.to_vec()], &point, round.local),
     }
 }
 
@@ -332,8 +345,12 @@ mod tests {
         r.refitted_levels.1 = r.refitted.1.clone();
         r.joint.1 = at(&after);
         assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
-        let expected =
-            Refused::WorseFolds { than_baseline: vec![1], than_before: vec![1], response_than_baseline: vec![] };
+        let expected = Refused::WorseFolds {
+            than_baseline: vec![1],
+            than_before: vec![1],
+            response_than_baseline: vec![],
+            response_pooled: false,
+        };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         // Nothing closed beyond the noise: that is the reason, with the share.
         let r = round(10.0, 9.95, 9.97, 10.0);
@@ -354,10 +371,40 @@ mod tests {
         let mut r = round(10.0, 2.0, 9.0, 10.0);
         r.joint_response = (at(&[1.0; 12]), at(&(0..12).map(|u| if u < 6 { 1.0 } else { 3.0 }).collect::<Vec<_>>()));
         assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
-        let expected =
-            Refused::WorseFolds { than_baseline: vec![], than_before: vec![], response_than_baseline: vec![1] };
+        let expected = Refused::WorseFolds {
+            than_baseline: vec![],
+            than_before: vec![],
+            response_than_baseline: vec![1],
+            response_pooled: true,
+        };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         r.joint_response.1 = at(&(0..12).map(|u| if u < 6 { 1.0 } else { 1.05 }).collect::<Vec<_>>());
+        assert_eq!(judge(&[r], &halves(), &units, NULL, 1).0, 1);
+    }
+
+    /// A model that predicts the response a little worse at every fold,
+    /// each rise within that fold's noise (a mean over 60 scores) but the
+    /// rise over both together beyond the noise of a mean over 120, is not
+    /// named: small folds must not let a model through by their width
+    /// alone. Half that rise is within the pooled noise too.
+    #[test]
+    fn an_effect_that_predicts_the_response_worse_over_every_fold_together_is_not_named() {
+        let units: Vec<usize> = (0..12).collect();
+        let (fold_noise, pooled_noise) = (NULL.noise(60), NULL.noise(120));
+        let rise = loss(1.6) - loss(1.0);
+        assert!(rise < fold_noise && rise > pooled_noise, "{rise} {fold_noise} {pooled_noise}");
+        let mut r = round(10.0, 2.0, 9.0, 10.0);
+        r.joint_response = (at(&[1.0; 12]), at(&[1.6; 12]));
+        assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
+        let expected = Refused::WorseFolds {
+            than_baseline: vec![],
+            than_before: vec![],
+            response_than_baseline: vec![],
+            response_pooled: true,
+        };
+        assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
+        r.joint_response.1 = at(&[1.3; 12]);
+        assert!(loss(1.3) - loss(1.0) < pooled_noise);
         assert_eq!(judge(&[r], &halves(), &units, NULL, 1).0, 1);
     }
 
