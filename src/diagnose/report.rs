@@ -796,13 +796,20 @@ mod tests {
     use crate::diagnose::{Refusal, candidates::SearchedForm};
     use crate::engine::Effect;
 
-    fn refused(reason: RefusalReason) -> String {
+    /// The sentence of a stiction refused for its response alone: worse at
+    /// the folds `at` and, with `pooled`, over every fold together.
+    fn refused(at: &[&str], pooled: bool) -> String {
         refusal_sentence(&Refusal {
             effect: Effect::Stiction,
             form: SearchedForm::Position,
             share_of_gap: 0.4,
             after_named: 0,
-            reason,
+            reason: RefusalReason::WorseFolds {
+                than_baseline: vec![],
+                than_model_before: vec![],
+                response_than_baseline: at.iter().map(|f| f.to_string()).collect(),
+                response_over_every_fold: pooled,
+            },
         })
     }
 
@@ -811,26 +818,11 @@ mod tests {
     /// names the fold, and the pooled reason is not repeated beside it.
     #[test]
     fn a_refusal_says_when_the_response_over_every_fold_together_is_worse() {
-        let pooled = refused(RefusalReason::WorseFolds {
-            than_baseline: vec![],
-            than_model_before: vec![],
-            response_than_baseline: vec![],
-            response_over_every_fold: true,
-        });
+        let pooled = refused(&[], true);
         assert!(pooled.contains("over the withheld folds together worse than the baseline"), "{pooled}");
-        let at_fold = refused(RefusalReason::WorseFolds {
-            than_baseline: vec![],
-            than_model_before: vec![],
-            response_than_baseline: vec!["normal force 16 N".into()],
-            response_over_every_fold: true,
-        });
+        let at_fold = refused(&["normal force 16 N"], true);
         assert!(at_fold.contains("at normal force 16 N worse") && !at_fold.contains("together"), "{at_fold}");
-        let none = refused(RefusalReason::WorseFolds {
-            than_baseline: vec![],
-            than_model_before: vec![],
-            response_than_baseline: vec![],
-            response_over_every_fold: false,
-        });
+        let none = refused(&[], false);
         assert!(none.contains("leave it out"), "{none}");
     }
 }

@@ -418,14 +418,17 @@ pub(crate) fn select(
         let labels = |folds: Vec<usize>| folds.into_iter().map(|k| data.folds.folds[k].label.clone()).collect();
         let reason = match verdict::refusal(&rounds[count], &fold_units, &units, null) {
             verdict::Refused::NotBeyondNoise { share } => RefusalReason::NotBeyondNoise { refitted_share: share },
-            verdict::Refused::WorseFolds { than_baseline, than_before, response_than_baseline, response_pooled } => {
-                RefusalReason::WorseFolds {
-                    than_baseline: labels(than_baseline),
-                    than_model_before: labels(than_before),
-                    response_than_baseline: labels(response_than_baseline),
-                    response_over_every_fold: response_pooled,
-                }
-            }
+            verdict::Refused::WorseFolds {
+                than_baseline,
+                than_before,
+                response_than_baseline,
+                response_over_every_fold,
+            } => RefusalReason::WorseFolds {
+                than_baseline: labels(than_baseline),
+                than_model_before: labels(than_before),
+                response_than_baseline: labels(response_than_baseline),
+                response_over_every_fold,
+            },
         };
         refused =
             Some(Refusal { effect: c.effect, form: c.form, share_of_gap: c.cv_share, after_named: count, reason });

@@ -90,7 +90,7 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
         }
         if every_fold_no_worse(&r.joint, folds, weights, r.local)
             && every_fold_no_worse(&r.joint_response, folds, weights, r.local)
-            && every_fold_no_worse(&r.joint_response, &[weights.units.to_vec()], weights, r.local)
+            && no_worse(&r.joint_response, weights, r.local)
             && every_fold_no_worse(&r.refitted_levels, folds, weights, r.local)
         {
             n = j + 1;
@@ -116,7 +116,7 @@ pub(crate) enum Refused {
         than_baseline: Vec<usize>,
         than_before: Vec<usize>,
         response_than_baseline: Vec<usize>,
-        response_pooled: bool,
+        response_over_every_fold: bool,
     },
 }
 
@@ -136,7 +136,7 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
         than_baseline: worse(&round.joint),
         than_before: worse(&round.refitted_levels),
         response_than_baseline: worse(&round.joint_response),
-        response_pooled: !every_fold_no_worse(&round.joint_response, &[units.to_vec()], &point, round.local),
+        response_over_every_fold: !no_worse(&round.joint_response, &point, round.local),
     }
 }
 
@@ -158,11 +158,17 @@ fn every_fold_no_worse(
     folds.iter().all(|fold| {
         let (units, w): (Vec<usize>, Vec<f64>) =
             weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
-        let at_fold = Weights { units: &units, w: &w, null: weights.null };
-        let ((before, n), (after, _)) = (at_fold.gap(&pair.0), at_fold.gap(&pair.1));
-        let noise = if local { weights.null.fall_noise(n, at_fold.moved(&pair.1).0) } else { at_fold.noise(n) };
-        n == 0.0 || after - before <= noise
+        no_worse(pair, &Weights { units: &units, w: &w, null: weights.null }, local)
     })
+}
+
+/// Whether the model (`pair.1`) predicts the units `weights` weigh, pooled,
+/// no worse than the other (`pair.0`), as [`every_fold_no_worse`] asks of
+/// each fold.
+fn no_worse(pair: &(UnitLosses, UnitLosses), weights: &Weights<'_>, local: bool) -> bool {
+    let ((before, n), (after, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
+    let noise = if local { weights.null.fall_noise(n, weights.moved(&pair.1).0) } else { weights.noise(n) };
+    n == 0.0 || after - before <= noise
 }
 
 /// How far form misfit discounts a verdict that names the first `n`
@@ -349,7 +355,7 @@ mod tests {
             than_baseline: vec![1],
             than_before: vec![1],
             response_than_baseline: vec![],
-            response_pooled: false,
+            response_over_every_fold: false,
         };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         // Nothing closed beyond the noise: that is the reason, with the share.
@@ -375,7 +381,7 @@ mod tests {
             than_baseline: vec![],
             than_before: vec![],
             response_than_baseline: vec![1],
-            response_pooled: true,
+            response_over_every_fold: true,
         };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         r.joint_response.1 = at(&(0..12).map(|u| if u < 6 { 1.0 } else { 1.05 }).collect::<Vec<_>>());
@@ -400,7 +406,7 @@ mod tests {
             than_baseline: vec![],
             than_before: vec![],
             response_than_baseline: vec![],
-            response_pooled: true,
+            response_over_every_fold: true,
         };
         assert_eq!(refusal(&r, &halves(), &units, NULL), expected);
         r.joint_response.1 = at(&[1.3; 12]);
