@@ -392,7 +392,7 @@ mod tests {
     /// each rise within that fold's noise (a mean over 60 scores) but the
     /// rise over both together beyond the noise of a mean over 120, is not
     /// named: small folds must not let a model through by their width
-    /// alone. Half that rise is within the pooled noise too.
+    /// alone. A smaller rise, within the pooled noise too, is named.
     #[test]
     fn an_effect_that_predicts_the_response_worse_over_every_fold_together_is_not_named() {
         let units: Vec<usize> = (0..12).collect();
