@@ -125,7 +125,9 @@ pub struct FrictionAtLoad {
     /// The fitted model's μ(0) there, –.
     pub fitted_mu: f64,
     /// The standard deviation of μ(0) over the models refitted without each
-    /// fold, –: how much the fitted value depends on which loads it saw.
+    /// fold, –: how much the fitted value depends on which loads it saw;
+    /// absent with fewer than two folds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted_mu_sd: Option<f64>,
 }
 
@@ -193,15 +195,21 @@ pub struct GapReport {
     /// `(baseline − after) / baseline`, –.
     pub shrink: f64,
     /// The same out of sample (each fold predicted by the models refitted
-    /// without it); `null` without folds.
+    /// without it), and the out-of-sample gaps before and after; absent
+    /// where nothing could be held out (`heldout_units` says so), so that
+    /// no number is `null`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heldout_shrink: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heldout_baseline: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heldout_after: Option<f64>,
     /// `heldout_shrink` fold by fold.
     #[serde(default)]
     pub heldout_folds: Vec<FoldReport>,
-    /// The standard deviation of the folds' shrinks, –.
-    #[serde(default)]
+    /// The standard deviation of the folds' shrinks, –; absent with fewer
+    /// than two folds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heldout_shrink_sd: Option<f64>,
     /// The out-of-sample gap's noise threshold: a gap within it of the
     /// floor (about 1.3) has nothing to explain.
@@ -240,7 +248,9 @@ pub struct CandidateReport {
     pub form: String,
     /// The relative fall of the gap over every unit with its best fit, –.
     pub shrink: f64,
-    /// The relative fall of the out-of-sample gap, –.
+    /// The relative fall of the out-of-sample gap, –; absent where nothing
+    /// could be held out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heldout_shrink: Option<f64>,
     /// The share of the explainable gap closed in sample and out of sample, –.
     #[serde(default)]

@@ -219,6 +219,10 @@ fn a_report_with_a_number_that_is_not_finite_is_refused() {
         "source": "set", "elapsed_s": 1.0 }"#;
     let report: Report = serde_json::from_str(text).unwrap();
     report.check_numbers().expect("a finite report passes");
+    // Numbers that do not exist (nothing held out) are left out, not null.
+    let written = serde_json::to_string(&report).unwrap();
+    assert!(!written.contains("\"heldout_shrink\"") && !written.contains("\"heldout_after\""), "{written}");
+    assert!(!written.contains(": null") && !written.contains(":null,\"heldout"), "{written}");
     let mut bad = report.clone();
     bad.gap.baseline = f64::INFINITY;
     let err = bad.check_numbers().unwrap_err().to_string();
