@@ -340,17 +340,18 @@ pub(super) fn read_run_file(
         ));
     }
     let time_origin = if has_base {
-        let (shift_s, amplitude) = base_phase(&t_s, &base, frequency_hz).ok_or_else(|| {
+        let base = base_phase(&t_s, &base, frequency_hz).ok_or_else(|| {
             bad(
                 path,
                 None,
                 "column `base_x`: the base does not move at the excitation frequency (no phase can be read)",
             )
         })?;
+        check_base(path, &base, frequency_hz, amplitude_m)?;
         for t in &mut t_s {
-            *t -= shift_s;
+            *t -= base.shift_s;
         }
-        TimeOrigin::BaseChannel { shift_s, amplitude_m: amplitude }
+        TimeOrigin::BaseChannel { shift_s: base.shift_s, amplitude_m: base.amplitude_m }
     } else if free_origin {
         TimeOrigin::Free
     } else {
@@ -370,12 +371,37 @@ pub(super) fn read_run_file(
     })
 }
 
+/// The fewest of a `base_x` column's variance about its mean that a
+/// sinusoid at the excitation frequency must explain, –: a shaker's base
+/// moves as one, up to its sensor's noise and a few per cent of harmonics;
+/// a column at another frequency (or the manifest's frequency wrong)
+/// leaves most of it, and a phase read against it would mean nothing.
+pub(crate) const BASE_SINUSOID_SHARE_MIN: f64 = 0.9;
+
+/// The largest factor by which a `base_x` column's amplitude at the
+/// excitation frequency may differ from the run's `excitation_amplitude_m`
+/// either way: the model is driven by the latter, so a base measured far
+/// from it means one of the two is not what it claims (a column in
+/// millimetres, say).
+pub(crate) const BASE_AMPLITUDE_FACTOR_MAX: f64 = 2.0;
+
+/// The base read from a `base_x` column ([`base_phase`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BaseFit {
+    /// The shift `s` of `base_x ≈ c + R cos(Ω (t − s))` within one period, s:
+    /// subtracting it from `t` puts the record in the frame of `u = U0 cos(Ω t)`.
+    pub(crate) shift_s: f64,
+    /// The amplitude `R`, m.
+    pub(crate) amplitude_m: f64,
+    /// The share of the column's variance about its mean that the sinusoid
+    /// explains, –.
+    pub(crate) share: f64,
+}
+
 /// The base's phase in a record's own time: `base_x ≈ c + R cos(Ω (t − s))`
-/// fitted by least squares at the excitation frequency; returns (s, R), s
-/// in seconds within one period (subtracting s from `t` puts the record in
-/// the frame of `u = U0 cos(Ω t)`), R in metres. `None` where the base does
-/// not move at that frequency.
-pub(crate) fn base_phase(t_s: &[f64], base_x_m: &[f64], frequency_hz: f64) -> Option<(f64, f64)> {
+/// fitted by least squares at the excitation frequency. `None` where the
+/// base does not move at that frequency.
+pub(crate) fn base_phase(t_s: &[f64], base_x_m: &[f64], frequency_hz: f64) -> Option<BaseFit> {
     let omega = std::f64::consts::TAU * frequency_hz;
     let n = t_s.len().min(base_x_m.len());
     let (coefficients, _) = crate::diagnose::features::least_squares(
@@ -387,15 +413,62 @@ pub(crate) fn base_phase(t_s: &[f64], base_x_m: &[f64], frequency_hz: f64) -> Op
         },
         |i| base_x_m[i],
     )?;
-    let (a, b) = (coefficients[1], coefficients[2]);
+    let (mean, a, b) = (coefficients[0], coefficients[1], coefficients[2]);
     let amplitude = a.hypot(b);
     let scale = base_x_m.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if amplitude.is_nan() || amplitude <= 1e-6 * scale.max(1e-12) {
         return None;
     }
+    // The residual summed sample by sample (the normal equations' own
+    // would cancel for a column that is nearly all sinusoid).
+    let (mut residual, mut total) = (0.0, 0.0);
+    for i in 0..n {
+        let (s, c) = (omega * t_s[i]).sin_cos();
+        residual += (base_x_m[i] - mean - a * c - b * s).powi(2);
+        total += (base_x_m[i] - mean).powi(2);
+    }
     // a cos Ωt + b sin Ωt = R cos(Ωt − ψ), ψ = atan2(b, a): s = ψ / Ω.
     let psi = b.atan2(a).rem_euclid(std::f64::consts::TAU);
-    Some((psi / omega, amplitude))
+    let share = if total > 0.0 { (1.0 - residual / total).max(0.0) } else { 0.0 };
+    Some(BaseFit { shift_s: psi / omega, amplitude_m: amplitude, share })
+}
+
+/// Refuses a `base_x` column that is not the base the run declares: one
+/// that a sinusoid at the excitation frequency (Hz) does not explain
+/// ([`BASE_SINUSOID_SHARE_MIN`]), or whose amplitude there is beyond
+/// [`BASE_AMPLITUDE_FACTOR_MAX`] of the declared `amplitude_m` (m; not
+/// checked where that is 0).
+fn check_base(path: &Path, base: &BaseFit, frequency_hz: f64, amplitude_m: f64) -> Result<()> {
+    if base.share < BASE_SINUSOID_SHARE_MIN {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "column `base_x`: the base does not move as a sinusoid at the excitation frequency ({} Hz): one \
+                 explains {:.1}% of its variance, and at least {:.0}% is needed to read a phase against it (is the \
+                 column the base's displacement, and `excitation_frequency_hz` the frequency it moves at?)",
+                fmt_value(frequency_hz),
+                100.0 * base.share,
+                100.0 * BASE_SINUSOID_SHARE_MIN
+            ),
+        ));
+    }
+    let ratio = base.amplitude_m / amplitude_m;
+    if amplitude_m > 0.0 && !(1.0 / BASE_AMPLITUDE_FACTOR_MAX..=BASE_AMPLITUDE_FACTOR_MAX).contains(&ratio) {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "column `base_x`: the base moves {} m at the excitation frequency, {} times the run's \
+                 `excitation_amplitude_m` ({} m); the two may differ by at most a factor {} (is the column in metres?)",
+                fmt_value(base.amplitude_m),
+                if (0.01..1000.0).contains(&ratio) { format!("{ratio:.3}") } else { format!("{ratio:.3e}") },
+                fmt_value(amplitude_m),
+                fmt_value(BASE_AMPLITUDE_FACTOR_MAX)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 const SUMMARY_COLUMNS: [Column; 9] = [
@@ -431,9 +504,9 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
         };
         let n_peaks = match values[6] {
             None => None,
-            Some(value) if value >= 0.0 && value.fract() == 0.0 && value <= 9_007_199_254_740_992.0 => {
-                Some(value as u64)
-            }
+            // A whole number too large for a u64 is counted as the largest
+            // (the limit below then names it).
+            Some(value) if value >= 0.0 && value.fract() == 0.0 => Some(value.min(u64::MAX as f64) as u64),
             Some(value) => {
                 return Err(bad(
                     path,

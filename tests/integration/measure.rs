@@ -468,6 +468,37 @@ fn a_base_x_column_puts_the_record_in_the_model_frame() {
     assert!((phase - 30.0).abs() < 0.5, "phase {phase}");
 }
 
+/// A `base_x` column that is not the base the run declares is refused by
+/// file and column, with what is wrong: one that moves mostly at twice the
+/// excitation frequency (no phase read against it would mean anything),
+/// and one a
+/// hundred times the declared amplitude (a column in other units). Sensor
+/// noise of a few micrometres on the right base reads.
+#[test]
+fn a_base_x_column_that_is_not_the_declared_base_is_refused() {
+    let s = Scratch::new("base-x-wrong");
+    s.write("manifest.json", &manifest_with_run("7.0"));
+    let with_base = |base: &dyn Fn(f64) -> f64| {
+        let mut text = String::from("t,x,base_x\n");
+        for i in 0..1200 {
+            let t = i as f64 / 600.0;
+            text += &format!("{t},{},{}\n", 0.004 * (std::f64::consts::TAU * 7.0 * t).cos(), base(t));
+        }
+        text
+    };
+    let omega = std::f64::consts::TAU * 7.0;
+    s.write("run.csv", &with_base(&|t| 0.0025 * (2.0 * omega * t).cos() + 0.00025 * (omega * t).cos()));
+    refused(&s.0, "run.csv", None, &["column `base_x`", "sinusoid at the excitation frequency (7 Hz)", "1.0%"]);
+    s.write("run.csv", &with_base(&|t| 0.25 * (omega * t).cos()));
+    refused(&s.0, "run.csv", None, &["column `base_x`", "100.000 times", "`excitation_amplitude_m` (0.0025 m)"]);
+    // The right base with a few micrometres of noise, and 1.5 times the
+    // declared amplitude (a shaker off its nominal setting), read.
+    s.write("run.csv", &with_base(&|t| 0.0025 * (omega * t).cos() + 3e-6 * (977.0 * t).sin()));
+    read_measurement_set(&s.0).expect("a noisy base reads");
+    s.write("run.csv", &with_base(&|t| 0.00375 * (omega * t + 1.0).cos()));
+    read_measurement_set(&s.0).expect("a base off its nominal amplitude reads");
+}
+
 #[test]
 fn a_free_time_origin_is_declared_by_name_and_anything_else_refused() {
     use stickslip::diagnose::features::run_features;
