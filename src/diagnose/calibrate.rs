@@ -16,9 +16,10 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
 use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fitting_records};
 use crate::diagnose::{DiagnoseSettings, mean};
+use crate::engine::oscillator::Oscillator;
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::measure::Run;
 
 /// What pins the baseline where the data have no friction channels: the
@@ -564,8 +565,26 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
         m.friction.d = law.d;
         m.friction.sigma = law.sigma;
     }
-    m.validate()?;
+    m.validate().map_err(|e| named_by_manifest(data, e))?;
+    // A rig the oscillator cannot integrate at some condition (one far
+    // stiffer than the excitation is slow) is the manifest's.
+    for unit in &data.units {
+        Oscillator::new(&m, unit.condition).map_err(|e| named_by_manifest(data, e))?;
+    }
     Ok(m)
+}
+
+/// An error in a parameter of the model that the manifest's `rig` gave,
+/// named by the manifest and its key instead of as a model parameter.
+fn named_by_manifest(data: &Data<'_>, e: Error) -> Error {
+    match e {
+        Error::InvalidParameter { key, value, message } if key.starts_with("rig.") => Error::Measurement {
+            file: data.set.dir.join("manifest.json"),
+            line: None,
+            message: format!("`{key}` = {value}: {message}"),
+        },
+        other => other,
+    }
 }
 #[cfg(test)]
 mod tests {
