@@ -594,6 +594,17 @@ fn schema_problem(table: &toml::Table, whole: &toml::de::Error) -> String {
         };
         if let Some(e) = error {
             let message = crate::text::excerpt(e.message().trim(), 200);
+            // A missing key has no line of its own: the error's span is
+            // the table's, whose first line names another key.
+            let missing = message.strip_prefix("missing field `").and_then(|m| m.split('`').next());
+            if let Some(field) = missing {
+                let field = crate::text::excerpt(field, 60);
+                return if core {
+                    format!("`{shown_name}.{field}`: {message}")
+                } else {
+                    format!("in table `{shown_name}`: {message}")
+                };
+            }
             return match key_at(&text, e.span()) {
                 Some(key) if core => format!("`{shown_name}.{key}`: {message}"),
                 Some(key) => format!("`{key}`: {message}"),
@@ -678,6 +689,18 @@ mod tests {
             assert!(err.contains(&format!("--set {assignment}")) && err.contains(needle), "{err}");
             assert!(!err.contains("embedded"), "{err}");
         }
+    }
+
+    /// A required key left out of a model file is named by its own dotted
+    /// key, not by the first key of its table.
+    #[test]
+    fn a_missing_key_is_named_by_itself() {
+        let text = Model::default().to_toml_string();
+        let without: String =
+            text.lines().filter(|l| !l.trim_start().starts_with("mass_kg")).map(|l| format!("{l}\n")).collect();
+        let err = Model::from_toml_str(&without, "model.toml", &[]).unwrap_err().to_string();
+        assert!(err.contains("`rig.mass_kg`") && err.contains("missing field"), "{err}");
+        assert!(!err.contains("damping_ratio"), "{err}");
     }
 
     #[test]
