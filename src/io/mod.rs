@@ -175,7 +175,9 @@ pub fn confine(root: &Path, name: &str) -> Confined {
         }
     }
     match std::fs::canonicalize(root.join(name)) {
-        Ok(resolved) if resolved.starts_with(root) && resolved != root => Confined::Inside(resolved),
+        // The set's directory itself is inside it (and is refused as a
+        // directory when read).
+        Ok(resolved) if resolved.starts_with(root) => Confined::Inside(resolved),
         Ok(_) => Confined::Outside,
         Err(e) => Confined::Unresolved(e),
     }
@@ -547,12 +549,18 @@ impl OutputSet {
             }
             let owned_directory =
                 directory && self.owned.iter().any(|p| p.strip_suffix('/').is_some_and(|p| matches_pattern(p, &name)));
-            if !(owned_directory || regular && (temporary || self.owned.iter().any(|p| matches_pattern(p, &name)))) {
+            let owned_name = self.owned.iter().any(|p| matches_pattern(p, &name));
+            if !(owned_directory || regular && (temporary || owned_name)) {
+                let what = if owned_name {
+                    "which is not a file (this command writes a file of that name)"
+                } else {
+                    "which this command does not write"
+                };
                 return Err(Error::setting(
                     &self.flag,
                     format!(
-                        "`{}` holds `{}`, which this command does not write; it replaces only its own output \
-                         sets (choose a new or empty directory)",
+                        "`{}` holds `{}`, {what}; it replaces only its own output sets (choose a new or empty \
+                         directory)",
                         shown(&self.dest),
                         excerpt(&name, 80)
                     ),

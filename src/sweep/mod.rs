@@ -30,10 +30,13 @@ pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
             return Err(bad("expected START:STOP:COUNT".into()));
         }
         let (start, stop) = (number(parts[0])?, number(parts[1])?);
-        let count: usize = parts[2]
-            .trim()
-            .parse()
-            .map_err(|_| bad(format!("COUNT `{}` is not a whole number", excerpt(parts[2], 30))))?;
+        let shown = excerpt(parts[2].trim(), 30);
+        let count: usize = parts[2].trim().parse().map_err(|_| match parts[2].trim().parse::<f64>() {
+            Ok(c) if c.fract() == 0.0 && c > 0.0 => {
+                bad(format!("COUNT `{shown}` is far more values than any grid holds"))
+            }
+            _ => bad(format!("COUNT `{shown}` is not a whole number")),
+        })?;
         match count {
             0 => return Err(bad("COUNT must be at least 1".into())),
             1 if start != stop => return Err(bad("COUNT 1 needs START = STOP".into())),
