@@ -204,6 +204,20 @@ fn implausible_numbers_are_refused_by_file_line_and_column() {
         &["r.csv:41", "normal_force"],
     );
     assert!(!out.exists());
+    // A rig inside the manifest's ranges that no step count can integrate
+    // at the run's frequency is refused by the manifest and its key.
+    let stiff = run_set(&s, "stiff-rig", |_, l| l.into());
+    let text = std::fs::read_to_string(stiff.join("manifest.json")).unwrap();
+    std::fs::write(
+        stiff.join("manifest.json"),
+        text.replace("\"natural_frequency_hz\": 10.05", "\"natural_frequency_hz\": 1e6"),
+    )
+    .unwrap();
+    refused(
+        &["diagnose", "--backend", "cpu", stiff.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        &["manifest.json", "`rig.natural_frequency_hz`", "steps per period"],
+    );
+    assert!(!out.exists());
 }
 
 /// A report never holds a number that is not finite: one with an infinite
