@@ -643,13 +643,17 @@ impl Drop for OutputSet {
 /// just before then finds the path gone or changed and tries again.
 fn lock_file(path: &Path) -> std::result::Result<File, String> {
     for _ in 0..16 {
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(path)
-            .map_err(|e| format!("cannot create its lock file `{}`: {e}", shown(path)))?;
+        let file = std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).open(path).map_err(
+            |e| {
+                let why = if e.kind() == std::io::ErrorKind::PermissionDenied {
+                    " (an output is built beside its destination and swapped in whole, so the directory that \
+                     holds it must be writable)"
+                } else {
+                    ""
+                };
+                format!("cannot create its lock file `{}`: {e}{why}", shown(path))
+            },
+        )?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::MetadataExt;
