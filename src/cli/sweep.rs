@@ -11,7 +11,6 @@ use crate::engine::model::{excitation_frequency_problem, fmt_value, normal_force
 use crate::engine::{GpuOptions, Job, Model, RunPlan};
 use crate::io::{OutputSet, owned};
 use crate::sweep::{self, Grid, RefineSettings, Shard, SweepSettings, write_output_set};
-use crate::text::excerpt;
 
 #[derive(Args, Debug)]
 pub(crate) struct SweepArgs {
@@ -74,29 +73,10 @@ pub(crate) struct MergeArgs {
     pub(crate) fig8_frequency: f64,
 }
 
-/// `text` as a positive whole number written as a float (`1e9`), capped
-/// at `u64::MAX`.
-fn whole_number(text: &str) -> Option<u64> {
-    let c: f64 = text.trim().parse().ok()?;
-    (c.fract() == 0.0 && c > 0.0).then_some(c.min(u64::MAX as f64) as u64)
-}
-
-/// Parses a grid flag after checking, before anything is allocated, that
-/// it names at most [`Job::MAX_POINTS`] values; every value must be a
+/// Parses a grid flag ([`sweep::parse_list`], which refuses more than
+/// [`Job::MAX_POINTS`] values before making them); every value must be a
 /// physical frequency or force (`check`), and the error names the flag.
 fn grid_values(flag: &str, text: &str, check: fn(f64) -> Option<String>) -> Result<Vec<f64>> {
-    let count = match text.split(':').collect::<Vec<_>>().as_slice() {
-        // A count written as a float (1e9) is counted too.
-        [_, _, count] => count.trim().parse::<u64>().ok().or_else(|| whole_number(count)).unwrap_or(0),
-        _ => text.split(',').count() as u64,
-    };
-    if count > Job::MAX_POINTS as u64 {
-        anyhow::bail!(
-            "invalid {flag}: `{}` gives {count} values; a grid may have at most {} points",
-            excerpt(text, 60),
-            Job::MAX_POINTS
-        );
-    }
     let values = sweep::parse_list(flag, text)?;
     for &v in &values {
         if let Some(problem) = check(v) {

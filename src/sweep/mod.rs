@@ -16,9 +16,28 @@ pub use output::{SWEEP_COLUMNS, write_accumulators, write_histograms_csv, write_
 pub use refine::{RefineSettings, Refinement, not_refinable, refine_frequencies};
 pub use shard::{ACCUMULATOR_FORMAT, AccumulatorFile, RunIdentity, Shard, merge_shards, read_accumulators};
 
-/// Parses a grid flag: a comma list (`6,7,8`) or `START:STOP:COUNT`.
+/// A count written as a whole number, in integer or float notation
+/// (`1e9`), capped at `u64::MAX`; `None` for anything else.
+fn whole_count(text: &str) -> Option<u64> {
+    let text = text.trim();
+    text.parse::<u64>().ok().or_else(|| {
+        let c: f64 = text.parse().ok()?;
+        (c.fract() == 0.0 && c >= 0.0).then_some(c.min(u64::MAX as f64) as u64)
+    })
+}
+
+/// Parses a grid flag: a comma list (`6,7,8`) or `START:STOP:COUNT`, of
+/// at most [`Job::MAX_POINTS`] values.
 pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
     let bad = |message: String| Error::setting(flag, format!("`{}`: {message}", excerpt(text, 60)));
+    // Checked before the values are made: a range is a few characters
+    // whatever its count.
+    let too_many = |count: u64| -> Result<()> {
+        if count > Job::MAX_POINTS as u64 {
+            return Err(bad(format!("gives {count} values; a grid may have at most {} points", Job::MAX_POINTS)));
+        }
+        Ok(())
+    };
     let number = |s: &str| -> Result<f64> {
         let shown = excerpt(s.trim(), 30);
         let v: f64 = s.trim().parse().map_err(|_| bad(format!("`{shown}` is not a number")))?;
@@ -30,13 +49,10 @@ pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
             return Err(bad("expected START:STOP:COUNT".into()));
         }
         let (start, stop) = (number(parts[0])?, number(parts[1])?);
-        let shown = excerpt(parts[2].trim(), 30);
-        let count: usize = parts[2].trim().parse().map_err(|_| match parts[2].trim().parse::<f64>() {
-            Ok(c) if c.fract() == 0.0 && c > 0.0 => {
-                bad(format!("COUNT `{shown}` is far more values than any grid holds"))
-            }
-            _ => bad(format!("COUNT `{shown}` is not a whole number")),
-        })?;
+        let count = whole_count(parts[2])
+            .ok_or_else(|| bad(format!("COUNT `{}` is not a whole number", excerpt(parts[2].trim(), 30))))?;
+        too_many(count)?;
+        let count = count as usize;
         match count {
             0 => return Err(bad("COUNT must be at least 1".into())),
             1 if start != stop => return Err(bad("COUNT 1 needs START = STOP".into())),
@@ -44,6 +60,7 @@ pub fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>> {
             _ => (0..count).map(|i| start + (stop - start) * i as f64 / (count - 1) as f64).collect(),
         }
     } else {
+        too_many(text.split(',').count() as u64)?;
         text.split(',').map(number).collect::<Result<Vec<f64>>>()?
     };
     if values.is_empty() {
@@ -189,6 +206,14 @@ mod tests {
     fn lists_and_ranges_parse() {
         assert_eq!(parse_list("--frequencies", "6,7,8").unwrap(), vec![6.0, 7.0, 8.0]);
         assert_eq!(parse_list("--frequencies", "5:15:3").unwrap(), vec![5.0, 10.0, 15.0]);
+        assert_eq!(parse_list("--frequencies", "5:15:3.0").unwrap(), vec![5.0, 10.0, 15.0]);
+        // A count beyond the grid limit is refused before its values are
+        // made, however it is written.
+        for huge in ["5:15:1000000000000", "5:15:1e12"] {
+            let e = parse_list("--frequencies", huge).unwrap_err().to_string();
+            assert!(e.contains("a grid may have at most"), "{e}");
+        }
+        assert!(parse_list("--frequencies", "5:15:2.5").unwrap_err().to_string().contains("not a whole number"));
         assert!(parse_list("--frequencies", "5:15").unwrap_err().to_string().contains("--frequencies"));
         assert!(parse_list("--normal-forces", "4,x").unwrap_err().to_string().contains("`x`"));
         let escaped = parse_list("--frequencies", "7\u{1b}[2J").unwrap_err().to_string();
