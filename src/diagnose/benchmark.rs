@@ -188,8 +188,9 @@ pub struct BenchmarkRow {
     pub truth_shrink: Option<f64>,
     /// The smallest of those shrinks fold by fold.
     pub worst_fold: Option<f64>,
-    /// Whether the effects move the statistics at the withheld level beyond
-    /// their noise.
+    /// Whether the hidden effects move the statistics beyond their noise
+    /// (the mean squared z, over every condition, of the truth without its
+    /// effects against the truth exceeds 4; see `Truth::effect_weight`).
     pub moves_statistics: bool,
     /// Whether the calibrated baseline's gap was within its noise threshold
     /// of the noise floor.
@@ -230,10 +231,8 @@ impl BenchmarkRow {
 pub type TruthStat = (f64, f64, f64);
 
 /// The error of `model`'s statistics against the truth's (`truth[i]`: its
-/// paths' statistics at `conditions[i]`): the mean over conditions of the
-/// squared differences of the ensemble mean peak, peak variance and phase,
-/// each in units of the truth's per-record noise (the spread over paths of
-/// one record's statistic over `runs` records).
+/// paths' statistics at `conditions[i]`): [`stats_error`] of the model's
+/// paths (simulated by the engine) against the truth's.
 pub fn error_against_stats(
     model: &Model,
     truth: &[Vec<TruthStat>],
@@ -242,23 +241,33 @@ pub fn error_against_stats(
     engine: &Engine,
 ) -> Result<f64> {
     let m = record_path_stats(engine, model, conditions, shape.duration_s, 32, 77, 60)?;
-    let runs = f64::from(shape.runs_per_condition.max(1)).sqrt();
+    let m: Vec<Vec<TruthStat>> =
+        m.iter().map(|pm| pm.iter().map(|p| (p.peak_mean_m, p.peak_var_m2, p.phase_mean_deg)).collect()).collect();
+    Ok(stats_error(truth, &m, shape.runs_per_condition))
+}
+
+/// The error of one set of paths' statistics (`other[i]`) against the
+/// truth's (`truth[i]`), condition by condition: the mean over conditions
+/// of the squared differences of the ensemble mean peak, peak variance and
+/// phase, each in units of the truth's per-record noise (the spread over
+/// paths of one record's statistic over `runs` records), –.
+pub fn stats_error(truth: &[Vec<TruthStat>], other: &[Vec<TruthStat>], runs: u32) -> f64 {
+    let runs = f64::from(runs.max(1)).sqrt();
     let mut terms = Vec::new();
-    for (pt, pm) in truth.iter().zip(&m) {
-        let pm: Vec<TruthStat> = pm.iter().map(|p| (p.peak_mean_m, p.peak_var_m2, p.phase_mean_deg)).collect();
+    for (pt, pm) in truth.iter().zip(other) {
         let stat = |p: &[TruthStat], f: fn(&TruthStat) -> f64| p.iter().map(f).collect::<Vec<f64>>();
         for f in [|p: &TruthStat| p.0, |p: &TruthStat| p.1] {
-            let (a, b) = (stat(pt, f), stat(&pm, f));
+            let (a, b) = (stat(pt, f), stat(pm, f));
             terms.push(((mean(&b) - mean(&a)) / (sd(&a).max(1e-30) / runs)).powi(2));
         }
         let phases = |p: &[TruthStat]| p.iter().map(|s| s.2.to_radians()).collect::<Vec<f64>>();
-        let (a, b) = (phases(pt), phases(&pm));
+        let (a, b) = (phases(pt), phases(pm));
         let (ca, va) = circular_mean_var(&a);
         let (cb, _) = circular_mean_var(&b);
         let d = crate::engine::reduce::wrap_angle(cb - ca);
         terms.push((d / (va.sqrt().max(1e-9) / runs)).powi(2));
     }
-    Ok(mean(&terms))
+    mean(&terms)
 }
 
 /// The paths' statistics of an engine model at `conditions` over records of
@@ -356,6 +365,30 @@ impl Truth {
         }
     }
 
+    /// How far the hidden effects move the statistics at `conditions`
+    /// ([`stats_error`] of the truth without its effects against `stats`,
+    /// the truth's own paths there), –: an engine truth's baseline simulated
+    /// by the engine; an independent truth's twin without effects by its
+    /// own generator, on the same noise paths.
+    fn effect_weight(
+        &self,
+        stats: &[Vec<TruthStat>],
+        conditions: &[Condition],
+        shape: SetShape,
+        engine: &Engine,
+    ) -> Result<f64> {
+        match self {
+            Truth::Engine(_) => error_against_stats(&self.engine_baseline(), stats, conditions, shape, engine),
+            Truth::Independent(t, seed) => {
+                let twin = Truth::Independent(
+                    Box::new(independent::IndependentTruth { effects: Vec::new(), ..(**t).clone() }),
+                    *seed,
+                );
+                Ok(stats_error(stats, &twin.stats(conditions, shape, engine)?, shape.runs_per_condition))
+            }
+        }
+    }
+
     /// The engine model without effects nearest the truth (an independent
     /// truth's rig and eq. 7 law).
     fn engine_baseline(&self) -> Model {
@@ -431,7 +464,7 @@ pub fn run_benchmark(
             (None, None, false)
         } else {
             let all = truth.stats(&conditions, shape, engine)?;
-            let moved = error_against_stats(&truth.engine_baseline(), &all, &conditions, shape, engine)?;
+            let moved = truth.effect_weight(&all, &conditions, shape, engine)?;
             let at = |fold: &crate::diagnose::data::Fold| -> Vec<Vec<TruthStat>> {
                 fold.conditions
                     .iter()
@@ -452,12 +485,8 @@ pub fn run_benchmark(
                     worst = worst.min(1.0 - ef / eb);
                 }
             }
-            // Engine truths: whether the effects move the statistics beyond
-            // their noise; an independent truth's presets are made to.
-            let moves = match &truth {
-                Truth::Engine(_) => moved > 4.0,
-                Truth::Independent(..) => true,
-            };
+            // Whether the effects move the statistics beyond their noise.
+            let moves = moved > 4.0;
             ((base > 0.0).then(|| 1.0 - fitted / base), worst.is_finite().then_some(worst), moves)
         };
         // How far the data move without each of two hidden effects: the
@@ -592,6 +621,15 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         "single-effect sets, top-1: {single_right}/{} = {} (target >= 90%)\n",
         singles.len(),
         percent(single_right, singles.len())
+    ));
+    let visible: Vec<&BenchmarkRow> = singles.iter().copied().filter(|r| r.moves_statistics).collect();
+    let visible_right = count(&visible, &|r| r.leading_right());
+    text.push_str(&format!(
+        "  of which the hidden effect moves the statistics beyond their noise ({}): top-1 {visible_right}/{} = {}; in the others ({}) the truth without its effect is within that noise of the truth\n",
+        visible.len(),
+        visible.len(),
+        percent(visible_right, visible.len()),
+        singles.len() - visible.len()
     ));
     let (both, lead) = (count(&pairs, &|r| r.all_right()), count(&pairs, &|r| r.leading_right()));
     text.push_str(&format!(
