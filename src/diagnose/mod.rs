@@ -380,6 +380,36 @@ fn misfit_of(scores: &[Score], null: search::cv::NullLoss, named: &[Effect]) -> 
     Some(Misfit { observables: worst, hints })
 }
 
+/// A hint for each family of the first round, not named, that closes
+/// more of the baseline's gap in sample than `noise` (the out-of-sample
+/// noise threshold of the gap) but none of it at the withheld folds: what
+/// it fits at some folds does not carry over to the others, which the
+/// user should hear about rather than see only `none`.
+fn fitting_only_hints(first_round: &[Candidate], named: &[Effect], noise: f64) -> Vec<String> {
+    first_round
+        .iter()
+        .filter(|c| !named.contains(&c.effect) && c.cv_share <= 0.0 && c.shrink < 1.0)
+        .filter(|c| c.gap_fit / (1.0 - c.shrink) - c.gap_fit > noise)
+        .map(|c| {
+            let example = match c.effect {
+                Effect::LoadDependentFriction => {
+                    " (as when the friction changes between two of the loads measured and holds beyond them: \
+                     more load levels between those two would tell)"
+                }
+                _ => "",
+            };
+            format!(
+                "{} ({}) closes {:.0}% of the baseline's gap in sample but none of it at the withheld folds \
+                 ({:+.0}%): what it fits at some folds does not carry over to the others{example}",
+                c.effect,
+                c.form,
+                100.0 * c.in_sample_share,
+                100.0 * c.cv_share
+            )
+        })
+        .collect()
+}
+
 /// Arithmetic mean; 0 for no values.
 pub(crate) fn mean(values: &[f64]) -> f64 {
     values.iter().sum::<f64>() / values.len().max(1) as f64
@@ -523,7 +553,10 @@ pub fn diagnose_set(
         None => 1.0,
     };
     let named: Vec<Effect> = effects.iter().map(|e| e.effect).collect();
-    let misfit = misfit_of(&fitted_scores, search::cv::NullLoss::for_replicates(settings.replicates), &named);
+    let mut misfit = misfit_of(&fitted_scores, search::cv::NullLoss::for_replicates(settings.replicates), &named);
+    if let Some(m) = misfit.as_mut() {
+        m.hints.extend(fitting_only_hints(&selection.first_round, &named, selection.noise));
+    }
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
         None => (None, selection.none_confidence),
@@ -559,7 +592,7 @@ pub fn diagnose_set(
 
 #[cfg(test)]
 mod tests {
-    use super::{Effect, Observable, Score, misfit_of};
+    use super::{Candidate, Effect, Observable, Score, fitting_only_hints, misfit_of};
 
     /// A fitting score of `observable` at unit `unit` with z = `z`.
     fn fitting_score(unit: usize, observable: Observable, z: f64) -> Score {
@@ -586,5 +619,42 @@ mod tests {
         // A named family is not pointed at again.
         let misfit = misfit_of(&scores, null, &[Effect::FrictionHysteresis]).expect("a misfit");
         assert!(!misfit.hints.iter().any(|h| h.contains("signature of friction_hysteresis")));
+    }
+
+    /// A first-round family with `shrink` of the gap `gap_before` in sample
+    /// and `cv_share` out of sample.
+    fn candidate(effect: Effect, gap_before: f64, shrink: f64, cv_share: f64) -> Candidate {
+        Candidate {
+            effect,
+            form: crate::diagnose::candidates::SearchedForm::Linear,
+            gap_fit: gap_before * (1.0 - shrink),
+            shrink,
+            in_sample_share: shrink,
+            cv_share,
+            heldout_shrink: cv_share,
+            wins: 0.0,
+            refined: true,
+            parameters: Default::default(),
+            unexplained: Vec::new(),
+            model: Default::default(),
+            scores: Vec::new(),
+        }
+    }
+
+    /// A family that fits the data in sample but predicts no withheld fold
+    /// is pointed at, unless it is named, its fall is within the noise, or
+    /// it predicts the withheld folds too.
+    #[test]
+    fn a_family_that_fits_only_in_sample_is_pointed_at() {
+        let noise = 0.06;
+        let round = [
+            candidate(Effect::LoadDependentFriction, 1.4, 0.3, -0.05),
+            candidate(Effect::Stiction, 1.4, 0.02, -0.01),
+            candidate(Effect::NormalForceDrift, 1.4, 0.3, 0.2),
+        ];
+        let hints = fitting_only_hints(&round, &[], noise);
+        assert_eq!(hints.len(), 1, "{hints:?}");
+        assert!(hints[0].starts_with("load_dependent_friction (linear) closes 30%") && hints[0].contains("(-5%)"));
+        assert!(fitting_only_hints(&round, &[Effect::LoadDependentFriction], noise).is_empty());
     }
 }
