@@ -702,3 +702,35 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
     ));
     text
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{SetShape, Truth, independent};
+    use crate::engine::{Effect, Engine};
+
+    /// How far a truth's one hidden effect moves the response at `ratios`
+    /// of its natural frequency and `loads_n`, over 5 s records.
+    fn weight(effect: Effect, form: u32, loads_n: &[f64], ratios: &[f64]) -> f64 {
+        let (mut truth, conditions) =
+            independent::random_truth(3, &[(effect, form, true)], loads_n, ratios).expect("a truth");
+        truth.integration.warmup_s = 1.0;
+        truth.integration.step_rate_hz = 100e3;
+        let shape = SetShape { runs_per_condition: 1, duration_s: 5.0, sample_rate_hz: 600.0 };
+        let engine = Engine::cpu("a test");
+        let truth = Truth::Independent(Box::new(truth), 3);
+        let stats = truth.stats(&conditions, shape, &engine).expect("its statistics");
+        truth.effect_weight(&stats, &conditions, shape, &engine).expect("its weight")
+    }
+
+    /// An independent truth's effect is weighed against its twin without
+    /// it on the same noise paths: a load dependence of the whole law moves
+    /// the response far beyond its noise, and stiction where the block
+    /// never stops (near resonance, at a light load) not at all.
+    #[test]
+    fn an_effect_is_weighed_against_its_twin_without_it() {
+        let load = weight(Effect::LoadDependentFriction, 0, &[4.0, 16.0], &[0.8]);
+        assert!(load > 4.0, "a strong Hertzian load dependence moves the response by {load}");
+        let stiction = weight(Effect::Stiction, 0, &[1.0], &[1.1, 1.2]);
+        assert!(stiction < 4.0, "stiction where the block never stops moves it by {stiction}");
+    }
+}
