@@ -366,7 +366,8 @@ impl Truth {
         }
     }
 
-    /// How far the hidden effects move the statistics at `conditions`
+    /// How far the hidden effects move the response statistics (peak
+    /// mean, variance and phase) at `conditions`
     /// ([`stats_error`] of the truth without its effects against `stats`,
     /// the truth's own paths there), –: an engine truth's baseline simulated
     /// by the engine; an independent truth's twin without effects by its
@@ -486,7 +487,7 @@ pub fn run_benchmark(
                     worst = worst.min(1.0 - ef / eb);
                 }
             }
-            // Whether the effects move the statistics beyond their noise.
+            // Whether the effects move the response beyond its noise.
             let moves = moved > 4.0;
             ((base > 0.0).then(|| 1.0 - fitted / base), worst.is_finite().then_some(worst), moves)
         };
@@ -623,9 +624,9 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         singles.len(),
         percent(single_right, singles.len())
     ));
-    // The response statistics alone: an effect seen in another channel
-    // (the normal force, the friction) may leave them within their noise
-    // and still be named, and one that moves nothing cannot be.
+    // Split by the response statistics alone: an effect seen in another
+    // channel (the normal force, the friction) may leave them within their
+    // noise and still be named; one that moves no channel cannot be.
     let (moved, still): (Vec<&BenchmarkRow>, Vec<&BenchmarkRow>) = singles.iter().partition(|r| r.moves_statistics);
     let (moved_right, still_right) = (count(&moved, &|r| r.leading_right()), count(&still, &|r| r.leading_right()));
     text.push_str(&format!(
