@@ -252,7 +252,7 @@ pub fn error_against_stats(
 /// of the squared differences of the ensemble mean peak, peak variance and
 /// phase, each in units of the truth's per-record noise (the spread over
 /// paths of one record's statistic over `runs` records), –.
-pub fn stats_error(truth: &[Vec<TruthStat>], other: &[Vec<TruthStat>], runs: u32) -> f64 {
+fn stats_error(truth: &[Vec<TruthStat>], other: &[Vec<TruthStat>], runs: u32) -> f64 {
     let runs = f64::from(runs.max(1)).sqrt();
     let mut terms = Vec::new();
     for (pt, pm) in truth.iter().zip(other) {
