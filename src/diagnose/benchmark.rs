@@ -232,7 +232,7 @@ impl BenchmarkRow {
 pub type TruthStat = (f64, f64, f64);
 
 /// The error of `model`'s statistics against the truth's (`truth[i]`: its
-/// paths' statistics at `conditions[i]`): [`stats_error`] of the model's
+/// paths' statistics at `conditions[i]`): `stats_error` of the model's
 /// paths (simulated by the engine) against the truth's.
 pub fn error_against_stats(
     model: &Model,
