@@ -11,6 +11,7 @@ use crate::diagnose::search::cv::{UnitLosses, pair_losses};
 use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
+use rayon::prelude::*;
 
 /// Families searched in full in a round, after every family's coarse fit:
 /// those whose coarse fit came closest to the data.
@@ -79,51 +80,66 @@ pub(super) fn round(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<Family>> {
     let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles);
+    let searched: Vec<(Effect, Vec<Variant>)> = Effect::ALL
+        .into_iter()
+        .filter(|e| !named.contains(e))
+        .map(|e| (e, variants(e, &ctx)))
+        .filter(|(_, forms)| !forms.is_empty())
+        .collect();
+    let every_form: Vec<&Variant> = searched.iter().flat_map(|(_, forms)| forms).collect();
+    progress(&format!(
+        "trying every family: a coarse fit of each of {} forms of {} effects",
+        every_form.len(),
+        searched.len()
+    ));
+    // The coarse fits are independent of each other (each starts from the
+    // current model, and a trial's records depend only on its model), so
+    // they run side by side: on a machine with many cores, or a GPU that
+    // wants many jobs in flight, a round is not a queue of small jobs.
+    let coarse: Vec<Vec<Trial>> =
+        every_form.par_iter().map(|v| coarse_fit(v, current, slope, data, search, engine)).collect::<Result<_>>()?;
+    let mut coarse = coarse.into_iter();
     let mut families: Vec<(Family, Vec<Option<Trial>>)> = Vec::new();
-    for effect in Effect::ALL.into_iter().filter(|e| !named.contains(e)) {
-        let forms = variants(effect, &ctx);
-        if forms.is_empty() {
-            continue;
-        }
-        progress(&format!("trying {effect} (a coarse fit of each of its {} forms)", forms.len()));
+    for (effect, forms) in &searched {
         let mut starts: Vec<Option<Trial>> = Vec::new();
         let mut pool = Vec::new();
-        for v in &forms {
-            let coarse = coarse_fit(v, current, slope, data, search, engine)?;
-            pool.extend(coarse.iter().map(|t| Member::of(v.form, t, current, data)));
-            starts.push(coarse.into_iter().min_by(|a, b| a.objective.total_cmp(&b.objective)));
+        for v in forms {
+            let trials = coarse.next().expect("a coarse fit per form");
+            pool.extend(trials.iter().map(|t| Member::of(v.form, t, current, data)));
+            starts.push(trials.into_iter().min_by(|a, b| a.objective.total_cmp(&b.objective)));
         }
         let objective = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
         let best = (0..forms.len()).min_by(|&a, &b| objective(a).total_cmp(&objective(b)));
         let Some((best, Some(trial))) = best.map(|i| (i, starts[i].clone())) else { continue };
         let (form, parameters) = (forms[best].form, forms[best].describe(&trial.values));
-        families.push((Family { effect, best: trial, form, parameters, pool, refined: false }, starts));
+        families.push((Family { effect: *effect, best: trial, form, parameters, pool, refined: false }, starts));
     }
     families.sort_by(|a, b| a.0.best.objective.total_cmp(&b.0.best.objective));
     // Every round searches every form of the closest family and the best
     // form of the next: a further effect is judged as the first is, so it
-    // is fitted as closely.
-    for (rank, (family, starts)) in families.iter_mut().take(REFINED_FAMILIES).enumerate() {
+    // is fitted as closely. The searches are independent: side by side too.
+    let refined = families.len().min(REFINED_FAMILIES);
+    for (rank, (family, starts)) in families.iter_mut().take(refined).enumerate() {
         progress(&format!("searching {} in full", family.effect));
-        let mut starts = std::mem::take(starts);
         if rank > 0 {
             // Only the form whose coarse fit came closest.
-            let best = (0..starts.len())
-                .min_by(|&a, &b| {
-                    let o = |i: usize| starts[i].as_ref().map_or(f64::INFINITY, |t| t.objective);
-                    o(a).total_cmp(&o(b))
-                })
-                .unwrap_or(0);
+            let o = |s: &Option<Trial>| s.as_ref().map_or(f64::INFINITY, |t| t.objective);
+            let best = (0..starts.len()).min_by(|&a, &b| o(&starts[a]).total_cmp(&o(&starts[b]))).unwrap_or(0);
             for (i, s) in starts.iter_mut().enumerate() {
                 if i != best {
                     *s = None;
                 }
             }
-            refine(family, starts, true, current, slope, &ctx, data, search, engine)?;
-        } else {
-            refine(family, starts, false, current, slope, &ctx, data, search, engine)?;
         }
     }
+    families[..refined]
+        .par_iter_mut()
+        .enumerate()
+        .map(|(rank, (family, starts))| {
+            let starts = std::mem::take(starts);
+            refine(family, starts, rank > 0, current, slope, &ctx, data, search, engine)
+        })
+        .collect::<Result<Vec<()>>>()?;
     Ok(families.into_iter().map(|(f, _)| f).collect())
 }
 

@@ -56,6 +56,7 @@ use cv::{
 use family::{Family, round, variant_named};
 pub(crate) use fit::Fitted;
 use fit::{Trial, coordinate_search, evaluate, polish, search_settings, tracing};
+use rayon::prelude::*;
 
 /// At most this many effects are named.
 pub(crate) const MAX_EFFECTS: usize = 3;
@@ -143,7 +144,7 @@ impl<'a> FoldSet<'a> {
     ) -> Result<FoldSet<'a>> {
         let views = data.fold_views();
         let fitted = views
-            .iter()
+            .par_iter()
             .map(|view| {
                 let (m, s, _) = calibrate_and_score(baseline, view, search, engine, Some(slope), 2, Scope::Fitting)?;
                 let (model, scores) = converge_law(m, s, view, search, engine)?;
@@ -609,44 +610,62 @@ fn refit_folds(
     search: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<Option<Vec<Fitted>>> {
+    // Each fold's refit is independent of the others': side by side, then
+    // read in order, so the first fold without a model decides as a loop
+    // would have.
+    let each: Vec<Result<Option<Fitted>>> = folds
+        .views
+        .par_iter()
+        .enumerate()
+        .map(|(k, view)| -> Result<Option<Fitted>> {
+            let member = &family.pool[picks[k]];
+            let base = &folds.current[k];
+            let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
+            let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else {
+                return Ok(None);
+            };
+            let Some(mut start) =
+                evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
+            else {
+                return Ok(None);
+            };
+            // Where the pool's parameters with the fold's own law fit the
+            // fold's units no better than the model before the effect, they
+            // are searched again there.
+            if start.objective >= 1.0 {
+                start = coordinate_search(
+                    &variant.params,
+                    start,
+                    |b: &Trial, v: &[f64]| {
+                        evaluate(&variant, v, &b.carry, &base.scores, 0, slope, view, search, engine)
+                    },
+                    &mut |_| {},
+                )?;
+            }
+            let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
+                Err(Error::Diverged { .. }) => return Ok(None),
+                other => other?,
+            };
+            if tracing() {
+                eprintln!(
+                    "fold {k} ({}): {} [{}] {:?}: fit {:.2} held out {:.2}",
+                    view.folds.folds[k].label,
+                    family.effect,
+                    variant.form,
+                    member.values,
+                    crate::diagnose::score::gap_of(&scores, false),
+                    crate::diagnose::score::gap_of(&scores, true)
+                );
+            }
+            Ok(Some(Fitted { model, scores }))
+        })
+        .collect();
     let mut out = Vec::new();
-    for (k, view) in folds.views.iter().enumerate() {
-        let member = &family.pool[picks[k]];
-        let base = &folds.current[k];
-        let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
-        let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else { return Ok(None) };
-        let Some(mut start) =
-            evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
-        else {
-            return Ok(None);
-        };
-        // Where the pool's parameters with the fold's own law fit the
-        // fold's units no better than the model before the effect, they
-        // are searched again there.
-        if start.objective >= 1.0 {
-            start = coordinate_search(
-                &variant.params,
-                start,
-                |b: &Trial, v: &[f64]| evaluate(&variant, v, &b.carry, &base.scores, 0, slope, view, search, engine),
-                &mut |_| {},
-            )?;
+    for fitted in each {
+        match fitted? {
+            Some(f) => out.push(f),
+            None => return Ok(None),
         }
-        let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
-            Err(Error::Diverged { .. }) => return Ok(None),
-            other => other?,
-        };
-        if tracing() {
-            eprintln!(
-                "fold {k} ({}): {} [{}] {:?}: fit {:.2} held out {:.2}",
-                view.folds.folds[k].label,
-                family.effect,
-                variant.form,
-                member.values,
-                crate::diagnose::score::gap_of(&scores, false),
-                crate::diagnose::score::gap_of(&scores, true)
-            );
-        }
-        out.push(Fitted { model, scores });
     }
     Ok(Some(out))
 }
