@@ -94,8 +94,8 @@ pub(super) fn round(
     ));
     // The coarse fits are independent of each other (each starts from the
     // current model, and a trial's records depend only on its model), so
-    // they run side by side: on a machine with many cores, or a GPU that
-    // wants many jobs in flight, a round is not a queue of small jobs.
+    // they run side by side: on a machine with many cores a round is not
+    // a queue of small jobs. (Trace lines of side-by-side trials interleave.)
     let coarse: Vec<Vec<Trial>> =
         every_form.par_iter().map(|v| coarse_fit(v, current, slope, data, search, engine)).collect::<Result<_>>()?;
     let mut coarse = coarse.into_iter();
