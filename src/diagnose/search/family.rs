@@ -8,7 +8,7 @@ use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::search::cv::{UnitLosses, pair_losses};
-use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate};
+use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
 use rayon::prelude::*;
@@ -94,10 +94,14 @@ pub(super) fn round(
     ));
     // The coarse fits are independent of each other (each starts from the
     // current model, and a trial's records depend only on its model), so
-    // they run side by side: on a machine with many cores a round is not
-    // a queue of small jobs. (Trace lines of side-by-side trials interleave.)
-    let coarse: Vec<Vec<Trial>> =
-        every_form.par_iter().map(|v| coarse_fit(v, current, slope, data, search, engine)).collect::<Result<_>>()?;
+    // they run side by side ([`fits_per_task`]): on a machine with many
+    // cores a round is not a queue of small jobs. (Trace lines of
+    // side-by-side trials interleave.)
+    let coarse: Vec<Vec<Trial>> = every_form
+        .par_iter()
+        .with_min_len(fits_per_task(engine))
+        .map(|v| coarse_fit(v, current, slope, data, search, engine))
+        .collect::<Result<_>>()?;
     let mut coarse = coarse.into_iter();
     let mut families: Vec<(Family, Vec<Option<Trial>>)> = Vec::new();
     for (effect, forms) in &searched {
@@ -134,6 +138,7 @@ pub(super) fn round(
     }
     families[..refined]
         .par_iter_mut()
+        .with_min_len(fits_per_task(engine))
         .enumerate()
         .map(|(rank, (family, starts))| {
             let starts = std::mem::take(starts);

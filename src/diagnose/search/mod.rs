@@ -55,7 +55,7 @@ use cv::{
 };
 use family::{Family, round, variant_named};
 pub(crate) use fit::Fitted;
-use fit::{Trial, coordinate_search, evaluate, polish, search_settings, tracing};
+use fit::{Trial, coordinate_search, evaluate, fits_per_task, polish, search_settings, tracing};
 use rayon::prelude::*;
 
 /// At most this many effects are named.
@@ -145,6 +145,7 @@ impl<'a> FoldSet<'a> {
         let views = data.fold_views();
         let fitted = views
             .par_iter()
+            .with_min_len(fits_per_task(engine))
             .map(|view| {
                 let (m, s, _) = calibrate_and_score(baseline, view, search, engine, Some(slope), 2, Scope::Fitting)?;
                 let (model, scores) = converge_law(m, s, view, search, engine)?;
@@ -616,6 +617,7 @@ fn refit_folds(
     let each: Vec<Result<Option<Fitted>>> = folds
         .views
         .par_iter()
+        .with_min_len(fits_per_task(engine))
         .enumerate()
         .map(|(k, view)| -> Result<Option<Fitted>> {
             let member = &family.pool[picks[k]];
