@@ -4,6 +4,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use super::channels;
 use super::json::{Bound, bad};
 use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow, TimeOrigin};
 use crate::engine::Job;
@@ -338,6 +339,12 @@ pub(super) fn read_run_file(
                 duration_s / period_s
             ),
         ));
+    }
+    if has_v {
+        channels::check_velocity(path, &t_s, &x_m, &v)?;
+    }
+    if has_f {
+        channels::check_friction(path, &t_s, &x_m, &friction)?;
     }
     let time_origin = if has_base {
         let base = base_phase(&t_s, &base, frequency_hz).ok_or_else(|| {

@@ -44,9 +44,14 @@
 //!   run is refused here, not half-way through a diagnosis.
 //! - **Sampling.** A record must be sampled above twice its excitation
 //!   frequency (Nyquist), with an interval the simulator can hold noise over.
+//! - **Channel conventions.** A `v` column must be the rate of change of
+//!   `x` (not its mirror image, not in another unit), and a friction force
+//!   must oppose the block's motion where it moves fastest, not push it
+//!   along (a reversed sign): see `channels`.
 //! - **Summary counts.** `n_peaks` must be at least 1 (2 with a variance) and
 //!   at most the periods one simulated record may run.
 
+mod channels;
 mod csv;
 mod json;
 mod write;

@@ -326,7 +326,7 @@ fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
         !ok && err.contains("not a finite number") && err.contains("peak_mean_m") && err.contains("spread"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&root).unwrap();
 }
 
 /// One run of one condition: nothing can be held out, so no effect can be

@@ -344,6 +344,39 @@ fn time_must_increase_and_be_uniform() {
     refused(&s.0, "run.csv", Some(101), &["uniformly sampled"]);
 }
 
+/// A slipping block's record at 600 Hz for 2 s, its velocity column scaled
+/// by `v_factor` and its friction force (2 N, opposing the motion) by
+/// `friction_sign`.
+fn run_csv_slipping(v_factor: f64, friction_sign: f64) -> String {
+    let mut text = String::from("t,x,v,normal_force,friction_force\n");
+    let w = std::f64::consts::TAU * 7.0;
+    for i in 0..1200 {
+        let t = i as f64 / 600.0;
+        let v = -0.004 * w * (w * t).sin();
+        text += &format!("{t},{},{},16,{}\n", 0.004 * (w * t).cos(), v_factor * v, -2.0 * friction_sign * v.signum());
+    }
+    text
+}
+
+/// A channel that breaks a convention no single value breaks (a velocity
+/// with its sign reversed or in mm/s, a friction force with its sign
+/// reversed) is refused by file and column. Read as it was, a reversed
+/// friction force (or velocity) left no sample slipping, every friction
+/// feature vanished, and a diagnosis of a null set was sure of `none`
+/// without having looked at the friction.
+#[test]
+fn a_channel_with_its_sign_reversed_or_in_another_unit_is_refused() {
+    let s = valid_set("conventions");
+    s.write("run.csv", &run_csv_slipping(1.0, 1.0));
+    read_measurement_set(&s.0).expect("a record that keeps the conventions reads");
+    s.write("run.csv", &run_csv_slipping(-1.0, 1.0));
+    refused(&s.0, "run.csv", None, &["column `v`", "falls where `x` rises"]);
+    s.write("run.csv", &run_csv_slipping(1000.0, 1.0));
+    refused(&s.0, "run.csv", None, &["column `v`", "1000 times its size", "m/s"]);
+    s.write("run.csv", &run_csv_slipping(1.0, -1.0));
+    refused(&s.0, "run.csv", None, &["column `friction_force`", "along its motion", "sign reversed"]);
+}
+
 #[test]
 fn records_shorter_than_ten_periods() {
     let s = Scratch::new("short");
