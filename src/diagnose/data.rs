@@ -14,9 +14,11 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::effects::HarmonicForm;
+use crate::engine::model::fmt_value;
 use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
-use crate::measure::{MeasurementSet, Run};
+use crate::measure::{MeasurementSet, Run, SAMPLING_TOLERANCE, sample_rate_hz};
+use crate::text::shown;
 
 /// One group of measured data at one condition.
 #[derive(Clone, Debug)]
@@ -373,6 +375,41 @@ impl SensorNoise {
     }
 }
 
+/// The sample interval (s) every run of a set shares (within
+/// [`SAMPLING_TOLERANCE`]; 1/600 s, the paper's, for a set of summary rows
+/// alone). A diagnosis simulates every record at one sample interval, which
+/// is also the baseline's noise interval (the friction and normal-force
+/// noise held over one sample), so a set whose runs are sampled at
+/// different rates is refused, naming a run of each rate: scored against
+/// replicates sampled at another rate, a record's noise features (the
+/// friction's lag-1 autocorrelation, say) are tens of standard errors off
+/// for that reason alone.
+fn one_sample_interval(runs: &[Run]) -> Result<f64> {
+    let Some(first) = runs.first() else { return Ok(1.0 / 600.0) };
+    let dt = first.sample_interval_s();
+    match runs.iter().find(|r| (r.sample_interval_s() / dt - 1.0).abs() > SAMPLING_TOLERANCE) {
+        None => Ok(dt),
+        Some(other) => Err(Error::Measurement {
+            file: other.file.clone(),
+            line: None,
+            message: format!(
+                "sampled at {} Hz, while {} is sampled at {} Hz: a diagnosis simulates every record at one rate \
+                 (the baseline's noise is held over one sample interval), so the runs of a set must share one; \
+                 resample them to a common rate",
+                fmt_value(round_6(sample_rate_hz(other))),
+                shown(&first.file),
+                fmt_value(round_6(sample_rate_hz(first)))
+            ),
+        }),
+    }
+}
+
+/// `x` rounded to six decimals, for messages (a rate of 600 Hz read from
+/// sample times is 600.0000000000001).
+fn round_6(x: f64) -> f64 {
+    (x * 1e6).round() / 1e6
+}
+
 impl<'a> Data<'a> {
     pub(crate) fn new(set: &'a MeasurementSet) -> Result<Data<'a>> {
         let mut by_condition: BTreeMap<(i64, i64), (Condition, Vec<usize>)> = BTreeMap::new();
@@ -460,7 +497,7 @@ impl<'a> Data<'a> {
                 record_s.push(mean(&u.runs.iter().map(|&r| set.runs[r].duration_s()).collect::<Vec<_>>()));
             }
         }
-        let sample_interval_s = set.runs.first().map(|r| r.sample_interval_s()).unwrap_or(1.0 / 600.0);
+        let sample_interval_s = one_sample_interval(&set.runs)?;
         // The measured normal force per condition, over the runs that record it.
         let mut forces: BTreeMap<(i64, i64), Vec<MeasuredLoad>> = BTreeMap::new();
         for r in &set.runs {

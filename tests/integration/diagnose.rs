@@ -363,3 +363,58 @@ fn one_record_alone_names_nothing_and_is_sure_of_none_only_where_the_baseline_fi
     assert!(memory <= 0.1, "a record with a friction memory: none at {memory}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// Runs sampled at different rates are refused, naming a run of each: a
+/// diagnosis simulates every record at one rate, the baseline's noise held
+/// over one sample interval. Read as they were, a run at 1 kHz among runs
+/// at 600 Hz was scored against replicates sampled at 600 Hz, its friction
+/// noise's lag-1 autocorrelation 55 standard errors off for that alone.
+#[test]
+fn runs_sampled_at_different_rates_are_refused_naming_both() {
+    let root = scratch("two-rates");
+    let set = root.join("set");
+    for (dir, rate) in [("a", "600"), ("b", "1000")] {
+        let out = root.join(dir);
+        let (ok, _, err) = stickslip(&[
+            "-q",
+            "simulate",
+            "--realisations",
+            "1",
+            "--duration",
+            "2",
+            "--sample-rate",
+            rate,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+        std::fs::create_dir_all(&set).unwrap();
+        std::fs::copy(out.join("run-7.000hz-16.390n-r000.csv"), set.join(format!("run-{dir}.csv"))).unwrap();
+    }
+    let run = |file: &str| {
+        format!(
+            r#"{{"file": "{file}", "excitation_frequency_hz": 7.0, "excitation_amplitude_m": 0.0025, "normal_force_n": 16.39}}"#
+        )
+    };
+    std::fs::write(
+        set.join("manifest.json"),
+        format!(
+            r#"{{"format": "stickslip-measurements/1", "rig": {{"mass_kg": 1.028, "natural_frequency_hz": 10.05, "damping_ratio": 0.00225}}, "runs": [{}, {}]}}"#,
+            run("run-a.csv"),
+            run("run-b.csv")
+        ),
+    )
+    .unwrap();
+    let out = root.join("out");
+    let (ok, _, err) =
+        stickslip(&["diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+    assert!(
+        !ok && err.contains("run-b.csv")
+            && err.contains("1000 Hz")
+            && err.contains("run-a.csv")
+            && err.contains("600 Hz"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
+    std::fs::remove_dir_all(&root).unwrap();
+}
