@@ -1,5 +1,6 @@
-//! The time frame of the records: which runs give absolute phases, and a
-//! check that the ones that claim to really do.
+//! The frame of the records: which runs give absolute phases, a check that
+//! the ones that claim to really do, and whether their displacement swings
+//! about zero.
 //!
 //! A response phase (the lag of the response's fundamental behind the base)
 //! and the normal force's harmonic phases are read against the base's
@@ -54,6 +55,57 @@ pub(crate) fn frame_notes(data: &Data<'_>) -> Vec<String> {
         ));
     }
     notes
+}
+
+/// The share of the runs' median amplitude by which their median
+/// displacement may lie off zero before the report notes it. The model's
+/// block swings about x = 0 (the spring at rest); a block that sticks for
+/// most of a cycle may rest off zero by up to μN/k, but to either side at
+/// random, run by run, and the one effect that pushes it aside steadily (a
+/// normal force whose first harmonic makes one direction's friction
+/// larger) moves it by about 0.1 mm, a few percent of the paper's
+/// amplitudes, at a harmonic of a tenth of the load. A sensor's zero
+/// shifts every run alike.
+const DISPLACEMENT_OFFSET_SHARE: f64 = 0.05;
+
+/// A note for the report where the records' displacement `x` swings about
+/// a common mean off zero: the median over the runs of each run's mean
+/// beyond [`DISPLACEMENT_OFFSET_SHARE`] of the median of their amplitudes
+/// (half a record's range). Every peak read from such records is off by
+/// that offset, which no effect explains, so the hints that blame the
+/// friction level or the rig would point the wrong way.
+pub(crate) fn displacement_offset_note(data: &Data<'_>) -> Option<String> {
+    let (mut means, mut amplitudes): (Vec<f64>, Vec<f64>) = data
+        .set
+        .runs
+        .iter()
+        .filter_map(|r| {
+            let finite = r.x_m.iter().copied().filter(|x| x.is_finite());
+            let (count, sum, lo, hi) = finite
+                .fold((0usize, 0.0, f64::INFINITY, f64::NEG_INFINITY), |(n, s, lo, hi), x| {
+                    (n + 1, s + x, lo.min(x), hi.max(x))
+                });
+            (count > 0).then(|| (sum / count as f64, 0.5 * (hi - lo)))
+        })
+        .unzip();
+    if means.is_empty() {
+        return None;
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (offset, amplitude) = (median(&mut means), median(&mut amplitudes));
+    (amplitude > 0.0 && offset.abs() > DISPLACEMENT_OFFSET_SHARE * amplitude).then(|| {
+        format!(
+            "the displacement x swings about {:.3} mm, not zero (the median over the runs of each run's mean; \
+             {:.0}% of their median amplitude): the model's block swings about x = 0, the spring at rest, so every \
+             peak read from these records is off by that offset, which no effect explains; if it is the sensor's \
+             zero, subtract it from x",
+            offset * 1e3,
+            100.0 * offset.abs() / amplitude
+        )
+    })
 }
 
 /// Fewest record units whose phases a frame check reads.

@@ -304,6 +304,7 @@ pub fn diagnose_set(
 ) -> Result<Diagnosis> {
     let mut data = Data::new(set)?;
     let mut notes = frame::frame_notes(&data);
+    notes.extend(frame::displacement_offset_note(&data));
     progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
     let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(
         &calibrate::initial_baseline(&data)?,

@@ -418,3 +418,42 @@ fn runs_sampled_at_different_rates_are_refused_naming_both() {
     assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// Records whose displacement swings about a common mean off zero (a
+/// sensor's zero) say so in the report, which no effect explains: every
+/// peak is off by it. The model's own record says nothing of the kind.
+#[test]
+fn a_displacement_offset_is_noted_in_the_report() {
+    let root = scratch("offset");
+    let data = root.join("data");
+    let (ok, _, err) =
+        stickslip(&["-q", "simulate", "--realisations", "1", "--duration", "20", "--out", data.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let notes_of = |name: &str| -> Vec<String> {
+        let out = root.join(name);
+        let (ok, _, err) =
+            stickslip(&["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+        assert!(ok, "{err}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap().to_string()).collect()
+    };
+    let plain = notes_of("plain");
+    assert!(!plain.iter().any(|n| n.contains("swings about")), "{plain:?}");
+    // The same record with 1 mm added to x.
+    let file = data.join("run-7.000hz-16.390n-r000.csv");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let x = header.split(',').position(|c| c == "x").unwrap();
+    let mut shifted = format!("{header}\n");
+    for line in lines {
+        let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+        cells[x] = (cells[x].parse::<f64>().unwrap() + 1e-3).to_string();
+        shifted += &(cells.join(",") + "\n");
+    }
+    std::fs::write(&file, shifted).unwrap();
+    let offset = notes_of("offset");
+    assert!(offset.iter().any(|n| n.contains("swings about") && n.contains("sensor's zero")), "{offset:?}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
