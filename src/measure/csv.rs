@@ -205,6 +205,11 @@ fn within_bound(path: &Path, line: u64, columns: &[Column], j: usize, value: f64
     }
 }
 
+/// The factor by which a record's mean measured normal force may differ
+/// from its run's nominal setting before the two are taken to be in
+/// different units: wear and drift move a load by tens of percent.
+const NOMINAL_FORCE_FACTOR: f64 = 3.0;
+
 /// Checks one run file's content (`bytes`, read from `path`).
 pub(super) fn read_run_file(
     path: &Path,
@@ -274,6 +279,26 @@ pub(super) fn read_run_file(
                 fmt_value(mean_force)
             ),
         ));
+    }
+    // The measured force is the nominal setting plus what moves it (noise,
+    // harmonics, drift, wear): tens of percent, not a factor of
+    // [`NOMINAL_FORCE_FACTOR`], which is a unit (kN for N) or a setting that
+    // is not in newtons.
+    if has_n && force_n > 0.0 && mean_force > 0.0 {
+        let ratio = mean_force / force_n;
+        if !(1.0 / NOMINAL_FORCE_FACTOR..=NOMINAL_FORCE_FACTOR).contains(&ratio) {
+            return Err(bad(
+                path,
+                None,
+                format!(
+                    "column `normal_force`: its mean over the record, {} N, is {} times the run's nominal \
+                     normal_force_n, {} N: both are in newtons, and the measured force swings about its setting",
+                    fmt_value(mean_force),
+                    fmt_value((ratio * 1e3).round() / 1e3),
+                    fmt_value(force_n)
+                ),
+            ));
+        }
     }
     let n = t_s.len();
     let period_s = 1.0 / frequency_hz;

@@ -360,7 +360,7 @@ fn run_csv_slipping(v_factor: f64, friction_sign: f64) -> String {
 
 /// A channel that breaks a convention no single value breaks (a velocity
 /// with its sign reversed or in mm/s, a friction force with its sign
-/// reversed) is refused by file and column. Read as it was, a reversed
+/// reversed, a normal force in kN) is refused by file and column. Read as it was, a reversed
 /// friction force (or velocity) left no sample slipping, every friction
 /// feature vanished, and a diagnosis of a null set was sure of `none`
 /// without having looked at the friction.
@@ -375,6 +375,9 @@ fn a_channel_with_its_sign_reversed_or_in_another_unit_is_refused() {
     refused(&s.0, "run.csv", None, &["column `v`", "1000 times its size", "m/s"]);
     s.write("run.csv", &run_csv_slipping(1.0, -1.0));
     refused(&s.0, "run.csv", None, &["column `friction_force`", "along its motion", "sign reversed"]);
+    // The normal force in kN beside a nominal setting in N.
+    s.write("run.csv", &run_csv_slipping(1.0, 1.0).replace(",16,", ",0.016,"));
+    refused(&s.0, "run.csv", None, &["column `normal_force`", "0.001 times", "nominal normal_force_n, 16 N"]);
 }
 
 #[test]
