@@ -130,9 +130,11 @@ impl Cost {
     /// long as each run, and an ensemble of `settings.ensemble_realisations`
     /// realisations over each summary row's `n_peaks` periods (350 when not
     /// given), with the noise held over the first run's sample interval
-    /// (1/600 s without runs).
+    /// (1/600 s without runs), or over that of the rate the runs are
+    /// thinned to.
     pub fn of_diagnosis(set: &MeasurementSet, settings: &DiagnoseSettings) -> Cost {
-        let interval_s = set.runs.first().map_or(1.0 / 600.0, |r| r.sample_interval_s());
+        let recorded_s = set.runs.first().map_or(1.0 / 600.0, |r| r.sample_interval_s());
+        let interval_s = settings.sample_rate_hz.map_or(recorded_s, |r| recorded_s.max(1.0 / r));
         let records = set.runs.iter().map(|r| (r.excitation_frequency_hz, r.duration_s()));
         let rows = set.summary.iter().map(|row| (row.excitation_frequency_hz, row.n_peaks));
         Cost::of_diagnosed(records, rows, interval_s, settings)

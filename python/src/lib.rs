@@ -449,7 +449,7 @@ fn run_simulate(
 #[pyfunction]
 #[pyo3(signature = (
     dir, out=None, backend="auto", allow_software_gpu=false, seed=20_251_122, replicates=8, realisations=64, progress=true,
-    force=false
+    force=false, sample_rate_hz=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run_diagnose(
@@ -463,6 +463,7 @@ fn run_diagnose(
     realisations: u32,
     progress: bool,
     force: bool,
+    sample_rate_hz: Option<f64>,
 ) -> PyResult<(String, String, String, String)> {
     if !(2..=1000).contains(&replicates) {
         return Err(value_error(format!(
@@ -489,14 +490,21 @@ fn run_diagnose(
             eprintln!("stickslip diagnose: backend: {}", engine.description());
         }
         let settings =
-            DiagnoseSettings { seed, replicates, ensemble_realisations: realisations, ..DiagnoseSettings::default() };
+            DiagnoseSettings {
+                seed,
+                replicates,
+                ensemble_realisations: realisations,
+                sample_rate_hz,
+                ..DiagnoseSettings::default()
+            };
         Cost::of_diagnosis(&set, &settings)
             .check(
                 engine.kind(),
                 budget::cpu_threads(),
                 Force::keyword(force),
                 "diagnose",
-                "lower replicates or realisations, or give fewer or shorter records",
+                "lower replicates or realisations, thin the records with sample_rate_hz, or give fewer or shorter \
+                 records",
             )
             .map_err(py_err)?;
         let started = Instant::now();

@@ -553,6 +553,7 @@ def diagnose(
     realisations: int = 64,
     progress: bool = True,
     force: bool = False,
+    sample_rate_hz: Optional[float] = None,
 ) -> Diagnosis:
     """Diagnoses the gap between a measurement set (a directory with
     ``manifest.json``) and the model, as ``stickslip diagnose`` does: where,
@@ -562,7 +563,9 @@ def diagnose(
     as it starts (``progress=False`` silences it). ``backend`` and
     ``allow_software_gpu`` are those of :func:`sweep`, and so is ``force``:
     a diagnosis estimated beyond the cost budget raises ``ValueError`` unless
-    ``force=True``."""
+    ``force=True``. ``sample_rate_hz`` thins each run to that rate by keeping
+    every k-th sample (its rate divided by a whole number), for records
+    sampled far faster than the response needs."""
     report, baseline, fitted, description = _native.run_diagnose(
         os.fspath(path),
         out=None if out is None else os.fspath(out),
@@ -573,6 +576,7 @@ def diagnose(
         realisations=int(realisations),
         progress=progress,
         force=bool(force),
+        sample_rate_hz=None if sample_rate_hz is None else float(sample_rate_hz),
     )
     paths: Dict[str, str] = {}
     if out is not None:

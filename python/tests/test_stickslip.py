@@ -279,6 +279,15 @@ def test_simulate_writes_a_measurement_set_that_load_reads(tmp_path):
 # -- diagnosis ----------------------------------------------------------------
 
 
+def test_diagnose_thins_records_to_a_sample_rate(tmp_path):
+    data = tmp_path / "sim"
+    stickslip.simulate(7.0, 16.39, realisations=1, duration=10.0, sample_rate=1200.0, warmup_cycles=10, out=data)
+    d = stickslip.diagnose(data, backend="cpu", replicates=2, sample_rate_hz=600, progress=False)
+    assert any("thinned to 600" in n for n in d.report["notes"]), d.report["notes"]
+    with pytest.raises(ValueError, match="does not divide"):
+        stickslip.diagnose(data, backend="cpu", replicates=2, sample_rate_hz=500, progress=False)
+
+
 def test_diagnose_figure8_and_load_the_report(tmp_path, capfd):
     out = tmp_path / "diagnosis"
     started = time.monotonic()

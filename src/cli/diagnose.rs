@@ -34,6 +34,11 @@ pub(crate) struct DiagnoseArgs {
     /// Realisations per condition in the ensembles that score summary data.
     #[arg(long, default_value_t = 64)]
     pub(crate) realisations: u32,
+    /// Thin each run to this sample rate, Hz, by keeping every k-th sample (its rate divided by a whole
+    /// number): records sampled far faster than the response needs are diagnosed in minutes, not hours.
+    /// The baseline's noise is then held over 1/HZ.
+    #[arg(long, value_name = "HZ")]
+    pub(crate) sample_rate: Option<f64>,
 }
 
 #[derive(Args, Debug)]
@@ -152,13 +157,15 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
         seed: args.seed,
         replicates: args.replicates,
         ensemble_realisations: args.realisations,
+        sample_rate_hz: args.sample_rate,
         ..DiagnoseSettings::default()
     };
     super::check_budget(
         Cost::of_diagnosis(&set, &settings),
         engine.kind(),
         "diagnose",
-        "lower --replicates or --realisations, or give fewer or shorter records",
+        "lower --replicates or --realisations, thin the records with --sample-rate, or give fewer or shorter \
+         records",
     )?;
     let started = Instant::now();
     let progress = Progress::steps("diagnose");

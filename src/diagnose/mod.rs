@@ -65,11 +65,21 @@ pub struct DiagnoseSettings {
     pub ensemble_realisations: u32,
     /// Warm-up periods before a simulated record starts.
     pub warmup_cycles: u32,
+    /// The sample rate (Hz) the runs are thinned to before the diagnosis
+    /// (every k-th sample kept, [`crate::measure::thinned`]); `None` keeps
+    /// them as recorded.
+    pub sample_rate_hz: Option<f64>,
 }
 
 impl Default for DiagnoseSettings {
     fn default() -> Self {
-        DiagnoseSettings { seed: 20_251_122, replicates: 8, ensemble_realisations: 64, warmup_cycles: 60 }
+        DiagnoseSettings {
+            seed: 20_251_122,
+            replicates: 8,
+            ensemble_realisations: 64,
+            warmup_cycles: 60,
+            sample_rate_hz: None,
+        }
     }
 }
 
@@ -302,8 +312,22 @@ pub fn diagnose_set(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Diagnosis> {
+    let thinned = match settings.sample_rate_hz {
+        Some(rate_hz) => Some(crate::measure::thinned(set, rate_hz)?),
+        None => None,
+    };
+    let set = thinned.as_ref().map_or(set, |(set, _)| set);
     let mut data = Data::new(set)?;
     let mut notes = frame::frame_notes(&data);
+    if let (Some((_, n)), Some(rate_hz)) = (&thinned, settings.sample_rate_hz) {
+        if *n > 0 {
+            notes.push(format!(
+                "{n} of {} runs were thinned to {rate_hz} Hz (every k-th sample kept) before the diagnosis: the \
+                 baseline's noise is held over 1/{rate_hz} s",
+                set.runs.len()
+            ));
+        }
+    }
     notes.extend(frame::displacement_offset_note(&data));
     progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
     let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(

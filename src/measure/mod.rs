@@ -54,6 +54,7 @@
 mod channels;
 mod csv;
 mod json;
+mod thin;
 mod write;
 
 use std::path::{Path, PathBuf};
@@ -66,6 +67,7 @@ use crate::error::Result;
 use crate::{io, text};
 use json::{Bound, Json, bad, kind};
 
+pub use thin::thinned;
 pub use write::{RunEntry, write_manifest, write_run_file};
 
 /// The only accepted value of the manifest's `format` key.

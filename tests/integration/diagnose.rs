@@ -457,3 +457,40 @@ fn a_displacement_offset_is_noted_in_the_report() {
     assert!(offset.iter().any(|n| n.contains("swings about") && n.contains("sensor's zero")), "{offset:?}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// `--sample-rate` thins each run by keeping every k-th sample, says so in
+/// the report, and refuses a rate that does not divide a run's, naming it.
+#[test]
+fn sample_rate_thins_the_runs_and_refuses_a_rate_that_does_not_divide() {
+    let root = scratch("thin");
+    let data = root.join("data");
+    let (ok, _, err) = stickslip(&[
+        "-q",
+        "simulate",
+        "--realisations",
+        "1",
+        "--duration",
+        "10",
+        "--sample-rate",
+        "1200",
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let diagnose = |rate: &str, out: &str| {
+        let out = root.join(out);
+        let args = ["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"];
+        let (ok, _, err) = stickslip(&[&args[..], &["--sample-rate", rate]].concat());
+        (ok, err, out)
+    };
+    let (ok, err, out) = diagnose("600", "thin");
+    assert!(ok, "{err}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let notes: Vec<&str> = report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect();
+    assert!(notes.iter().any(|n| n.contains("1 of 1 runs were thinned to 600 Hz")), "{notes:?}");
+    let (ok, err, out) = diagnose("500", "refused");
+    assert!(!ok && err.contains("run-7.000hz-16.390n-r000.csv") && err.contains("does not divide"), "{err}");
+    assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
+    std::fs::remove_dir_all(&root).unwrap();
+}
