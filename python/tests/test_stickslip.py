@@ -290,12 +290,9 @@ def test_diagnose_thins_records_to_a_sample_rate(tmp_path):
 
 def test_diagnose_figure8_and_load_the_report(tmp_path, capfd):
     out = tmp_path / "diagnosis"
-    started = time.monotonic()
     d = stickslip.diagnose(FIGURE8, out=out, backend="cpu", realisations=8, replicates=2)
-    elapsed = time.monotonic() - started
     # Progress goes to stderr by default, one line per step.
     assert "stickslip diagnose:" in capfd.readouterr().err
-    assert elapsed < 120, f"the diagnosis took {elapsed:.0f} s"
     r = d.report
     assert r["format"].startswith("stickslip-diagnosis/")
     assert isinstance(r["verdict"]["effect"], str)
