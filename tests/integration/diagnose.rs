@@ -19,6 +19,14 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// The report a diagnosis wrote into `out`, and its notes.
+fn report_in(out: &Path) -> (serde_json::Value, Vec<String>) {
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let notes = report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap().to_string()).collect();
+    (report, notes)
+}
+
 fn figure8() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data/figure8")
 }
@@ -350,10 +358,8 @@ fn one_record_alone_names_nothing_and_is_sure_of_none_only_where_the_baseline_fi
         let (ok, _, err) =
             stickslip(&["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
         assert!(ok, "{err}");
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        let (report, notes) = report_in(&out);
         assert_eq!(report["verdict"]["effect"], "none", "{name}");
-        let notes = report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap().to_string()).collect();
         (report["verdict"]["confidence"].as_f64().unwrap(), notes)
     };
     let (null, notes) = confidence_of("baseline", &[]);
@@ -434,9 +440,7 @@ fn a_displacement_offset_is_noted_in_the_report() {
         let (ok, _, err) =
             stickslip(&["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
         assert!(ok, "{err}");
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-        report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap().to_string()).collect()
+        report_in(&out).1
     };
     let plain = notes_of("plain");
     assert!(!plain.iter().any(|n| n.contains("swings about")), "{plain:?}");
@@ -485,9 +489,7 @@ fn sample_rate_thins_the_runs_and_refuses_a_rate_that_does_not_divide() {
     };
     let (ok, err, out) = diagnose("600", "thin");
     assert!(ok, "{err}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let notes: Vec<&str> = report["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect();
+    let notes = report_in(&out).1;
     assert!(notes.iter().any(|n| n.contains("1 of 1 runs were thinned to 600 Hz")), "{notes:?}");
     let (ok, err, out) = diagnose("500", "refused");
     assert!(!ok && err.contains("run-7.000hz-16.390n-r000.csv") && err.contains("does not divide"), "{err}");
