@@ -37,7 +37,7 @@ pub(crate) struct DiagnoseArgs {
     /// Thin each run to this sample rate, Hz, by keeping every k-th sample (its rate divided by a whole
     /// number): records sampled far faster than the response needs are diagnosed in minutes, not hours.
     /// The baseline's noise is then held over 1/HZ.
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
     pub(crate) sample_rate: Option<f64>,
 }
 
@@ -149,6 +149,9 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
             args.realisations,
             Job::MAX_REALISATIONS
         );
+    }
+    if let Some(rate) = args.sample_rate.filter(|r| !(r.is_finite() && *r > 0.0)) {
+        anyhow::bail!("invalid --sample-rate: {rate} Hz; a sample rate is a positive number");
     }
     let set = read_measurement_set(&args.dir)?;
     let out = OutputSet::prepare(&args.out, "--out", owned::DIAGNOSIS, &[args.dir.as_path()])?;

@@ -439,7 +439,14 @@ fn absurd_diagnosis_settings() {
     let set_s = set.to_str().unwrap();
     let out = s.path("out");
     let out_s = out.to_str().unwrap();
-    for (flag, value) in [("--replicates", "0"), ("--replicates", "1"), ("--realisations", "0")] {
+    for (flag, value) in [
+        ("--replicates", "0"),
+        ("--replicates", "1"),
+        ("--realisations", "0"),
+        ("--sample-rate", "0"),
+        ("--sample-rate", "-600"),
+        ("--sample-rate", "nan"),
+    ] {
         refused(&["diagnose", "--backend", "cpu", flag, value, set_s, "--out", out_s], &[flag]);
     }
     // --out equal to, inside or containing the input set; the set is untouched.
