@@ -376,7 +376,9 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
         let named_by = format!("manifest.json {ctx}.file");
         let path = dir.join(&file);
         let bytes = read_inside(&root, dir, &file, &manifest_path, &named_by, io::MAX_TABLE_FILE_BYTES, &mut budget)?;
-        runs.push(csv::read_run_file(&path, bytes, frequency, amplitude, force, free)?);
+        let run = csv::read_run_file(&path, bytes, frequency, amplitude, force, free)?;
+        channels::check_force_balance(&run, &rig)?;
+        runs.push(run);
     }
 
     let (summary, summary_file) = match summary_name {

@@ -437,6 +437,31 @@ fn simulated_set_round_trips() {
     assert!((measure::sample_rate_hz(&set.runs[0]) - rate_hz).abs() < 1e-6);
 }
 
+/// A friction force in another unit is refused by what the equation of
+/// motion says the force on the block is: a simulated record reads, the
+/// same record with its friction force in kN does not.
+#[test]
+fn a_friction_force_the_equation_of_motion_disowns_is_refused() {
+    let s = Scratch::new("force-balance");
+    let model = Model::default();
+    let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
+    let mut samples = common::record(&model, condition, 5, 10, 4.0, 600.0);
+    let entry = measure::RunEntry {
+        file: "sim.csv".into(),
+        excitation_frequency_hz: 7.0,
+        excitation_amplitude_m: model.excitation.amplitude_m,
+        normal_force_n: 16.39,
+    };
+    measure::write_manifest(&s.0, "force balance", &model, &[entry]).unwrap();
+    measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
+    read_measurement_set(&s.0).expect("a simulated record keeps the equation of motion");
+    for sample in &mut samples {
+        sample.friction_force_n /= 1000.0;
+    }
+    measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
+    refused(&s.0, "sim.csv", None, &["column `friction_force`", "equation of motion", "newtons"]);
+}
+
 /// Some rigs publish only phases: a summary row needs a mean peak or a mean
 /// phase, its other statistics may be blank, and a row with neither is
 /// refused by line.
