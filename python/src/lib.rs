@@ -465,19 +465,14 @@ fn run_diagnose(
     force: bool,
     sample_rate_hz: Option<f64>,
 ) -> PyResult<(String, String, String, String)> {
-    if !(2..=1000).contains(&replicates) {
-        return Err(value_error(format!(
-            "invalid replicates: {replicates} simulated replicates per condition; a z-score needs a spread, so at \
-             least 2 (and at most 1000)"
-        )));
-    }
-    if !(4..=Job::MAX_REALISATIONS).contains(&realisations) {
-        return Err(value_error(format!(
-            "invalid realisations: {realisations} per condition; the ensembles that score summary data need at \
-             least 4 (and at most {})",
-            Job::MAX_REALISATIONS
-        )));
-    }
+    let settings = DiagnoseSettings {
+        seed,
+        replicates,
+        ensemble_realisations: realisations,
+        sample_rate_hz,
+        ..DiagnoseSettings::default()
+    };
+    settings.check(false).map_err(py_err)?;
     let set = read_measurement_set(&dir).map_err(py_err)?;
     let prepared = match &out {
         Some(o) => Some(OutputSet::prepare(o, "out", owned::DIAGNOSIS, &[dir.as_path()]).map_err(py_err)?),
@@ -489,14 +484,6 @@ fn run_diagnose(
         if progress {
             eprintln!("stickslip diagnose: backend: {}", engine.description());
         }
-        let settings =
-            DiagnoseSettings {
-                seed,
-                replicates,
-                ensemble_realisations: realisations,
-                sample_rate_hz,
-                ..DiagnoseSettings::default()
-            };
         Cost::of_diagnosis(&set, &settings)
             .check(
                 engine.kind(),

@@ -286,6 +286,10 @@ def test_diagnose_thins_records_to_a_sample_rate(tmp_path):
     assert any("thinned to 600" in n for n in d.report["notes"]), d.report["notes"]
     with pytest.raises(ValueError, match="does not divide"):
         stickslip.diagnose(data, backend="cpu", replicates=2, sample_rate_hz=500, progress=False)
+    with pytest.raises(ValueError, match="invalid sample_rate_hz"):
+        stickslip.diagnose(data, backend="cpu", sample_rate_hz=0, progress=False)
+    with pytest.raises(ValueError, match="invalid replicates"):
+        stickslip.diagnose(data, backend="cpu", replicates=1, progress=False)
 
 
 def test_diagnose_figure8_and_load_the_report(tmp_path, capfd):

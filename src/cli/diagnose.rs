@@ -8,8 +8,8 @@ use crate::budget::Cost;
 use crate::diagnose::benchmark::{BenchmarkSettings, Generator, Origins, run_benchmark as run_benchmark_sets};
 use crate::diagnose::report::{RunInfo, write_diagnosis_with};
 use crate::diagnose::synthetic::SetShape;
-use crate::diagnose::{DiagnoseSettings, diagnose_set};
-use crate::engine::{Effect, GpuOptions, Job};
+use crate::diagnose::{DiagnoseSettings, MAX_REPLICATES, MIN_REPLICATES, diagnose_set};
+use crate::engine::{Effect, GpuOptions};
 use crate::io::{OutputSet, owned};
 use crate::measure::read_measurement_set;
 use anyhow::Result;
@@ -125,37 +125,9 @@ pub(crate) enum OriginArg {
     Mixed,
 }
 
-/// Fewest simulated replicates per condition: a spread needs two.
-const MIN_REPLICATES: u32 = 2;
-/// Most simulated replicates per condition (each is a whole record in memory).
-const MAX_REPLICATES: u32 = 1000;
-/// Fewest realisations in the ensembles that score summary data.
-const MIN_ENSEMBLE_REALISATIONS: u32 = 4;
-
 pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     // The flags, the set and --out are checked before any computation; bad
     // input writes nothing.
-    if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&args.replicates) {
-        anyhow::bail!(
-            "invalid --replicates: {} simulated replicates per condition; a z-score needs a spread, so at least \
-             {MIN_REPLICATES} (and at most {MAX_REPLICATES})",
-            args.replicates
-        );
-    }
-    if !(MIN_ENSEMBLE_REALISATIONS..=Job::MAX_REALISATIONS).contains(&args.realisations) {
-        anyhow::bail!(
-            "invalid --realisations: {} realisations per condition; the ensembles that score summary data need \
-             at least {MIN_ENSEMBLE_REALISATIONS} (and at most {})",
-            args.realisations,
-            Job::MAX_REALISATIONS
-        );
-    }
-    if let Some(rate) = args.sample_rate.filter(|r| !(r.is_finite() && *r > 0.0)) {
-        anyhow::bail!("invalid --sample-rate: {rate} Hz; a sample rate is a positive number");
-    }
-    let set = read_measurement_set(&args.dir)?;
-    let out = OutputSet::prepare(&args.out, "--out", owned::DIAGNOSIS, &[args.dir.as_path()])?;
-    let engine = open_engine(args.backend, GpuOptions::default())?;
     let settings = DiagnoseSettings {
         seed: args.seed,
         replicates: args.replicates,
@@ -163,6 +135,10 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
         sample_rate_hz: args.sample_rate,
         ..DiagnoseSettings::default()
     };
+    settings.check(true)?;
+    let set = read_measurement_set(&args.dir)?;
+    let out = OutputSet::prepare(&args.out, "--out", owned::DIAGNOSIS, &[args.dir.as_path()])?;
+    let engine = open_engine(args.backend, GpuOptions::default())?;
     super::check_budget(
         Cost::of_diagnosis(&set, &settings),
         engine.kind(),

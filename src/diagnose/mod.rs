@@ -44,8 +44,8 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::engine::{Condition, Effect, Engine, Model};
-use crate::error::Result;
+use crate::engine::{Condition, Effect, Engine, Job, Model};
+use crate::error::{Error, Result};
 use crate::measure::{MeasurementSet, read_measurement_set};
 use data::{Data, Folds, condition_key};
 use observable::Observable;
@@ -69,6 +69,47 @@ pub struct DiagnoseSettings {
     /// (every k-th sample kept, [`crate::measure::thinned`]); `None` keeps
     /// them as recorded.
     pub sample_rate_hz: Option<f64>,
+}
+
+/// Fewest simulated replicates per condition: a spread needs two.
+pub const MIN_REPLICATES: u32 = 2;
+/// Most simulated replicates per condition (each is a whole record in memory).
+pub const MAX_REPLICATES: u32 = 1000;
+/// Fewest realisations in the ensembles that score summary data.
+pub const MIN_ENSEMBLE_REALISATIONS: u32 = 4;
+
+impl DiagnoseSettings {
+    /// Refuses settings a diagnosis cannot run with, each named as the
+    /// front end spells it (`command_line`: `--replicates`, else the Python
+    /// keyword `replicates`), before any data is read.
+    pub fn check(&self, command_line: bool) -> Result<()> {
+        let name = |flag: &str, keyword: &str| if command_line { flag.to_string() } else { keyword.to_string() };
+        if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&self.replicates) {
+            return Err(Error::setting(
+                name("--replicates", "replicates"),
+                format!(
+                    "{} simulated replicates per condition; a z-score needs a spread, so at least {MIN_REPLICATES} \
+                     (and at most {MAX_REPLICATES})",
+                    self.replicates
+                ),
+            ));
+        }
+        if !(MIN_ENSEMBLE_REALISATIONS..=Job::MAX_REALISATIONS).contains(&self.ensemble_realisations) {
+            return Err(Error::setting(
+                name("--realisations", "realisations"),
+                format!(
+                    "{} realisations per condition; the ensembles that score summary data need at least \
+                     {MIN_ENSEMBLE_REALISATIONS} (and at most {})",
+                    self.ensemble_realisations,
+                    Job::MAX_REALISATIONS
+                ),
+            ));
+        }
+        match self.sample_rate_hz {
+            Some(rate_hz) => crate::measure::check_sample_rate(rate_hz, &name("--sample-rate", "sample_rate_hz")),
+            None => Ok(()),
+        }
+    }
 }
 
 impl Default for DiagnoseSettings {

@@ -67,7 +67,7 @@ use crate::error::Result;
 use crate::{io, text};
 use json::{Bound, Json, bad, kind};
 
-pub use thin::thinned;
+pub use thin::{check_sample_rate, thinned};
 pub use write::{RunEntry, write_manifest, write_run_file};
 
 /// The only accepted value of the manifest's `format` key.

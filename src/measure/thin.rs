@@ -20,9 +20,7 @@ use crate::error::{Error, Result};
 /// diagnosed: not sampled above twice its excitation frequency, or with a
 /// sample interval outside the range the noise can be held over.
 pub fn thinned(set: &MeasurementSet, rate_hz: f64) -> Result<(MeasurementSet, usize)> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(Error::setting("sample rate", format!("{rate_hz} Hz: a sample rate is a positive number")));
-    }
+    check_sample_rate(rate_hz, "sample rate")?;
     let mut thinned_runs = 0;
     let mut runs = Vec::with_capacity(set.runs.len());
     for run in &set.runs {
@@ -67,6 +65,16 @@ pub fn thinned(set: &MeasurementSet, rate_hz: f64) -> Result<(MeasurementSet, us
         runs.push(every(run, k));
     }
     Ok((MeasurementSet { runs, ..set.clone() }, thinned_runs))
+}
+
+/// Refuses a sample rate (Hz) that is not a positive number, naming it
+/// `what`.
+pub fn check_sample_rate(rate_hz: f64, what: &str) -> Result<()> {
+    if rate_hz.is_finite() && rate_hz > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::setting(what, format!("{rate_hz} Hz; a sample rate is a positive number")))
+    }
 }
 
 /// `run` with every `k`-th sample kept, the first included.
