@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use stickslip::Error;
-use stickslip::engine::{Condition, Model};
+use stickslip::engine::{Condition, Model, Sample};
 use stickslip::measure::{self, read_measurement_set};
 
 use crate::common;
@@ -409,6 +409,19 @@ fn a_set_needs_runs_or_a_summary() {
     refused(&s.0, "s.csv", None, &["no rows"]);
 }
 
+/// Writes `samples`, a record of `model` at 7 Hz and 16.39 N, as `sim.csv`
+/// in `s`, with a manifest that names it.
+fn write_simulated_set(s: &Scratch, description: &str, model: &Model, samples: &[Sample]) {
+    measure::write_run_file(&s.0.join("sim.csv"), samples).unwrap();
+    let entry = measure::RunEntry {
+        file: "sim.csv".into(),
+        excitation_frequency_hz: 7.0,
+        excitation_amplitude_m: model.excitation.amplitude_m,
+        normal_force_n: 16.39,
+    };
+    measure::write_manifest(&s.0, description, model, &[entry]).unwrap();
+}
+
 #[test]
 fn simulated_set_round_trips() {
     let s = Scratch::new("round-trip");
@@ -416,14 +429,7 @@ fn simulated_set_round_trips() {
     let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
     let rate_hz = 600.0;
     let samples = common::record(&model, condition, 5, 10, 2.0, rate_hz);
-    measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
-    let entry = measure::RunEntry {
-        file: "sim.csv".into(),
-        excitation_frequency_hz: 7.0,
-        excitation_amplitude_m: model.excitation.amplitude_m,
-        normal_force_n: 16.39,
-    };
-    measure::write_manifest(&s.0, "round trip", &model, &[entry]).unwrap();
+    write_simulated_set(&s, "round trip", &model, &samples);
 
     let set = read_measurement_set(&s.0).expect("stickslip's own output reads");
     assert_eq!(set.description, "round trip");
@@ -446,14 +452,7 @@ fn a_friction_force_the_equation_of_motion_disowns_is_refused() {
     let model = Model::default();
     let condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
     let mut samples = common::record(&model, condition, 5, 10, 4.0, 600.0);
-    let entry = measure::RunEntry {
-        file: "sim.csv".into(),
-        excitation_frequency_hz: 7.0,
-        excitation_amplitude_m: model.excitation.amplitude_m,
-        normal_force_n: 16.39,
-    };
-    measure::write_manifest(&s.0, "force balance", &model, &[entry]).unwrap();
-    measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
+    write_simulated_set(&s, "force balance", &model, &samples);
     read_measurement_set(&s.0).expect("a simulated record keeps the equation of motion");
     for sample in &mut samples {
         sample.friction_force_n /= 1000.0;
