@@ -370,6 +370,7 @@ pub fn diagnose_set(
         }
     }
     notes.extend(frame::displacement_offset_note(&data));
+    notes.extend(frame::friction_offset_note(&data));
     progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
     let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(
         &calibrate::initial_baseline(&data)?,

@@ -44,7 +44,7 @@ const REVERSED_SHARE: f64 = 0.8;
 /// The rate of change of `x` (m/s) at each interior sample with finite
 /// neighbours, by central differences over the times `t_s` (s), with the
 /// sample's index.
-fn displacement_rate(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
+pub(crate) fn displacement_rate(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
     let n = t_s.len().min(x_m.len());
     (1..n.saturating_sub(1))
         .filter_map(|i| {

@@ -52,6 +52,7 @@
 //!   at most the periods one simulated record may run.
 
 mod channels;
+pub(crate) use channels::displacement_rate;
 mod csv;
 mod json;
 mod thin;

@@ -425,40 +425,44 @@ fn runs_sampled_at_different_rates_are_refused_naming_both() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// Records whose displacement swings about a common mean off zero (a
-/// sensor's zero) say so in the report, which no effect explains: every
-/// peak is off by it. The model's own record says nothing of the kind.
+/// Records whose displacement swings about a common mean off zero, or whose
+/// friction force carries a zero offset, say so in the report, which no
+/// effect explains: every peak is off by the one, the friction one way
+/// larger than the other by the other. The model's own record says nothing
+/// of the kind.
 #[test]
-fn a_displacement_offset_is_noted_in_the_report() {
+fn channel_offsets_are_noted_in_the_report() {
     let root = scratch("offset");
     let data = root.join("data");
     let (ok, _, err) =
         stickslip(&["-q", "simulate", "--realisations", "1", "--duration", "20", "--out", data.to_str().unwrap()]);
     assert!(ok, "{err}");
-    let notes_of = |name: &str| -> Vec<String> {
+    let file = data.join("run-7.000hz-16.390n-r000.csv");
+    let original = std::fs::read_to_string(&file).unwrap();
+    // The record with `by` added to column `column`, diagnosed: its notes.
+    let notes_with = |name: &str, column: &str, by: f64| -> Vec<String> {
+        let mut lines = original.lines();
+        let header = lines.next().unwrap();
+        let j = header.split(',').position(|c| c == column).unwrap();
+        let mut shifted = format!("{header}\n");
+        for line in lines {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            cells[j] = (cells[j].parse::<f64>().unwrap() + by).to_string();
+            shifted += &(cells.join(",") + "\n");
+        }
+        std::fs::write(&file, shifted).unwrap();
         let out = root.join(name);
         let (ok, _, err) =
             stickslip(&["-q", "diagnose", data.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
         assert!(ok, "{err}");
         report_in(&out).1
     };
-    let plain = notes_of("plain");
-    assert!(!plain.iter().any(|n| n.contains("swings about")), "{plain:?}");
-    // The same record with 1 mm added to x.
-    let file = data.join("run-7.000hz-16.390n-r000.csv");
-    let text = std::fs::read_to_string(&file).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap();
-    let x = header.split(',').position(|c| c == "x").unwrap();
-    let mut shifted = format!("{header}\n");
-    for line in lines {
-        let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
-        cells[x] = (cells[x].parse::<f64>().unwrap() + 1e-3).to_string();
-        shifted += &(cells.join(",") + "\n");
-    }
-    std::fs::write(&file, shifted).unwrap();
-    let offset = notes_of("offset");
-    assert!(offset.iter().any(|n| n.contains("swings about") && n.contains("sensor's zero")), "{offset:?}");
+    let plain = notes_with("plain", "x", 0.0);
+    assert!(!plain.iter().any(|n| n.contains("swings about") || n.contains("one way than")), "{plain:?}");
+    let moved = notes_with("x-offset", "x", 1e-3);
+    assert!(moved.iter().any(|n| n.contains("swings about") && n.contains("sensor's zero")), "{moved:?}");
+    let pushed = notes_with("friction-offset", "friction_force", 0.5);
+    assert!(pushed.iter().any(|n| n.contains("one way than the other") && n.contains("+0.")), "{pushed:?}");
     std::fs::remove_dir_all(&root).unwrap();
 }
 
