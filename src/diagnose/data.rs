@@ -14,10 +14,9 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
 use crate::engine::effects::HarmonicForm;
-use crate::engine::model::fmt_value;
 use crate::engine::reduce::circular_mean_var;
 use crate::error::{Error, Result};
-use crate::measure::{MeasurementSet, Run, SAMPLING_TOLERANCE, sample_rate_hz};
+use crate::measure::{MeasurementSet, Run, SAMPLING_TOLERANCE, fmt_rate_hz, sample_rate_hz};
 use crate::text::shown;
 
 /// One group of measured data at one condition.
@@ -396,18 +395,12 @@ fn one_sample_interval(runs: &[Run]) -> Result<f64> {
                 "sampled at {} Hz, while {} is sampled at {} Hz: a diagnosis simulates every record at one rate \
                  (the baseline's noise is held over one sample interval), so the runs of a set must share one; \
                  resample them to a common rate",
-                fmt_value(round_6(sample_rate_hz(other))),
+                fmt_rate_hz(sample_rate_hz(other)),
                 shown(&first.file),
-                fmt_value(round_6(sample_rate_hz(first)))
+                fmt_rate_hz(sample_rate_hz(first))
             ),
         }),
     }
-}
-
-/// `x` rounded to six decimals, for messages (a rate of 600 Hz read from
-/// sample times is 600.0000000000001).
-fn round_6(x: f64) -> f64 {
-    (x * 1e6).round() / 1e6
 }
 
 impl<'a> Data<'a> {

@@ -130,20 +130,18 @@ const ASYMMETRY_MIN_SAMPLES: usize = 20;
 /// channel or with too few such samples either way.
 fn friction_asymmetry(run: &crate::measure::Run) -> Option<(f64, f64)> {
     let friction = run.friction_force.as_ref()?;
-    let rate = crate::measure::displacement_rate(&run.t_s, &run.x_m);
-    let peak = rate.iter().fold(0.0f64, |m, &(_, r)| m.max(r.abs()));
     // (count, Σμ, ΣN) forwards and backwards.
     let mut sums = [(0usize, 0.0, 0.0); 2];
-    for &(i, v) in &rate {
+    for (i, v) in crate::measure::fast_motion(&run.t_s, &run.x_m) {
         let normal = run.normal_force.as_ref().map_or(run.normal_force_n, |n| n[i]);
         let f = friction[i];
-        if v.abs() >= 0.5 * peak && f * v < 0.0 && normal > 0.0 {
+        if f * v < 0.0 && normal > 0.0 {
             let side = &mut sums[usize::from(v < 0.0)];
             *side = (side.0 + 1, side.1 + f.abs() / normal, side.2 + normal);
         }
     }
     let [(n_fwd, mu_fwd, load_fwd), (n_back, mu_back, load_back)] = sums;
-    if peak <= 0.0 || n_fwd < ASYMMETRY_MIN_SAMPLES || n_back < ASYMMETRY_MIN_SAMPLES {
+    if n_fwd < ASYMMETRY_MIN_SAMPLES || n_back < ASYMMETRY_MIN_SAMPLES {
         return None;
     }
     let (fwd, back) = (mu_fwd / n_fwd as f64, mu_back / n_back as f64);

@@ -353,21 +353,16 @@ pub fn diagnose_set(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Diagnosis> {
-    let thinned = match settings.sample_rate_hz {
-        Some(rate_hz) => Some(crate::measure::thinned(set, rate_hz)?),
-        None => None,
-    };
+    let thinned = settings.sample_rate_hz.map(|rate_hz| crate::measure::thinned(set, rate_hz)).transpose()?;
     let set = thinned.as_ref().map_or(set, |(set, _)| set);
     let mut data = Data::new(set)?;
     let mut notes = frame::frame_notes(&data);
-    if let (Some((_, n)), Some(rate_hz)) = (&thinned, settings.sample_rate_hz) {
-        if *n > 0 {
-            notes.push(format!(
-                "{n} of {} runs were thinned to {rate_hz} Hz (every k-th sample kept) before the diagnosis: the \
-                 baseline's noise is held over 1/{rate_hz} s",
-                set.runs.len()
-            ));
-        }
+    if let (Some((_, n @ 1..)), Some(rate_hz)) = (&thinned, settings.sample_rate_hz) {
+        notes.push(format!(
+            "{n} of {} runs were thinned to {rate_hz} Hz (every k-th sample kept) before the diagnosis: the \
+             baseline's noise is held over 1/{rate_hz} s",
+            set.runs.len()
+        ));
     }
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));

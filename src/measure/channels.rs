@@ -44,7 +44,7 @@ const REVERSED_SHARE: f64 = 0.8;
 /// The rate of change of `x` (m/s) at each interior sample with finite
 /// neighbours, by central differences over the times `t_s` (s), with the
 /// sample's index.
-pub(crate) fn displacement_rate(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
+fn displacement_rate(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
     let n = t_s.len().min(x_m.len());
     (1..n.saturating_sub(1))
         .filter_map(|i| {
@@ -52,6 +52,19 @@ pub(crate) fn displacement_rate(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
             rate.is_finite().then_some((i, rate))
         })
         .collect()
+}
+
+/// The samples where the block moves at more than half its peak speed (so
+/// slips, where it moves at all), with the rate of change of `x_m` (m/s)
+/// there ([`displacement_rate`] at times `t_s`, s); none where it does not
+/// move.
+pub(crate) fn fast_motion(t_s: &[f64], x_m: &[f64]) -> Vec<(usize, f64)> {
+    let rate = displacement_rate(t_s, x_m);
+    let peak = rate.iter().fold(0.0f64, |m, &(_, r)| m.max(r.abs()));
+    if peak <= 0.0 {
+        return Vec::new();
+    }
+    rate.into_iter().filter(|&(_, r)| r.abs() >= 0.5 * peak).collect()
 }
 
 /// Refuses a velocity column `v` (m/s) that is not the rate of change of
@@ -99,16 +112,13 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
 /// [`REVERSED_SHARE`] or more of the samples where the block moves at more
 /// than half its peak speed, where it slips.
 pub(super) fn check_friction(path: &Path, t_s: &[f64], x_m: &[f64], friction_n: &[f64]) -> Result<()> {
-    let rate = displacement_rate(t_s, x_m);
-    let peak = rate.iter().fold(0.0f64, |m, &(_, r)| m.max(r.abs()));
-    let signs: Vec<f64> = rate
-        .iter()
-        .filter(|&&(_, r)| r.abs() >= 0.5 * peak)
-        .filter_map(|&(i, r)| friction_n.get(i).map(|&f| f * r))
+    let signs: Vec<f64> = fast_motion(t_s, x_m)
+        .into_iter()
+        .filter_map(|(i, r)| friction_n.get(i).map(|&f| f * r))
         .filter(|p| p.is_finite() && *p != 0.0)
         .collect();
     let along = signs.iter().filter(|&&p| p > 0.0).count();
-    if peak > 0.0 && signs.len() >= MIN_SAMPLES && along as f64 >= REVERSED_SHARE * signs.len() as f64 {
+    if signs.len() >= MIN_SAMPLES && along as f64 >= REVERSED_SHARE * signs.len() as f64 {
         return Err(bad(
             path,
             None,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::channels;
 use super::json::{Bound, bad};
-use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow, TimeOrigin};
+use super::{MIN_PERIODS, Run, SAMPLING_TOLERANCE, SummaryRow, TimeOrigin, fmt_rate_hz};
 use crate::engine::Job;
 use crate::engine::model::{fmt_bound, fmt_value, limits};
 use crate::error::{Error, Result};
@@ -349,7 +349,7 @@ pub(super) fn read_run_file(
             format!(
                 "the record is sampled at {} Hz, not above twice its excitation frequency ({} Hz; the Nyquist \
                  rate): its periods and peaks cannot be resolved",
-                fmt_value((rate_hz * 1e6).round() / 1e6),
+                fmt_rate_hz(rate_hz),
                 fmt_value(2.0 * frequency_hz)
             ),
         ));

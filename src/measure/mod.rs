@@ -52,7 +52,7 @@
 //!   at most the periods one simulated record may run.
 
 mod channels;
-pub(crate) use channels::displacement_rate;
+pub(crate) use channels::fast_motion;
 mod csv;
 mod json;
 mod thin;
@@ -234,6 +234,12 @@ impl Run {
         let n = self.t_s.len();
         if n == 0 { 0.0 } else { n as f64 * self.sample_interval_s() }
     }
+}
+
+/// A sample rate (Hz) for messages, rounded to six decimals (a rate of
+/// 600 Hz read from sample times is 600.0000000000001).
+pub(crate) fn fmt_rate_hz(rate_hz: f64) -> String {
+    fmt_value((rate_hz * 1e6).round() / 1e6)
 }
 
 /// Sample rate of a record, Hz, from its mean sample interval; 0 for a

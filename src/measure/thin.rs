@@ -8,7 +8,7 @@
 //! peak by its sinc, a systematic miss of several standard errors).
 
 use super::json::bad;
-use super::{MeasurementSet, Run, SAMPLING_TOLERANCE, sample_rate_hz};
+use super::{MeasurementSet, Run, SAMPLING_TOLERANCE, fmt_rate_hz, sample_rate_hz};
 use crate::engine::model::{fmt_value, limits};
 use crate::error::{Error, Result};
 
@@ -34,11 +34,11 @@ pub fn thinned(set: &MeasurementSet, rate_hz: f64) -> Result<(MeasurementSet, us
                 format!(
                     "sampled at {} Hz, which a sample rate of {} Hz does not divide: keeping every k-th sample \
                      gives {} Hz, {} Hz, {} Hz, …",
-                    fmt_value(rounded(rate)),
-                    fmt_value(rounded(rate_hz)),
-                    fmt_value(rounded(rate / 2.0)),
-                    fmt_value(rounded(rate / 3.0)),
-                    fmt_value(rounded(rate / 4.0))
+                    fmt_rate_hz(rate),
+                    fmt_rate_hz(rate_hz),
+                    fmt_rate_hz(rate / 2.0),
+                    fmt_rate_hz(rate / 3.0),
+                    fmt_rate_hz(rate / 4.0)
                 ),
             ));
         }
@@ -52,7 +52,7 @@ pub fn thinned(set: &MeasurementSet, rate_hz: f64) -> Result<(MeasurementSet, us
                 format!(
                     "thinned to {} Hz, the record could not be diagnosed: it must stay sampled above twice its \
                      excitation frequency ({} Hz), with a sample interval of {}..{} s",
-                    fmt_value(rounded(rate_hz)),
+                    fmt_rate_hz(rate_hz),
                     fmt_value(2.0 * run.excitation_frequency_hz),
                     fmt_value(dt_lo),
                     fmt_value(dt_hi)
@@ -88,12 +88,6 @@ fn every(run: &Run, k: usize) -> Run {
         friction_force: run.friction_force.as_ref().map(keep),
         ..run.clone()
     }
-}
-
-/// `x` rounded to six decimals, for messages (a rate read from sample
-/// times is 600.0000000000001 Hz).
-fn rounded(x: f64) -> f64 {
-    (x * 1e6).round() / 1e6
 }
 
 #[cfg(test)]
