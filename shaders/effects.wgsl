@@ -63,7 +63,7 @@ fn dwell_excess(excess: f32, dwell_s: f32, ageing_s: f32) -> f32 {
     return excess * (1.0 - exp(-max(dwell_s, 0.0) / ageing_s));
 }
 
-// `start`: φ₀ of `dahl` (–), unused by the other forms.
+// `start`: φ₀ of `dahl` and `bristle` (–), unused by the other forms.
 fn hysteresis_factor(slipped_m: f32, start: f32) -> f32 {
     let length = effects.hysteresis_length_m;
     if (length == 0.0) {
@@ -76,7 +76,7 @@ fn hysteresis_factor(slipped_m: f32, start: f32) -> f32 {
     if (effects.hysteresis_form == HYSTERESIS_FORM_RATIONAL) {
         return r / (r + 1.0);
     }
-    if (effects.hysteresis_form == HYSTERESIS_FORM_DAHL) {
+    if (effects.hysteresis_form == HYSTERESIS_FORM_DAHL || effects.hysteresis_form == HYSTERESIS_FORM_BRISTLE) {
         return 1.0 - (1.0 - start) * exp(-r);
     }
     if (effects.hysteresis_form == HYSTERESIS_FORM_LAG || effects.hysteresis_form == HYSTERESIS_FORM_SLIP
@@ -84,6 +84,15 @@ fn hysteresis_factor(slipped_m: f32, start: f32) -> f32 {
         return 1.0;
     }
     return 1.0 - exp(-r);
+}
+
+// κ = k δ / (k δ + μ₀ N0) of `bristle` (the CPU's effects::bristle_compliance), –.
+fn bristle_compliance(stiffness_n_per_m: f32, held_n: f32, length_m: f32) -> f32 {
+    let elastic = stiffness_n_per_m * length_m;
+    if (elastic > 0.0 && held_n > 0.0) {
+        return elastic / (elastic + held_n);
+    }
+    return 0.0;
 }
 
 // (|v|/L)(μ_ss − μ_f): the slip law's rate of the friction memory, 1/s.

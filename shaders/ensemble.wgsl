@@ -171,6 +171,11 @@ fn load_invocation(n: u32) {
     law_a = params.friction_a * point.friction_scale;
     law_b = params.friction_b * point.friction_scale;
     law_d = params.friction_d_s2_per_m2 * point.friction_scale;
+    stick_compliance = 0.0;
+    if (effects.hysteresis_form == HYSTERESIS_FORM_BRISTLE) {
+        stick_compliance = bristle_compliance(params.stiffness_n_per_m,
+            (law_a + point.friction_offset + law_b) * point.normal_force_mean_n, effects.hysteresis_length_m);
+    }
 }
 
 fn store_path(n: u32) {
@@ -214,7 +219,7 @@ fn init_paths(@builtin(global_invocation_id) gid: vec3<u32>) {
         path.mode = stick_or_slip(vec2<f32>(1.0, 0.0));
     }
     if (path.mode == MODE_STICK) {
-        start_stick(0.0);
+        start_stick(0.0, vec2<f32>(1.0, 0.0));
     } else if (memory_form() != MEMORY_AGEING) {
         // The contact age starts at 0 whether the block sticks or slips.
         path.memory = breakaway_memory();
@@ -234,6 +239,9 @@ fn run_cycles(@builtin(global_invocation_id) gid: vec3<u32>) {
         s.next_boundary_frac, s.friction_noise, s.normal_force_n, s.stick_time_s,
         s.slip_start_x_m, s.colour_state, s.interval_phase, s.stiction_excess, s.colour_state_1,
         s.colour_state_2, s.memory, s.stick_since_s, s.ageing_excess, s.drift_walk, 0.0, 0.0, 0.0, 0.0);
+    // A stuck block's anchor from where it rests, the base at the period's
+    // start (the states keep no anchor).
+    stick_anchor_m = anchor_of(vec2<f32>(1.0, 0.0));
     sample_row = n * params.sample_slots;
     interval_at_dispatch = s.interval;
     tally = Tally(0u, vec2<u32>(0u), vec3<u32>(0u), vec2<u32>(0u), 0u, vec2<u32>(0u), vec2<u32>(0u), 0u, 0u);

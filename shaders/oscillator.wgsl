@@ -70,6 +70,10 @@ var<private> key: vec2<u32>;
 var<private> law_a: f32;
 var<private> law_b: f32;
 var<private> law_d: f32;
+// κ of hysteresis `bristle` (0: a rigid stick), set with the point, and the
+// anchored slider's position w while stuck (m; the CPU's Path fields).
+var<private> stick_compliance: f32;
+var<private> stick_anchor_m: f32;
 
 // (cos, sin) of a phase, and a rotation of one by another.
 fn trig_at(theta: f32) -> vec2<f32> {
@@ -186,12 +190,29 @@ fn contact_age_excess(age_s: f32) -> f32 {
     return contact_age_term(age_s, cutoff_age_s, floor_age_s);
 }
 
-// A stick starts at t_s (from the run's start): dwell stiction ages anew.
-fn start_stick(t_s: f32) {
+// A stick starts at t_s (from the run's start, the base at `trig`): dwell
+// stiction ages anew, and the slider is anchored where the block rests on it.
+fn start_stick(t_s: f32, trig: vec2<f32>) {
     path.stick_since_s = t_s;
+    stick_anchor_m = anchor_of(trig);
     if (effects.stiction_form == STICTION_FORM_DWELL) {
         path.stiction_excess = dwell_excess(effects.stiction_excess, 0.0, effects.stiction_dwell_s);
     }
+}
+
+// w = (x − κ u) / (1 − κ): where the slider is anchored for the block at x (m).
+fn anchor_of(trig: vec2<f32>) -> f32 {
+    if (stick_compliance == 0.0) {
+        return path.x_m;
+    }
+    return (path.x_m - stick_compliance * params.base_amplitude_m * trig.x) / (1.0 - stick_compliance);
+}
+
+// A stuck block's (x, v): κ u + (1 − κ) w and κ du/dt (m, m/s).
+fn stuck_state(trig: vec2<f32>) -> vec2<f32> {
+    let moving = stick_compliance * params.base_amplitude_m;
+    return vec2<f32>(moving * trig.x + (1.0 - stick_compliance) * stick_anchor_m,
+        -moving * point.omega_rad_per_s * trig.y);
 }
 
 fn spring_force(cos_omega_t: f32, x_m: f32) -> f32 {
@@ -283,9 +304,10 @@ fn static_coefficient() -> f32 {
         + path.ageing_excess, 0.0);
 }
 
-// Whether hysteresis `dahl` is on (δ > 0; the CPU's Path::dahl).
+// Whether hysteresis `dahl` or `bristle` is on (δ > 0; the CPU's Path::dahl).
 fn dahl() -> bool {
-    return effects.hysteresis_form == HYSTERESIS_FORM_DAHL && effects.hysteresis_length_m != 0.0;
+    return (effects.hysteresis_form == HYSTERESIS_FORM_DAHL || effects.hysteresis_form == HYSTERESIS_FORM_BRISTLE)
+        && effects.hysteresis_length_m != 0.0;
 }
 
 // The friction memory a slip starts with at a breakaway: lag_start_coefficient, or φ₀ = 1
@@ -391,11 +413,38 @@ fn add_slip_phase(h_s: f32, step: SlipStep) {
     path.period_sin_integral += h_s / 6.0 * (x1 * step.trig0.y + x23 * step.trig1.y + step.x4_m * step.trig2.y);
 }
 
-// A stuck interval between base trigs a and b, added exactly: x is constant.
-fn add_stick_phase(a: vec2<f32>, b: vec2<f32>) {
+// A stuck interval of duration_s between base trigs a and b, added exactly: x
+// is constant on a rigid stick, κ u + (1 − κ) w on an elastic one.
+fn add_stick_phase(a: vec2<f32>, b: vec2<f32>, duration_s: f32) {
     let w = point.omega_rad_per_s;
-    path.period_cos_integral += path.x_m * (b.y - a.y) / w;
-    path.period_sin_integral += path.x_m * (a.x - b.x) / w;
+    if (stick_compliance == 0.0) {
+        path.period_cos_integral += path.x_m * (b.y - a.y) / w;
+        path.period_sin_integral += path.x_m * (a.x - b.x) / w;
+        return;
+    }
+    let held = (1.0 - stick_compliance) * stick_anchor_m;
+    let moving = stick_compliance * params.base_amplitude_m;
+    let cos2 = 0.5 * duration_s + (b.y * b.x - a.y * a.x) / (2.0 * w);
+    let cos_sin = (b.y * b.y - a.y * a.y) / (2.0 * w);
+    path.period_cos_integral += held * (b.y - a.y) / w + moving * cos2;
+    path.period_sin_integral += held * (a.x - b.x) / w + moving * cos_sin;
+}
+
+// A block stuck on an elastic contact moves to where the base at `end` puts it;
+// its period's largest x counts the base's top inside the interval (the CPU's
+// Path::creep).
+fn creep(start: vec2<f32>, end: vec2<f32>) {
+    if (stick_compliance == 0.0) {
+        return;
+    }
+    let state = stuck_state(end);
+    path.x_m = state.x;
+    path.v_m_per_s = state.y;
+    var top = path.x_m;
+    if (start.y < 0.0 && end.y >= 0.0) {
+        top = stuck_state(vec2<f32>(1.0, 0.0)).x;
+    }
+    path.period_max_x_m = max(path.period_max_x_m, top);
 }
 
 fn locate_velocity_zero(start: vec2<f32>, h_s: f32, sign: f32) -> f32 {
@@ -463,7 +512,11 @@ fn stick_or_slip(trig: vec2<f32>) -> i32 {
 // Entering cos(θ) >= C+ happens at θ = 2πn − acos(C+); entering
 // cos(θ) <= C− at θ = 2πn + acos(C−). Keeps `best` unless this entry is earlier.
 fn earliest_entry(best: vec2<f32>, sign: f32, phase_a: f32, reach: f32, t_a: f32, t_b: f32) -> vec2<f32> {
-    let level = (path.x_m + sign * reach) / params.base_amplitude_m;
+    var anchor = stick_anchor_m;
+    if (stick_compliance == 0.0) {
+        anchor = path.x_m;
+    }
+    let level = (anchor + sign * reach) / params.base_amplitude_m;
     if (level < -1.0 || level > 1.0) {
         return best;
     }
@@ -497,7 +550,7 @@ fn breakaway_time(t_a: f32, start: vec2<f32>, t_b: f32) -> vec2<f32> {
         return vec2<f32>(t_b, 0.0);
     }
     let phase_a = point.omega_rad_per_s * t_a;
-    let reach = threshold / params.stiffness_n_per_m;
+    let reach = threshold / (params.stiffness_n_per_m * (1.0 - stick_compliance));
     var best = vec2<f32>(t_b, 0.0);
     best = earliest_entry(best, 1.0, phase_a, reach, t_a, t_b);
     best = earliest_entry(best, -1.0, phase_a, reach, t_a, t_b);
@@ -534,7 +587,13 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
             }
             if (measuring) {
                 path.period_stick_s += t_end - t_a;
-                add_stick_phase(start, end);
+                add_stick_phase(start, end, t_end - t_a);
+            }
+            creep(start, end);
+            if (until.y != 0.0 && stick_compliance != 0.0) {
+                // Off an elastic stick the block slips on from the speed it
+                // crept at, where that is the slip's way.
+                path.v_m_per_s = until.y * max(until.y * path.v_m_per_s, 0.0);
             }
             path.mode = i32(until.y);
             path.slip_start_x_m = path.x_m;
@@ -591,7 +650,7 @@ fn advance_segment(t_start: f32, t_b: f32, start_trig: vec2<f32>, regular: bool,
                 path.mode = MODE_STICK;
             }
             if (path.mode == MODE_STICK) {
-                start_stick(period_start_s + t_a);
+                start_stick(period_start_s + t_a, start);
             } else if (memory_form() != MEMORY_AGEING) {
                 // A slip from rest is a breakaway: μ_f starts at the static
                 // coefficient; the contact age goes on from where the slip left it;

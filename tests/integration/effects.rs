@@ -13,7 +13,7 @@ const PLAN: RunPlan = RunPlan { warmup_cycles: 5, measured_cycles: 15 };
 pub(super) const COND: Condition = Condition { excitation_frequency_hz: 7.0, normal_force_n: 16.39 };
 
 /// Every effect in every form, at zero strength.
-const ZERO: [&[&str]; 41] = [
+const ZERO: [&[&str]; 42] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.0, 0.0, 0.0, 0.0]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -36,6 +36,7 @@ const ZERO: [&[&str]; 41] = [
     &["friction_hysteresis.time_constant_s=0.0", "friction_hysteresis.form=\"lag\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"slip\""],
     &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"dahl\""],
+    &["friction_hysteresis.length_m=0.0", "friction_hysteresis.form=\"bristle\""],
     // Ageing is off at B = 0 whatever its slip distance, and at L = 0
     // whatever its B (no state, no raised steps).
     &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.0", "friction_hysteresis.form=\"ageing\""],
@@ -72,7 +73,7 @@ const ZERO: [&[&str]; 41] = [
 /// Every effect in every form, switched on (the coloured `two_scale` form
 /// mixes in a slow part, so its strength is a correlation time), and the
 /// one pair whose parts meet in one state (lag and a released stiction).
-const ON: [&[&str]; 42] = [
+const ON: [&[&str]; 43] = [
     &[
         "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
         "normal_force_harmonics.phases_rad=[0.3, 0.1, 0.0, 2.0]",
@@ -109,6 +110,7 @@ const ON: [&[&str]; 42] = [
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"slip\""],
     &["friction_hysteresis.length_m=2e-5", "friction_hysteresis.strength=0.05", "friction_hysteresis.form=\"ageing\""],
     &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"dahl\""],
+    &["friction_hysteresis.length_m=2e-4", "friction_hysteresis.form=\"bristle\""],
     &["coloured_friction_noise.correlation_time_s=0.05"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.coloured_share=0.4"],
     &["coloured_friction_noise.correlation_time_s=0.05", "coloured_friction_noise.form=\"hold\""],

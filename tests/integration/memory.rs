@@ -195,6 +195,71 @@ fn dahls_friction_turns_over_a_displacement_through_a_reversal() {
     assert!(build_up.len() >= 20 && build_up.iter().all(|t| t.0 >= 0.0 && t.1.is_none()), "exponential: {build_up:?}");
 }
 
+/// Hysteresis `bristle`: a stick held by the contact's elasticity. Noise
+/// off, at 7 Hz and 16.39 N where the block sticks at every reversal: while
+/// stuck the block creeps with the base, x = κ u + (1 − κ) w with w fixed
+/// and κ = k δ / (k δ + μ₀ N0), so x − κ u holds to rounding while x itself
+/// moves by tens of micrometres, and v = κ du/dt; the contact force k (u − x)
+/// stays within μ₀ N0 and reaches it at the breakaway (within the spring's
+/// rise over one 20 µs sample). Under `dahl` the same δ leaves the stick
+/// rigid: x holds and v is 0.
+#[test]
+fn a_bristle_stick_creeps_with_the_base_until_the_contact_lets_go() {
+    let length_m = 2e-4;
+    let condition = COND;
+    let sets = [format!("friction_hysteresis.length_m={length_m}"), "friction_hysteresis.form=\"bristle\"".into()];
+    let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let (m, r) = noiseless_record(&sets, condition, 2.0, 50_000.0);
+    let k = m.stiffness_n_per_m();
+    let (u0, w) = (m.excitation.amplitude_m, std::f64::consts::TAU * condition.excitation_frequency_hz);
+    let held_n = (m.friction.a + m.friction.b) * condition.normal_force_n;
+    let kappa = k * length_m / (k * length_m + held_n);
+    let u = |s: &Sample| u0 * (w * s.t_s).cos();
+    let anchor = |s: &Sample| s.x_m - kappa * u(s);
+    // Runs of samples over which x − κ u holds: the sticks, less their
+    // first and last samples (the stick may begin or the slip have begun
+    // between a sample and its neighbour).
+    let mut stretches: Vec<&[Sample]> = Vec::new();
+    let mut start = 0;
+    for i in 1..=r.len() {
+        if i == r.len() || (anchor(&r[i]) - anchor(&r[i - 1])).abs() > 1e-12 {
+            if i - start >= 20 {
+                stretches.push(&r[start + 1..i - 1]);
+            }
+            start = i;
+        }
+    }
+    assert!(stretches.len() >= 20, "only {} sticks in 2 s at 7 Hz", stretches.len());
+    let mut largest_force: f64 = 0.0;
+    for stick in &stretches {
+        let (first, last) = (&stick[0], &stick[stick.len() - 1]);
+        assert!((last.x_m - first.x_m).abs() > 1e-6, "the block held still over a stick: {} m", last.x_m - first.x_m);
+        for s in *stick {
+            let creep = -kappa * u0 * w * (w * s.t_s).sin();
+            assert!(
+                (s.v_m_per_s - creep).abs() <= 1e-9 * creep.abs().max(1e-9),
+                "v {} against κ du/dt {creep}",
+                s.v_m_per_s
+            );
+            let force = k * (u(s) - s.x_m);
+            assert!(force.abs() <= held_n * (1.0 + 1e-9), "contact force {force} N beyond μ₀ N0 = {held_n} N");
+        }
+        largest_force = largest_force.max((k * (u(last) - last.x_m)).abs());
+    }
+    // The contact force's rise over the two samples between the last one
+    // read and the breakaway, at most.
+    let rise_n = 2.0 * k * (1.0 - kappa) * u0 * w / 50_000.0;
+    println!(
+        "bristle: κ = {kappa:.4}, {} sticks, largest contact force {largest_force:.4} N of μ₀ N0 = {held_n:.4} N",
+        stretches.len()
+    );
+    assert!(largest_force >= held_n - rise_n, "the contact let go at {largest_force} N, μ₀ N0 = {held_n} N");
+    let dahl = [format!("friction_hysteresis.length_m={length_m}"), "friction_hysteresis.form=\"dahl\"".into()];
+    let dahl: Vec<&str> = dahl.iter().map(String::as_str).collect();
+    let (_, rigid) = noiseless_record(&dahl, condition, 2.0, 50_000.0);
+    assert!(sticks(&rigid).len() >= 20, "dahl: {} sticks", sticks(&rigid).len());
+}
+
 /// Hysteresis `ageing`, the rate-and-state ageing law: the contact age θ
 /// grows while stuck, and the static coefficient is
 /// μ(0) + B ln((θ + θ_0)/(θ_c + θ_0)), so a stick twice as long raises it by

@@ -68,8 +68,8 @@ pub fn dwell_excess(excess: f64, dwell_s: f64, ageing_s: f64) -> f64 {
 /// Build-up of sliding friction with displacement `d` (m) since slip start,
 /// over the characteristic displacement `length` (m); 1 when `length` is 0
 /// and for the `lag`, `slip` and `ageing` forms (which act through the
-/// friction memory state). `dahl` starts from `start` (φ₀, –: −φ at a
-/// reversal, 1 after a stick) and turns to 1, `1 − (1 − φ₀) e^(−d/δ)`.
+/// friction memory state). `dahl` and `bristle` start from `start` (φ₀, –:
+/// −φ at a reversal, 1 after a stick) and turn to 1, `1 − (1 − φ₀) e^(−d/δ)`.
 pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64, start: f64) -> f64 {
     if length == 0.0 {
         return 1.0;
@@ -79,9 +79,20 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64, start: f64) 
         HysteresisForm::Tanh => r.tanh(),
         HysteresisForm::Rational => r / (r + 1.0),
         HysteresisForm::Exponential => 1.0 - (-r).exp(),
-        HysteresisForm::Dahl => 1.0 - (1.0 - start) * (-r).exp(),
+        HysteresisForm::Dahl | HysteresisForm::Bristle => 1.0 - (1.0 - start) * (-r).exp(),
         HysteresisForm::Lag | HysteresisForm::Slip | HysteresisForm::Ageing => 1.0,
     }
+}
+
+/// κ = k / (k + k_t) of hysteresis `bristle`, –: the share of the base's
+/// motion a block stuck on a contact of stiffness k_t = `held_n` / δ
+/// follows, for a rig of stiffness `stiffness_n_per_m` (N/m), the force
+/// the contact holds at rest `held_n` (μ₀ N0, N) and the bristle length
+/// `length_m` (δ, m): `k δ / (k δ + μ₀ N0)`. 0 (a rigid stick) where δ is 0
+/// or the contact holds nothing.
+pub fn bristle_compliance(stiffness_n_per_m: f64, held_n: f64, length_m: f64) -> f64 {
+    let elastic = stiffness_n_per_m * length_m;
+    if elastic > 0.0 && held_n > 0.0 { elastic / (elastic + held_n) } else { 0.0 }
 }
 
 /// Rate of the friction memory μ_f under hysteresis `slip` (the slip law),

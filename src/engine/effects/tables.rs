@@ -152,6 +152,19 @@ pub struct FrictionHysteresis {
     /// the static friction that held the block already acts, φ₀ = 1, and
     /// there is no build-up. Off (the baseline) when δ = 0.
     ///
+    /// `bristle`: `dahl`'s friction, and a stick held by the contact's
+    /// elasticity instead of a rigid one (the bristle picture of LuGre,
+    /// Canudas de Wit et al. 1995, and the elasto-plastic model, Dupont et
+    /// al. 2002, taken quasi-statically: the bristles are stiff and damped
+    /// beside the rig). While stuck the contact is a tangential spring of
+    /// stiffness k_t = μ₀ N0 / δ (μ₀ = a + Δa + b, the law at rest without
+    /// its noise; N0 the nominal normal force), in series with the anchored
+    /// slider, so the block creeps with the base, x = κ u + (1 − κ) w with
+    /// κ = k / (k + k_t) and w fixed at the stick's start, and breaks away
+    /// when the contact force k (1 − κ)(u − w) reaches μ_s N. The friction
+    /// that turns over a δ in a slip is the bristles' deflection, so one
+    /// length sets both. Off (the baseline) when δ = 0 (κ = 0: a rigid stick).
+    ///
     /// `lag`: the friction coefficient μ_f follows the steady law μ_ss(v)
     /// with a first-order lag in time, dμ_f/dt = (μ_ss(v) − μ_f)/τ_m
     /// (τ_m = `time_constant_s`), starting at the static coefficient at each
@@ -213,6 +226,7 @@ pub enum HysteresisForm {
     Slip = 4,
     Ageing = 5,
     Dahl = 6,
+    Bristle = 7,
 }
 
 impl Form for HysteresisForm {
@@ -224,6 +238,7 @@ impl Form for HysteresisForm {
         HysteresisForm::Slip,
         HysteresisForm::Ageing,
         HysteresisForm::Dahl,
+        HysteresisForm::Bristle,
     ];
 
     fn code(self) -> u32 {

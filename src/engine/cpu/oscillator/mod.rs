@@ -7,7 +7,9 @@
 //! use classical RK4 with the slip direction frozen (the ODE is smooth there);
 //! a velocity zero inside a step is located by root finding on the RK4 map
 //! itself (Newton's method in a bracket), and the stick→slip breakaway is solved in closed
-//! form because the block is at rest and only the base moves. No `sgn` is
+//! form because the block is at rest and only the base moves (on the elastic
+//! stick of hysteresis `bristle` the block follows the base by a fixed share,
+//! so the contact force is still a cosine of the base's phase). No `sgn` is
 //! smoothed. The base's `cos Ωt` and `sin Ωt` are exact at the start of each
 //! span and carried through its steps by rotation (by `Ωh/2` for each half
 //! step), so a step evaluates no trigonometric function.
@@ -35,6 +37,7 @@
 //! | halvings probing for motion after a start from rest | 60, from a guess of the first under way, walked to it | 30, one by one from h/2 | 2⁻⁶⁰ and 2⁻³⁰ of the step are below each type's resolution; both find the same probe (the first under way) where the motion's sign changes once, the CPU in about two steps |
 //! | time inside a period | span start + `k · h` in f64 | the same in f32, boundary position `frac · S / 2³²` by `mulhilo` | f32 cannot hold 32.32 fixed point; both switch noise at the same instants |
 //! | `cos Ωt`, `sin Ωt` | exact at the period start and after events, rotated otherwise | also exact at every noise boundary and every 16 steps | f32 rotations drift by about 1e-7 each, f64 ones by 1e-16 |
+//! | a `bristle` stick's slider anchor w | kept in the path | recomputed from x at each dispatch's start (a period start), as the path states keep no anchor | the same w within f32 rounding; the states' layout is shared with the host |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
 //! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all (the baseline's as vector code, `simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
@@ -228,6 +231,13 @@ pub(crate) struct Path<'a> {
     law_d: f64,
     /// 1 / m, 1/kg.
     inv_mass: f64,
+    /// κ = k / (k + k_t) of hysteresis `bristle`: the share of the base's
+    /// motion a stuck block follows on the contact's elasticity, –; 0 for
+    /// a rigid stick (every other form).
+    stick_compliance: f64,
+    /// The anchored slider's position w while stuck, m: the block is at
+    /// x = κ u + (1 − κ) w (w = x for a rigid stick).
+    stick_anchor_m: f64,
     /// Largest x so far in the current period, m.
     pub(crate) period_max_x_m: f64,
     /// Time stuck so far in the current period, s.
@@ -247,8 +257,22 @@ impl<'a> Path<'a> {
         let memory_form = Memory::form(e);
         let build_up = matches!(
             e.hysteresis_form,
-            HysteresisForm::Exponential | HysteresisForm::Tanh | HysteresisForm::Rational | HysteresisForm::Dahl
+            HysteresisForm::Exponential
+                | HysteresisForm::Tanh
+                | HysteresisForm::Rational
+                | HysteresisForm::Dahl
+                | HysteresisForm::Bristle
         );
+        let (law_a, law_b) = (osc.friction_a * e.friction_scale, osc.friction_b * e.friction_scale);
+        let stick_compliance = if e.hysteresis_form == HysteresisForm::Bristle && e.hysteresis_length_m > 0.0 {
+            effects::bristle_compliance(
+                osc.stiffness_n_per_m,
+                (law_a + e.friction_offset + law_b) * osc.normal_force_mean_n,
+                e.hysteresis_length_m,
+            )
+        } else {
+            0.0
+        };
         let history = memory_form != Memory::None
             || (e.hysteresis_length_m != 0.0 && build_up)
             || e.adhesion_force_n != 0.0
@@ -277,10 +301,12 @@ impl<'a> Path<'a> {
             drift_walk: 0.0,
             history,
             memory_form,
-            law_a: osc.friction_a * e.friction_scale,
-            law_b: osc.friction_b * e.friction_scale,
+            law_a,
+            law_b,
             law_d: osc.friction_d_s2_per_m2 * e.friction_scale,
             inv_mass: 1.0 / osc.mass_kg,
+            stick_compliance,
+            stick_anchor_m: initial.x_m,
             period_max_x_m: initial.x_m,
             period_stick_s: 0.0,
             period_cos_integral: 0.0,
@@ -296,7 +322,7 @@ impl<'a> Path<'a> {
             path.stick_or_slip(Trig { cos: 1.0, sin: 0.0 })
         };
         if path.mode == Mode::Stick {
-            path.start_stick(0.0);
+            path.start_stick(0.0, Trig { cos: 1.0, sin: 0.0 });
         } else if path.memory_form != Memory::Ageing {
             // The contact age starts at 0 whether the block sticks or slips.
             path.memory = path.breakaway_memory();
@@ -422,14 +448,34 @@ impl<'a> Path<'a> {
         effects::contact_age_term(e.hysteresis_strength, age_s, cutoff_age_s, floor_age_s)
     }
 
-    /// Marks the start of a stick at `t_s` (from the run's start): the
-    /// `dwell` stiction's ageing starts again.
-    fn start_stick(&mut self, t_s: f64) {
+    /// Marks the start of a stick at `t_s` (from the run's start, with the
+    /// base at `trig`): the `dwell` stiction's ageing starts again, and the
+    /// slider is anchored where the block rests on it.
+    fn start_stick(&mut self, t_s: f64, trig: Trig) {
         self.stick_since_s = t_s;
+        self.stick_anchor_m = self.anchor_of(trig);
         if self.osc.effects.stiction_form == StictionForm::Dwell {
             let e = &self.osc.effects;
             self.stiction_excess = effects::dwell_excess(e.stiction_excess, 0.0, e.stiction_dwell_s);
         }
+    }
+
+    /// Where the slider is anchored for a block at x with the base at
+    /// `trig`: `w = (x − κ u) / (1 − κ)`, m (x itself for a rigid stick).
+    fn anchor_of(&self, trig: Trig) -> f64 {
+        let kappa = self.stick_compliance;
+        if kappa == 0.0 {
+            return self.x_m;
+        }
+        (self.x_m - kappa * self.osc.base_amplitude_m * trig.cos) / (1.0 - kappa)
+    }
+
+    /// A stuck block's displacement (m) and velocity (m/s) with the base at
+    /// `trig`: `κ u + (1 − κ) w` and `κ du/dt`.
+    fn stuck_state(&self, trig: Trig) -> (f64, f64) {
+        let (kappa, o) = (self.stick_compliance, self.osc);
+        let x = kappa * o.base_amplitude_m * trig.cos + (1.0 - kappa) * self.stick_anchor_m;
+        (x, -kappa * o.base_amplitude_m * o.omega_rad_per_s * trig.sin)
     }
 
     /// Force of springs and damper on the block at rest, `k (u − x)` with
@@ -539,12 +585,13 @@ impl<'a> Path<'a> {
             .max(0.0)
     }
 
-    /// Whether hysteresis `dahl` is on (δ > 0): friction continuous
-    /// through a reversal, so its coefficient may be negative for a while.
+    /// Whether hysteresis `dahl` or `bristle` is on (δ > 0): friction
+    /// continuous through a reversal, so its coefficient may be negative
+    /// for a while.
     #[inline(always)]
     fn dahl(&self) -> bool {
         let e = &self.osc.effects;
-        e.hysteresis_form == HysteresisForm::Dahl && e.hysteresis_length_m != 0.0
+        matches!(e.hysteresis_form, HysteresisForm::Dahl | HysteresisForm::Bristle) && e.hysteresis_length_m != 0.0
     }
 
     /// The friction memory a slip starts with at a breakaway, from a stick

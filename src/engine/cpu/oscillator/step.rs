@@ -89,12 +89,38 @@ impl Path<'_> {
         self.period_sin_integral += h_s / 6.0 * (x1 * a.sin + 2.0 * (x2 + x3) * m.sin + x4 * b.sin);
     }
 
-    /// Adds a stuck interval between base trigs `a` and `b` to the period's
-    /// phase integrals, exactly: x is constant.
-    fn add_stick_phase(&mut self, a: Trig, b: Trig) {
+    /// Adds a stuck interval of `duration_s` between base trigs `a` and `b`
+    /// to the period's phase integrals, exactly: x is constant on a rigid
+    /// stick, and `κ u + (1 − κ) w` on an elastic one.
+    fn add_stick_phase(&mut self, a: Trig, b: Trig, duration_s: f64) {
         let w = self.osc.omega_rad_per_s;
-        self.period_cos_integral += self.x_m * (b.sin - a.sin) / w;
-        self.period_sin_integral += self.x_m * (a.cos - b.cos) / w;
+        let kappa = self.stick_compliance;
+        if kappa == 0.0 {
+            self.period_cos_integral += self.x_m * (b.sin - a.sin) / w;
+            self.period_sin_integral += self.x_m * (a.cos - b.cos) / w;
+            return;
+        }
+        let (held, moving) = ((1.0 - kappa) * self.stick_anchor_m, kappa * self.osc.base_amplitude_m);
+        // ∫cos² = Δt/2 + (sin 2Ωt_b − sin 2Ωt_a)/(4Ω); ∫cos·sin = (sin²Ωt_b − sin²Ωt_a)/(2Ω).
+        let cos2 = 0.5 * duration_s + (b.sin * b.cos - a.sin * a.cos) / (2.0 * w);
+        let cos_sin = (b.sin * b.sin - a.sin * a.sin) / (2.0 * w);
+        self.period_cos_integral += held * (b.sin - a.sin) / w + moving * cos2;
+        self.period_sin_integral += held * (a.cos - b.cos) / w + moving * cos_sin;
+    }
+
+    /// Moves a block stuck on an elastic contact to where the base at
+    /// `end` puts it, and its period's largest x over the stuck interval
+    /// that started with the base at `start` (the base's largest
+    /// displacement lies inside where its sin turns from − to +). A rigid
+    /// stick does not move.
+    fn creep(&mut self, start: Trig, end: Trig) {
+        if self.stick_compliance == 0.0 {
+            return;
+        }
+        (self.x_m, self.v_m_per_s) = self.stuck_state(end);
+        let top =
+            if start.sin < 0.0 && end.sin >= 0.0 { self.stuck_state(Trig { cos: 1.0, sin: 0.0 }).0 } else { self.x_m };
+        self.period_max_x_m = self.period_max_x_m.max(top);
     }
 
     /// The step length `h* ∈ (0, h]` at which the RK4 map's velocity reaches
@@ -233,7 +259,8 @@ impl Path<'_> {
     }
 
     /// Earliest time in `[t_a, t_b]` at which a stuck block breaks away, and
-    /// the direction. `k (U0 cos(Ω t) − x) = ±μ_s N` is solved in closed form.
+    /// the direction. `k (U0 cos(Ω t) − x) = ±μ_s N` is solved in closed form
+    /// (on an elastic stick `k (1 − κ)(U0 cos(Ω t) − w) = ±μ_s N`).
     fn breakaway_time(&self, t_a: f64, start: Trig, t_b: f64) -> Option<(f64, i8)> {
         let o = self.osc;
         let force = self.spring_force(start.cos, self.x_m);
@@ -248,7 +275,7 @@ impl Path<'_> {
             return None;
         }
         let phase_a = o.omega_rad_per_s * t_a;
-        let reach = threshold / o.stiffness_n_per_m;
+        let reach = threshold / (o.stiffness_n_per_m * (1.0 - self.stick_compliance));
         let best = self.earliest_entry(None, 1, phase_a, reach, t_b);
         self.earliest_entry(best, -1, phase_a, reach, t_b).map(|(t, sign)| (t.max(t_a), sign))
     }
@@ -265,7 +292,8 @@ impl Path<'_> {
         t_b: f64,
     ) -> Option<(f64, i8)> {
         let o = self.osc;
-        let level = (self.x_m + f64::from(sign) * reach) / o.base_amplitude_m;
+        let anchor = if self.stick_compliance == 0.0 { self.x_m } else { self.stick_anchor_m };
+        let level = (anchor + f64::from(sign) * reach) / o.base_amplitude_m;
         if !(-1.0..=1.0).contains(&level) {
             return best;
         }
@@ -346,7 +374,15 @@ impl Path<'_> {
                     };
                     if measuring {
                         self.period_stick_s += t_end - t_a;
-                        self.add_stick_phase(start, end);
+                        self.add_stick_phase(start, end, t_end - t_a);
+                    }
+                    self.creep(start, end);
+                    if let Mode::Slip(s) = next
+                        && self.stick_compliance != 0.0
+                    {
+                        // Off an elastic stick the block slips on from the
+                        // speed it crept at, where that is the slip's way.
+                        self.v_m_per_s = f64::from(s) * (f64::from(s) * self.v_m_per_s).max(0.0);
                     }
                     self.mode = next;
                     self.slip_start_x_m = self.x_m;
@@ -405,7 +441,7 @@ impl Path<'_> {
                     }
                     self.mode = if events < MAX_EVENTS_PER_SEGMENT { self.stick_or_slip(start) } else { Mode::Stick };
                     if self.mode == Mode::Stick {
-                        self.start_stick(period_start_s + t_a);
+                        self.start_stick(period_start_s + t_a, start);
                     } else if self.memory_form != Memory::Ageing {
                         // A slip from rest is a breakaway like one from a
                         // stick: the lagged coefficient starts at the static
