@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 use crate::diagnose::{Diagnosis, FoldGap, RefusalReason, Unexplained, chart, sd};
+use crate::engine::effects::HysteresisForm;
 use crate::error::{Error, Result};
 use crate::io::{OutputSet, owned, write_atomically};
 
@@ -497,6 +498,15 @@ pub fn write_diagnosis_with(
             writeln!(
                 w,
                 "# normal_force_harmonics (position): a sweep's normal force N0 is the load with the block at x = 0; the mean\n# force over a record is N0 (1 + a mean(x/U0) + b mean((x/U0)^2)), as the measured records' mean was.\n"
+            )?;
+        }
+        if let Some(h) =
+            diagnosis.fitted.effects.friction_hysteresis.as_ref().filter(|h| h.form == HysteresisForm::Bristle)
+        {
+            writeln!(
+                w,
+                "# friction_hysteresis (bristle): a stuck block rests on a contact of stiffness mu0 N0 / {:.3e} m at each\n# sweep point's nominal normal force N0 (mu0 = a + b), so it follows the base by k delta / (k delta + mu0 N0)\n# of its motion; the records' normal_force_n was taken as the load their contact carried.\n",
+                h.length_m
             )?;
         }
         w.write_all(diagnosis.fitted.to_toml_string().as_bytes())

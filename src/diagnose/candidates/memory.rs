@@ -41,7 +41,9 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     // is higher then. Both are searched, the likelier first. Beside the
     // build-up, pre-sliding friction that is continuous through a
     // reversal (Dahl; the bristles of LuGre and the elasto-plastic
-    // models), over the same displacements.
+    // models), over the same displacements, with a rigid stick and with
+    // the bristles' elastic one (a stuck block creeps with the base by a
+    // share that falls with the load, which the rigid stick cannot give).
     let over_displacement = |searched: SearchedForm, form: HysteresisForm| Variant {
         effect,
         form: searched,
@@ -54,6 +56,7 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
     };
     let build_up = over_displacement(SearchedForm::BuildUp, HysteresisForm::Exponential);
     let dahl = over_displacement(SearchedForm::Dahl, HysteresisForm::Dahl);
+    let bristle = over_displacement(SearchedForm::Bristle, HysteresisForm::Bristle);
     // A memory time shorter than one sample interval is not searched:
     // the branches it separates differ by less than μ moves within
     // one sample, which the records cannot resolve, and integrating
@@ -104,9 +107,9 @@ pub(super) fn friction_hysteresis(effect: Effect, ctx: &Context<'_>) -> Vec<Vari
         }),
     };
     if ctx.excess(Observable::FrictionHysteresis).unwrap_or(0.0) < 0.0 {
-        vec![lag, slip, build_up, dahl, ageing]
+        vec![lag, slip, build_up, dahl, bristle, ageing]
     } else {
-        vec![build_up, dahl, slip, lag, ageing]
+        vec![build_up, dahl, bristle, slip, lag, ageing]
     }
 }
 

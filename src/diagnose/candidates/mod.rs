@@ -98,6 +98,8 @@ pub enum SearchedForm {
     BuildUp,
     /// Friction continuous through a reversal, turning over a displacement (Dahl).
     Dahl,
+    /// Dahl's friction with a stick held by the contact's elasticity (bristles).
+    Bristle,
     /// Friction that lags the law in time.
     Lag,
     /// Rate-and-state slip law: relaxation over a slip distance.
@@ -141,6 +143,7 @@ impl SearchedForm {
             SearchedForm::Polynomial => "polynomial",
             SearchedForm::BuildUp => "exponential",
             SearchedForm::Dahl => "dahl",
+            SearchedForm::Bristle => "bristle",
             SearchedForm::Lag => "lag",
             SearchedForm::Slip => "slip",
             SearchedForm::Ageing => "ageing",
