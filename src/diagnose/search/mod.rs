@@ -633,8 +633,19 @@ fn refit_folds(
             };
             // Where the pool's parameters with the fold's own law fit the
             // fold's units no better than the model before the effect, they
-            // are searched again there.
+            // are searched again there, from the better of the two starts a
+            // coarse fit tries: the law recalibrated at those parameters, and
+            // the law the fold's model already has. One calibration step can
+            // hand part of an effect's signature to the law (a friction
+            // spread cut by half where a harmonic of the normal force adds
+            // its own), a basin the search, which keeps the law it starts
+            // from, never leaves.
             if start.objective >= 1.0 {
+                let kept =
+                    evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?;
+                if let Some(kept) = kept.filter(|k| k.objective < start.objective) {
+                    start = kept;
+                }
                 start = coordinate_search(
                     &variant.params,
                     start,
