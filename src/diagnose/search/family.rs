@@ -8,7 +8,7 @@ use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::search::cv::{UnitLosses, pair_losses};
-use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task};
+use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
 use rayon::prelude::*;
@@ -167,7 +167,7 @@ fn coarse_fit(
     let mut out = Vec::new();
     let mut best: Option<(Model, f64)> = None;
     for steps in [0, 1] {
-        if steps == 0 && data.measured_law.is_none() {
+        if steps == 0 && !law_can_stay(data) {
             continue;
         }
         if let Some(t) = evaluate(v, &start, &current.model, &current.scores, steps, slope, data, search, engine)? {

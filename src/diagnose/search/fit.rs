@@ -85,6 +85,14 @@ pub(crate) fn tracing() -> bool {
     std::env::var_os("STICKSLIP_DEBUG").is_some()
 }
 
+/// Whether a trial on `data` can be scored at the law it starts from
+/// (`law_steps` 0 in [`evaluate`]): only where the records carry force
+/// channels. Without them the friction level is solved at every trial, so
+/// the unstepped start is the stepped one evaluated again.
+pub(crate) fn law_can_stay(data: &Data<'_>) -> bool {
+    data.measured_law.is_some()
+}
+
 /// Evaluates one set of parameter values on top of `base` on the view
 /// `data`, its friction law first calibrated with `law_steps` steps (the
 /// indirect inference, or the level's solve without force channels; 0:
@@ -114,7 +122,7 @@ pub(crate) fn evaluate(
     // at every trial: a summary table's mean peaks are known to a few
     // hundred periods' precision, and a level carried from the last trial
     // by one Newton step leaves them tens of spreads off.
-    let outcome = if law_steps == 0 && data.measured_law.is_some() {
+    let outcome = if law_steps == 0 && law_can_stay(data) {
         score(engine, &trial, data, settings, Scope::Fitting).map(|scores| (trial, scores))
     } else {
         calibrate_and_score(&trial, data, settings, engine, Some(slope), law_steps.max(1), Scope::Fitting)

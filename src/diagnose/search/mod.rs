@@ -55,7 +55,7 @@ use cv::{
 };
 use family::{Family, round, variant_named};
 pub(crate) use fit::Fitted;
-use fit::{Trial, coordinate_search, evaluate, fits_per_task, polish, search_settings, tracing};
+use fit::{Trial, coordinate_search, evaluate, fits_per_task, law_can_stay, polish, search_settings, tracing};
 use rayon::prelude::*;
 
 /// At most this many effects are named.
@@ -641,9 +641,11 @@ fn refit_folds(
             // its own), a basin the search, which keeps the law it starts
             // from, never leaves.
             if start.objective >= 1.0 {
-                let kept =
-                    evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?;
-                if let Some(kept) = kept.filter(|k| k.objective < start.objective) {
+                if law_can_stay(view)
+                    && let Some(kept) =
+                        evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?
+                    && kept.objective < start.objective
+                {
                     start = kept;
                 }
                 start = coordinate_search(
