@@ -241,7 +241,8 @@ pub enum RefusalReason {
     /// (their labels) worse than the baseline does, these worse than the
     /// model before it, and the response (the peaks' and the phase's mean
     /// and variance) at these worse than the baseline does, beyond each
-    /// fold's noise; `response_over_every_fold`: the response over every
+    /// fold's noise and beyond what its form leaves of that fold fitted to
+    /// every unit; `response_over_every_fold`: the response over every
     /// withheld fold together worse than the baseline, beyond the noise of
     /// that pooled mean. Its form does not carry over to the conditions it
     /// was not fitted on.
@@ -410,6 +411,19 @@ pub fn diagnose_set(
                 .collect(),
         })
         .collect();
+    for c in &selection.misfit_folds {
+        let label = &data.folds.folds[c.fold].label;
+        notes.push(format!(
+            "refitted without {label}, the fitted model predicts {} there worse than the baseline does (mean loss \
+             {:.2} against {:.2}), and about as closely as its form fits {label} when fitted to it too ({:.2}): \
+             that is the form's misfit there, not a failed prediction, and predictions at {label} from the fitted \
+             model carry it",
+            if c.response { "the response (the peaks' and the phase's mean and variance)" } else { "the data" },
+            c.predicted,
+            c.baseline,
+            c.own_fit
+        ));
+    }
     let (mut fitted, fitted_scores) = match selection.steps.last() {
         Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),

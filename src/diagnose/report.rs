@@ -43,7 +43,7 @@ pub struct Report {
 }
 
 /// How the confidence is defined, as `report.json` states it.
-pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline, over every observable and over the response's (peaks and phase) alone (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample";
+pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline (up to the noise, and to what its form leaves of that fold when fitted to it too), over every observable and over the response's (peaks and phase) alone, and the response over every withheld fold together no worse than the baseline (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample";
 
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -618,7 +618,8 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
                 "the verdict's checks at the withheld folds leave it out".to_string()
             } else {
                 format!(
-                    "refitted without each fold, the model with it {}. Its form does not carry over to conditions it \
+                    "refitted without each fold, the model with it {}, beyond the noise and beyond what its form \
+                     leaves of those folds when fitted to them too. Its form does not carry over to conditions it \
                      was not fitted on: the effect may be there in a shape no candidate has, which more conditions \
                      around those folds would tell",
                     parts.join(", and ")
@@ -668,7 +669,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
         d.confidence
     ));
     if d.effects.is_empty() {
-        s.push_str("<p>No unmodelled effect is named: no effect family closed a share of the calibrated baseline's out-of-sample gap beyond the noise while predicting every withheld fold no worse (see <i>Candidates</i> below for what each family closed).</p>");
+        s.push_str("<p>No unmodelled effect is named: no effect family closed a share of the calibrated baseline's out-of-sample gap beyond the noise while predicting every withheld fold no worse than the baseline, or than its form fits that fold (see <i>Candidates</i> below for what each family closed).</p>");
     } else {
         s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed (out of sample)</th><th>form misfit</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {
@@ -683,7 +684,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
                 params(&e.parameters)
             ));
         }
-        s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions that give this verdict (its family closes the largest share of what the model before it left of the out-of-sample gap, beyond the noise, and predicts every withheld fold no worse), times the share of the gap the named effects close (or each one's margin over the best rival family, where smaller) over one half, at most 1: a form that leaves much of the gap unexplained, or a rival that explains nearly as much, makes the verdict less sure. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
+        s.push_str("</table><p class=\"note\"><b>Confidence</b> is the share of 2000 bootstrap resamples of the conditions that give this verdict (its family closes the largest share of what the model before it left of the out-of-sample gap, beyond the noise, and predicts every withheld fold no worse than the baseline, or than its form fits that fold, and the response over every fold together no worse than the baseline), times the share of the gap the named effects close (or each one's margin over the best rival family, where smaller) over one half, at most 1: a form that leaves much of the gap unexplained, or a rival that explains nearly as much, makes the verdict less sure. <b>Share of the gap closed</b> is measured on conditions the models were not fitted to (each fold predicted by models refitted without it). <b>Form misfit</b> is what the best candidate form leaves of that gap: real rigs never match a candidate's shape exactly, so an effect is named for its family. <code>fitted-model.toml</code> holds the effects with these values.</p>");
         for e in report.verdict.effects.iter().filter(|e| !e.friction_at_loads.is_empty()) {
             s.push_str(&format!("<p>{} in physical terms: the friction coefficient at rest, μ(0), at each measured load.</p><table><tr><th>normal force (N)</th><th>baseline μ(0)</th><th>fitted μ(0)</th><th>± over the folds' refits</th></tr>", escape(&e.effect)));
             for f in &e.friction_at_loads {

@@ -219,7 +219,12 @@ pub(crate) fn pair_losses_of(
 
 /// The losses of a model's `scores` in its own scales (its z-scores).
 pub(crate) fn own_losses(scores: &[Score], data: &Data<'_>) -> UnitLosses {
-    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), (loss(s.z), 1.0))).collect(), data, |_| true)
+    own_losses_of(scores, data, |_| true)
+}
+
+/// [`own_losses`] over the observables `keep` selects alone.
+pub(crate) fn own_losses_of(scores: &[Score], data: &Data<'_>, keep: fn(Observable) -> bool) -> UnitLosses {
+    per_unit(&scores.iter().map(|s| ((s.unit, s.observable), (loss(s.z), 1.0))).collect(), data, keep)
 }
 
 /// Per-score losses (with how much each was moved) summed by unit over the

@@ -19,7 +19,9 @@
 //!    the noise. The leading contender is then refitted fold by fold from
 //!    scratch on each fold's own units, friction law included
 //!    ([`refit_folds`]), and must close a share beyond the noise that way
-//!    too, and predict no withheld fold worse than the model before it.
+//!    too, and predict no withheld fold worse than the model before it
+//!    (beyond what its form leaves of that fold when it is fitted to it:
+//!    [`verdict`]).
 //!    Where no family predicts a withheld level beyond the noise in the
 //!    first round, an effect seen at one load alone may be why (fitted
 //!    without that load, it was never seen): the contest is held again on
@@ -50,8 +52,8 @@ use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexp
 use crate::engine::{Effect, Engine, Model};
 use crate::error::{Error, Result};
 use cv::{
-    Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses, pair_losses,
-    pair_losses_of, pool_predictions, unpaired,
+    Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses,
+    own_losses_of, pair_losses, pair_losses_of, pool_predictions, unpaired,
 };
 use family::{Family, round, variant_named};
 pub(crate) use fit::Fitted;
@@ -91,6 +93,10 @@ pub(crate) struct Selection {
     pub(crate) steps: Vec<Step>,
     /// The first leader not named, where one led.
     pub(crate) refused: Option<Refusal>,
+    /// The withheld folds the model with the named effects predicts worse
+    /// than the baseline, but as closely as its form fits them
+    /// ([`verdict::FoldCheck::within_form_misfit`]).
+    pub(crate) misfit_folds: Vec<verdict::FoldCheck>,
     /// Every family of the first round, best (most wins) first.
     pub(crate) first_round: Vec<Candidate>,
     /// How sure "the baseline explains the data" is where nothing was
@@ -382,16 +388,6 @@ pub(crate) fn select(
                 FoldResult { gap_before: before, gap_after: after, after: level_refits[k].clone() }
             })
             .collect();
-        rounds.push(verdict::Round {
-            current: current_losses,
-            entrants: predictions.iter().map(|(l, r, _)| (l.clone(), r.clone())).collect(),
-            leader: top,
-            refitted,
-            refitted_levels,
-            joint,
-            joint_response,
-            local: on_crossed,
-        });
         progress(&format!("{} leads; polishing its model on every replicate", family.effect));
         let polished = polish(&family.best, slope, data, settings, engine)?.unwrap_or_else(|| family.best.clone());
         let candidate = candidate_of(
@@ -408,11 +404,35 @@ pub(crate) fn select(
             model: polished.model.clone(),
             scores: score(engine, &polished.model, data, &search, Scope::All)?,
         };
+        rounds.push(verdict::Round {
+            current: current_losses,
+            entrants: predictions.iter().map(|(l, r, _)| (l.clone(), r.clone())).collect(),
+            leader: top,
+            refitted,
+            refitted_levels,
+            joint,
+            joint_response,
+            fitted: (own_losses(&current.scores, data), own_losses_of(&current.scores, data, Observable::is_response)),
+            local: on_crossed,
+        });
         levels.current = level_refits;
     }
     let fold_units: Vec<Vec<usize>> = data.folds.folds.iter().map(|f| f.units.clone()).collect();
     let (count, confidence, each) = verdict::judge(&rounds, &fold_units, &units, null, seed);
     if tracing() {
+        for (j, r) in rounds.iter().enumerate() {
+            for c in verdict::fold_checks(r, &fold_units, &units, null) {
+                eprintln!(
+                    "round {j}: fold {} ({}): baseline {:.3}, predicted {:.3}, its own fit {:.3}, noise {:.3}",
+                    c.fold,
+                    if c.response { "the response" } else { "every observable" },
+                    c.baseline,
+                    c.predicted,
+                    c.own_fit,
+                    c.noise
+                );
+            }
+        }
         eprintln!("verdict: {count} of {} leaders named, confidence {confidence:.3}, each {each:?}", rounds.len());
     }
     if count < rounds.len() {
@@ -435,6 +455,13 @@ pub(crate) fn select(
         refused =
             Some(Refusal { effect: c.effect, form: c.form, share_of_gap: c.cv_share, after_named: count, reason });
     }
+    let misfit_folds = match count.checked_sub(1) {
+        Some(last) => verdict::fold_checks(&rounds[last], &fold_units, &units, null)
+            .into_iter()
+            .filter(verdict::FoldCheck::within_form_misfit)
+            .collect(),
+        None => Vec::new(),
+    };
     steps.truncate(count);
     for (step, c) in steps.iter_mut().zip(&each) {
         step.confidence = *c;
@@ -453,7 +480,17 @@ pub(crate) fn select(
         let (gap, n) = point.gap(&first.current);
         none_confidence = confidence / noise_thresholds_above(gap, point.noise(n), null).sqrt();
     }
-    Ok(Selection { steps, refused, first_round, none_confidence, baseline_folds, noise, null, attribution_folds })
+    Ok(Selection {
+        steps,
+        refused,
+        misfit_folds,
+        first_round,
+        none_confidence,
+        baseline_folds,
+        noise,
+        null,
+        attribution_folds,
+    })
 }
 
 /// Orders the named effects by how much the fitted model's response (the

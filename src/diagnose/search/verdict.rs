@@ -8,18 +8,28 @@
 //! refitted from scratch without each fold; of those it names the longest
 //! run whose model, with all of them,
 //!
-//! - predicts every withheld fold no worse than the baseline does, up to
-//!   that fold's noise (the verdict holds in every fold, not on average),
-//!   over every observable and over the response's alone (the peaks' and
-//!   the phase's mean and variance: what a fitted model is used to
-//!   predict, and a handful of scores beside the friction and
-//!   normal-force features that dominate the first), and predicts the
-//!   response over every withheld fold together no worse than the baseline,
-//!   up to the noise of that pooled mean (a fold of a few conditions holds
-//!   only a dozen response scores, and its noise alone lets a model that
-//!   predicts the response worse everywhere pass fold by fold), and
+//! - predicts the response over every withheld fold together no worse
+//!   than the baseline, up to the noise of that pooled mean (the response:
+//!   the peaks' and the phase's mean and variance, what a fitted model is
+//!   used to predict),
+//! - predicts every withheld fold no worse than the baseline does (the
+//!   verdict holds in every fold, not on average), over every observable
+//!   and over the response's alone (a handful of scores beside the
+//!   friction and normal-force features that dominate the first), and
 //! - whose last effect predicts every fold no worse than the model before
 //!   it.
+//!
+//! "No worse" at a fold is up to that fold's noise, and up to what the
+//! model's form leaves of that fold when it is fitted to every unit, the
+//! fold's own included (its form misfit there, [`Round::fitted`]): a form
+//! that cannot fit a withheld level as closely as the baseline predicts
+//! it even when it sees that level (a power law through 4 and 16 N misses
+//! a load dependence's curvature at 8 N, where a baseline averaged over the
+//! loads is closest) predicts it as well as its form allows, and that rise
+//! is form misfit, reported as such, not a failed prediction. What is held
+//! against a family is a withheld fold it predicts worse than both the
+//! baseline and its own fit of that fold, and a response worse over every
+//! fold together.
 //!
 //! The first of two effects is fitted while the second is still missing,
 //! and that fit can trade one fold for the others (a load dependence
@@ -67,6 +77,11 @@ pub(crate) struct Round {
     /// `joint` over the response's observables alone (the peaks' and the
     /// phase's mean and variance): what a fitted model is used to predict.
     pub(crate) joint_response: (UnitLosses, UnitLosses),
+    /// The model after the leader, fitted to every unit (the fold's own
+    /// included), its own losses at every unit: over every observable, and
+    /// over the response's alone. What its form leaves of a fold it has
+    /// seen: no refit without the fold can be asked to predict it closer.
+    pub(crate) fitted: (UnitLosses, UnitLosses),
     /// Whether the leader was judged as an effect seen at a few conditions
     /// (on crossed folds, each fall against the noise of the scores it
     /// moved): a rise at a withheld level is then judged so too.
@@ -88,10 +103,11 @@ pub(crate) fn named(rounds: &[Round], folds: &[Vec<usize>], weights: &Weights<'_
         if !(refitted > 0.0 && beyond) {
             break;
         }
-        if every_fold_no_worse(&r.joint, folds, weights, r.local)
-            && every_fold_no_worse(&r.joint_response, folds, weights, r.local)
-            && no_worse(&r.joint_response, weights, r.local)
-            && every_fold_no_worse(&r.refitted_levels, folds, weights, r.local)
+        let (fitted, fitted_response) = (&r.fitted.0, &r.fitted.1);
+        if no_worse(&r.joint_response, weights, r.local)
+            && every_fold_no_worse(&r.joint, fitted, folds, weights, r.local)
+            && every_fold_no_worse(&r.joint_response, fitted_response, folds, weights, r.local)
+            && every_fold_no_worse(&r.refitted_levels, fitted, folds, weights, r.local)
         {
             n = j + 1;
         }
@@ -129,28 +145,79 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
     if !(share > 0.0 && beyond) {
         return Refused::NotBeyondNoise { share };
     }
-    let worse = |pair: &(UnitLosses, UnitLosses)| -> Vec<usize> {
-        (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, &folds[k..=k], &point, round.local)).collect()
+    let worse = |pair: &(UnitLosses, UnitLosses), fitted: &UnitLosses| -> Vec<usize> {
+        (0..folds.len()).filter(|&k| !every_fold_no_worse(pair, fitted, &folds[k..=k], &point, round.local)).collect()
     };
     Refused::WorseFolds {
-        than_baseline: worse(&round.joint),
-        than_before: worse(&round.refitted_levels),
-        response_than_baseline: worse(&round.joint_response),
+        than_baseline: worse(&round.joint, &round.fitted.0),
+        than_before: worse(&round.refitted_levels, &round.fitted.0),
+        response_than_baseline: worse(&round.joint_response, &round.fitted.1),
         response_over_every_fold: !no_worse(&round.joint_response, &point, round.local),
     }
+}
+
+/// One withheld fold as [`named`]'s checks against the baseline read it,
+/// unweighted: mean losses there, –.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct FoldCheck {
+    /// The fold's index.
+    pub(crate) fold: usize,
+    /// Over the response's observables alone (else over every observable).
+    pub(crate) response: bool,
+    /// The baseline refitted without the fold.
+    pub(crate) baseline: f64,
+    /// The model with the named effects refitted without the fold.
+    pub(crate) predicted: f64,
+    /// That model fitted to every unit, the fold's own included.
+    pub(crate) own_fit: f64,
+    /// The noise of a mean over the fold's scores.
+    pub(crate) noise: f64,
+}
+
+impl FoldCheck {
+    /// Whether the fold passes only for the form's misfit: predicted worse
+    /// than the baseline beyond the noise, but no worse than the form fits
+    /// the fold when it sees it.
+    pub(crate) fn within_form_misfit(&self) -> bool {
+        self.predicted - self.baseline > self.noise && self.predicted - self.own_fit <= self.noise
+    }
+}
+
+/// Every withheld fold of `round` as its checks against the baseline, over
+/// every observable and over the response's alone, read it unweighted.
+pub(crate) fn fold_checks(round: &Round, folds: &[Vec<usize>], units: &[usize], null: NullLoss) -> Vec<FoldCheck> {
+    let ones = vec![1.0; units.len()];
+    let checks = [(false, &round.joint, &round.fitted.0), (true, &round.joint_response, &round.fitted.1)];
+    let mut out = Vec::new();
+    for (response, pair, fitted) in checks {
+        for (fold, held) in folds.iter().enumerate() {
+            let (at, w): (Vec<usize>, Vec<f64>) =
+                units.iter().zip(&ones).filter(|(u, _)| held.contains(u)).map(|(&u, &w)| (u, w)).unzip();
+            let weights = Weights { units: &at, w: &w, null };
+            let ((baseline, n), (predicted, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
+            let noise = rise_noise(&pair.1, &weights, n, round.local);
+            out.push(FoldCheck { fold, response, baseline, predicted, own_fit: weights.gap(fitted).0, noise });
+        }
+    }
+    out
 }
 
 /// Whether a model refitted without each fold predicts every fold that
 /// carries weight no worse than another (`pair`: the other and the model,
 /// at each fold's units; the model before a leader and after it, or the
-/// baseline and the model after it): its mean loss there rises by no more
-/// than the noise of a mean over that many scores (with `local`, of the
-/// scores the change moved there, [`crate::diagnose::search::cv::NullLoss::fall_noise`]:
-/// an effect judged at the few conditions it shows at is held to their
-/// noise where it makes a prediction worse as well). A fold the effect
-/// leaves untouched is then not held against it for the replicates' noise.
+/// baseline and the model after it), up to the model's form misfit there
+/// (`fitted`: its own losses fitted to every unit, the fold's included):
+/// its mean loss there rises above the other's, and above its own fit's,
+/// by no more than the noise of a mean over that many scores (with
+/// `local`, of the scores the change moved there,
+/// [`crate::diagnose::search::cv::NullLoss::fall_noise`]: an effect judged
+/// at the few conditions it shows at is held to their noise where it makes
+/// a prediction worse as well). A fold the effect leaves untouched is then
+/// not held against it for the replicates' noise, nor one it predicts as
+/// closely as its form can fit it.
 fn every_fold_no_worse(
     pair: &(UnitLosses, UnitLosses),
+    fitted: &UnitLosses,
     folds: &[Vec<usize>],
     weights: &Weights<'_>,
     local: bool,
@@ -158,17 +225,33 @@ fn every_fold_no_worse(
     folds.iter().all(|fold| {
         let (units, w): (Vec<usize>, Vec<f64>) =
             weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
-        no_worse(pair, &Weights { units: &units, w: &w, null: weights.null }, local)
+        let at = Weights { units: &units, w: &w, null: weights.null };
+        rise_within_noise(pair, Some(at.gap(fitted).0), &at, local)
     })
 }
 
 /// Whether the model (`pair.1`) predicts the units `weights` weigh, pooled,
-/// no worse than the other (`pair.0`), as [`every_fold_no_worse`] asks of
-/// each fold.
+/// no worse than the other (`pair.0`), up to the noise of that mean (as
+/// [`every_fold_no_worse`] asks of each fold, with no allowance for form
+/// misfit).
 fn no_worse(pair: &(UnitLosses, UnitLosses), weights: &Weights<'_>, local: bool) -> bool {
+    rise_within_noise(pair, None, weights, local)
+}
+
+/// Whether the model's (`pair.1`) mean loss over the units `weights`
+/// weigh rises above the other's (`pair.0`), or above `floor` where that is
+/// higher (its own fit's loss there), by no more than the noise of that
+/// mean.
+fn rise_within_noise(pair: &(UnitLosses, UnitLosses), floor: Option<f64>, weights: &Weights<'_>, local: bool) -> bool {
     let ((before, n), (after, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
-    let noise = if local { weights.null.fall_noise(n, weights.moved(&pair.1).0) } else { weights.noise(n) };
-    n == 0.0 || after - before <= noise
+    n == 0.0 || after - floor.map_or(before, |f| before.max(f)) <= rise_noise(&pair.1, weights, n, local)
+}
+
+/// The noise a model's (`after`) mean loss over `n` weighted scores may
+/// rise by before it counts: that of the mean, or with `local` that of the
+/// scores the change moved ([`NullLoss::fall_noise`]).
+fn rise_noise(after: &UnitLosses, weights: &Weights<'_>, n: f64, local: bool) -> f64 {
+    if local { weights.null.fall_noise(n, weights.moved(after).0) } else { weights.noise(n) }
 }
 
 /// How far form misfit discounts a verdict that names the first `n`
@@ -250,6 +333,7 @@ mod tests {
             refitted_levels: (at(&vec![before; n]), at(&vec![after; n])),
             joint: (at(&vec![baseline; n]), at(&vec![after; n])),
             joint_response: (at(&vec![baseline; n]), at(&vec![after; n])),
+            fitted: (at(&vec![after; n]), at(&vec![after; n])),
             local: false,
         }
     }
@@ -338,6 +422,36 @@ mod tests {
         second.refitted_levels.1 = second.refitted.1.clone();
         let rounds = [round(10.0, 6.0, 7.0, 10.0), second];
         assert_eq!(judge(&rounds, &halves(), &units, NULL, 1).0, 1);
+    }
+
+    /// A fold predicted worse than the baseline predicts it, but no worse
+    /// than the model's form fits it when it sees that fold (a power law
+    /// through the outer loads missing a curved load dependence at the
+    /// middle one), is form misfit, not a failed prediction: named. A fold
+    /// predicted worse than both, beyond the noise, is not.
+    #[test]
+    fn a_fold_predicted_as_closely_as_the_form_fits_it_is_not_held_against_it() {
+        let units: Vec<usize> = (0..12).collect();
+        let after: Vec<f64> = (0..12).map(|u| if u < 6 { 2.0 } else { 3.0 }).collect();
+        let mut r = round(10.0, 2.0, 9.0, 10.0);
+        let baseline: Vec<f64> = (0..12).map(|u| if u < 6 { 10.0 } else { 1.0 }).collect();
+        r.joint = (at(&baseline), at(&after));
+        r.joint_response = r.joint.clone();
+        r.refitted_levels = r.joint.clone();
+        r.refitted.1 = at(&after);
+        // Fitted to every unit, the form leaves z 3 at the second fold too.
+        r.fitted = (at(&after), at(&after));
+        assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 1);
+        // Where the form fits the second fold closely (z 1), predicting it
+        // at z 3 is a prediction that failed.
+        r.fitted = (at(&[2.0; 12]), at(&[1.0; 12]));
+        assert_eq!(judge(std::slice::from_ref(&r), &halves(), &units, NULL, 1).0, 0);
+        match refusal(&r, &halves(), &units, NULL) {
+            Refused::WorseFolds { than_baseline, response_than_baseline, .. } => {
+                assert_eq!((than_baseline, response_than_baseline), (vec![1], vec![1]));
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]
