@@ -187,12 +187,12 @@ impl FoldCheck {
 /// every observable and over the response's alone, read it unweighted.
 pub(crate) fn fold_checks(round: &Round, folds: &[Vec<usize>], units: &[usize], null: NullLoss) -> Vec<FoldCheck> {
     let ones = vec![1.0; units.len()];
+    let all = Weights { units, w: &ones, null };
     let checks = [(false, &round.joint, &round.fitted.0), (true, &round.joint_response, &round.fitted.1)];
     let mut out = Vec::new();
     for (response, pair, fitted) in checks {
         for (fold, held) in folds.iter().enumerate() {
-            let (at, w): (Vec<usize>, Vec<f64>) =
-                units.iter().zip(&ones).filter(|(u, _)| held.contains(u)).map(|(&u, &w)| (u, w)).unzip();
+            let (at, w) = within(&all, held);
             let weights = Weights { units: &at, w: &w, null };
             let ((baseline, n), (predicted, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
             let noise = rise_noise(&pair.1, &weights, n, round.local);
@@ -223,11 +223,15 @@ fn every_fold_no_worse(
     local: bool,
 ) -> bool {
     folds.iter().all(|fold| {
-        let (units, w): (Vec<usize>, Vec<f64>) =
-            weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
+        let (units, w) = within(weights, fold);
         let at = Weights { units: &units, w: &w, null: weights.null };
         rise_within_noise(pair, Some(at.gap(fitted).0), &at, local)
     })
+}
+
+/// The units `weights` weigh that `fold` holds, with their weights.
+fn within(weights: &Weights<'_>, fold: &[usize]) -> (Vec<usize>, Vec<f64>) {
+    weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip()
 }
 
 /// Whether the model (`pair.1`) predicts the units `weights` weigh, pooled,
