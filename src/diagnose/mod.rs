@@ -419,9 +419,9 @@ pub fn diagnose_set(
              that is the form's misfit there, not a failed prediction, and predictions at {label} from the fitted \
              model carry it",
             if c.response { "the response (the peaks' and the phase's mean and variance)" } else { "the data" },
-            c.predicted,
-            c.baseline,
-            c.own_fit
+            c.rise.model,
+            c.rise.other,
+            c.rise.own_fit.unwrap_or(f64::NAN)
         ));
     }
     let (mut fitted, fitted_scores) = match selection.steps.last() {

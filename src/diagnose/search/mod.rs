@@ -95,7 +95,7 @@ pub(crate) struct Selection {
     pub(crate) refused: Option<Refusal>,
     /// The withheld folds the model with the named effects predicts worse
     /// than the baseline, but as closely as its form fits them
-    /// ([`verdict::FoldCheck::within_form_misfit`]).
+    /// ([`verdict::Rise::within_form_misfit`]).
     pub(crate) misfit_folds: Vec<verdict::FoldCheck>,
     /// Every family of the first round, best (most wins) first.
     pub(crate) first_round: Vec<Candidate>,
@@ -426,10 +426,10 @@ pub(crate) fn select(
                     "round {j}: fold {} ({}): baseline {:.3}, predicted {:.3}, its own fit {:.3}, noise {:.3}",
                     c.fold,
                     if c.response { "the response" } else { "every observable" },
-                    c.baseline,
-                    c.predicted,
-                    c.own_fit,
-                    c.noise
+                    c.rise.other,
+                    c.rise.model,
+                    c.rise.own_fit.unwrap_or(f64::NAN),
+                    c.rise.noise
                 );
             }
         }
@@ -458,7 +458,7 @@ pub(crate) fn select(
     let misfit_folds = match count.checked_sub(1) {
         Some(last) => verdict::fold_checks(&rounds[last], &fold_units, &units, null)
             .into_iter()
-            .filter(verdict::FoldCheck::within_form_misfit)
+            .filter(|c| c.rise.within_form_misfit())
             .collect(),
         None => Vec::new(),
     };

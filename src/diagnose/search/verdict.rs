@@ -157,29 +157,59 @@ pub(crate) fn refusal(round: &Round, folds: &[Vec<usize>], units: &[usize], null
 }
 
 /// One withheld fold as [`named`]'s checks against the baseline read it,
-/// unweighted: mean losses there, –.
+/// unweighted.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct FoldCheck {
     /// The fold's index.
     pub(crate) fold: usize,
     /// Over the response's observables alone (else over every observable).
     pub(crate) response: bool,
-    /// The baseline refitted without the fold.
-    pub(crate) baseline: f64,
-    /// The model with the named effects refitted without the fold.
-    pub(crate) predicted: f64,
-    /// That model fitted to every unit, the fold's own included.
-    pub(crate) own_fit: f64,
-    /// The noise of a mean over the fold's scores.
-    pub(crate) noise: f64,
+    /// The baseline refitted without the fold (`other`), the model with the
+    /// named effects refitted without it (`model`), and that model's own
+    /// fit of it.
+    pub(crate) rise: Rise,
 }
 
-impl FoldCheck {
-    /// Whether the fold passes only for the form's misfit: predicted worse
-    /// than the baseline beyond the noise, but no worse than the form fits
-    /// the fold when it sees it.
+/// A model's mean loss over some units against another model's, and
+/// against its own fit's there where that counts, –: what every check of
+/// [`named`] weighs.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Rise {
+    /// The other model's mean loss.
+    pub(crate) other: f64,
+    /// The model's mean loss.
+    pub(crate) model: f64,
+    /// The model fitted to every unit, these included: its own mean loss
+    /// there (`None`: no allowance for form misfit).
+    pub(crate) own_fit: Option<f64>,
+    /// The noise a rise must exceed to count ([`rise_noise`]).
+    pub(crate) noise: f64,
+    /// The weighted number of scores behind the means.
+    scores: f64,
+}
+
+impl Rise {
+    /// `pair` (the other model's and the model's losses) and the model's
+    /// own fit (`fitted`, where form misfit is allowed for) over the units
+    /// `weights` weigh; with `local`, the noise of the scores the change
+    /// moved.
+    fn of(pair: &(UnitLosses, UnitLosses), fitted: Option<&UnitLosses>, weights: &Weights<'_>, local: bool) -> Rise {
+        let ((other, scores), (model, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
+        let own_fit = fitted.map(|f| weights.gap(f).0);
+        Rise { other, model, own_fit, noise: rise_noise(&pair.1, weights, scores, local), scores }
+    }
+
+    /// Whether the model's mean loss rises above the other's, or above its
+    /// own fit's where that is higher, by no more than the noise.
+    fn within_noise(&self) -> bool {
+        self.scores == 0.0 || self.model - self.own_fit.map_or(self.other, |f| self.other.max(f)) <= self.noise
+    }
+
+    /// Whether it passes only for the form's misfit: worse than the other
+    /// model beyond the noise, but no worse than the form fits these units
+    /// when it sees them.
     pub(crate) fn within_form_misfit(&self) -> bool {
-        self.predicted - self.baseline > self.noise && self.predicted - self.own_fit <= self.noise
+        self.within_noise() && self.model - self.other > self.noise
     }
 }
 
@@ -192,11 +222,7 @@ pub(crate) fn fold_checks(round: &Round, folds: &[Vec<usize>], units: &[usize], 
     let mut out = Vec::new();
     for (response, pair, fitted) in checks {
         for (fold, held) in folds.iter().enumerate() {
-            let (at, w) = within(&all, held);
-            let weights = Weights { units: &at, w: &w, null };
-            let ((baseline, n), (predicted, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
-            let noise = rise_noise(&pair.1, &weights, n, round.local);
-            out.push(FoldCheck { fold, response, baseline, predicted, own_fit: weights.gap(fitted).0, noise });
+            out.push(FoldCheck { fold, response, rise: fold_rise(pair, fitted, held, &all, round.local) });
         }
     }
     out
@@ -222,16 +248,20 @@ fn every_fold_no_worse(
     weights: &Weights<'_>,
     local: bool,
 ) -> bool {
-    folds.iter().all(|fold| {
-        let (units, w) = within(weights, fold);
-        let at = Weights { units: &units, w: &w, null: weights.null };
-        rise_within_noise(pair, Some(at.gap(fitted).0), &at, local)
-    })
+    folds.iter().all(|fold| fold_rise(pair, fitted, fold, weights, local).within_noise())
 }
 
-/// The units `weights` weigh that `fold` holds, with their weights.
-fn within(weights: &Weights<'_>, fold: &[usize]) -> (Vec<usize>, Vec<f64>) {
-    weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip()
+/// [`Rise::of`] over the units of `fold` that `weights` weigh.
+fn fold_rise(
+    pair: &(UnitLosses, UnitLosses),
+    fitted: &UnitLosses,
+    fold: &[usize],
+    weights: &Weights<'_>,
+    local: bool,
+) -> Rise {
+    let (units, w): (Vec<usize>, Vec<f64>) =
+        weights.units.iter().zip(weights.w).filter(|(u, _)| fold.contains(u)).map(|(&u, &w)| (u, w)).unzip();
+    Rise::of(pair, Some(fitted), &Weights { units: &units, w: &w, null: weights.null }, local)
 }
 
 /// Whether the model (`pair.1`) predicts the units `weights` weigh, pooled,
@@ -239,16 +269,7 @@ fn within(weights: &Weights<'_>, fold: &[usize]) -> (Vec<usize>, Vec<f64>) {
 /// [`every_fold_no_worse`] asks of each fold, with no allowance for form
 /// misfit).
 fn no_worse(pair: &(UnitLosses, UnitLosses), weights: &Weights<'_>, local: bool) -> bool {
-    rise_within_noise(pair, None, weights, local)
-}
-
-/// Whether the model's (`pair.1`) mean loss over the units `weights`
-/// weigh rises above the other's (`pair.0`), or above `floor` where that is
-/// higher (its own fit's loss there), by no more than the noise of that
-/// mean.
-fn rise_within_noise(pair: &(UnitLosses, UnitLosses), floor: Option<f64>, weights: &Weights<'_>, local: bool) -> bool {
-    let ((before, n), (after, _)) = (weights.gap(&pair.0), weights.gap(&pair.1));
-    n == 0.0 || after - floor.map_or(before, |f| before.max(f)) <= rise_noise(&pair.1, weights, n, local)
+    Rise::of(pair, None, weights, local).within_noise()
 }
 
 /// The noise a model's (`after`) mean loss over `n` weighted scores may
