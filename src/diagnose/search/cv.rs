@@ -274,17 +274,8 @@ pub(crate) fn pool_predictions(
     folds: &Folds,
 ) -> (UnitLosses, UnitLosses, Vec<usize>) {
     let (mut out, mut reference) = (UnitLosses::new(), UnitLosses::new());
-    let mut picks = Vec::new();
-    if pool.is_empty() {
-        return (out, reference, picks);
-    }
-    for fold in &folds.folds {
-        let training = |(member, current): &(UnitLosses, UnitLosses)| {
-            let units = || member.keys().copied().filter(|u| !fold.units.contains(u));
-            mean_loss(member, units()) / mean_loss(current, units()).max(1e-12)
-        };
-        let best = (0..pool.len()).min_by(|&a, &b| training(&pool[a]).total_cmp(&training(&pool[b]))).unwrap_or(0);
-        picks.push(best);
+    let picks = fold_picks(pool, folds, |_| true);
+    for (fold, &best) in folds.folds.iter().zip(&picks) {
         for &u in &fold.units {
             if let (Some(&l), Some(&c)) = (pool[best].0.get(&u), pool[best].1.get(&u)) {
                 out.insert(u, l);
@@ -293,6 +284,32 @@ pub(crate) fn pool_predictions(
         }
     }
     (out, reference, picks)
+}
+
+/// Per fold, the member of `pool` (of those `eligible` takes) that closes
+/// the largest share of the current model's gap at the units the fold does
+/// not hold out (see [`pool_predictions`]); none where no member is
+/// eligible.
+pub(crate) fn fold_picks(
+    pool: &[(UnitLosses, UnitLosses)],
+    folds: &Folds,
+    eligible: impl Fn(usize) -> bool,
+) -> Vec<usize> {
+    let members: Vec<usize> = (0..pool.len()).filter(|&i| eligible(i)).collect();
+    if members.is_empty() {
+        return Vec::new();
+    }
+    folds
+        .folds
+        .iter()
+        .map(|fold| {
+            let training = |(member, current): &(UnitLosses, UnitLosses)| {
+                let units = || member.keys().copied().filter(|u| !fold.units.contains(u));
+                mean_loss(member, units()) / mean_loss(current, units()).max(1e-12)
+            };
+            members.iter().copied().min_by(|&a, &b| training(&pool[a]).total_cmp(&training(&pool[b]))).unwrap_or(0)
+        })
+        .collect()
 }
 
 /// The losses at the held-out units of fold models: `per_fold[k]` is the
@@ -574,5 +591,31 @@ mod tests {
         assert_eq!(predicted[&0], pool[1].0[&0]);
         assert_eq!(predicted[&1], pool[0].0[&1]);
         assert_eq!(reference[&0], current[&0]);
+    }
+
+    /// A fold's pick is made among the eligible members alone (a family's
+    /// named form), by the same fit to the other folds; none is made where
+    /// no member is eligible.
+    #[test]
+    fn fold_picks_choose_among_the_eligible_members() {
+        use crate::diagnose::data::{Fold, FoldKind};
+        let folds = Folds {
+            kind: FoldKind::LoadLevels,
+            folds: vec![
+                Fold { label: "a".into(), units: vec![0], conditions: Vec::new() },
+                Fold { label: "b".into(), units: vec![1], conditions: Vec::new() },
+            ],
+        };
+        let current = at(&[5.0, 5.0]);
+        // Member 0 fits both folds' other units best; members 1 and 2 are
+        // the eligible ones, 1 closer at unit 1 and 2 closer at unit 0.
+        let pool = vec![
+            (at(&[0.0, 0.0]), current.clone()),
+            (at(&[4.0, 1.0]), current.clone()),
+            (at(&[1.0, 4.0]), current.clone()),
+        ];
+        assert_eq!(fold_picks(&pool, &folds, |_| true), vec![0, 0]);
+        assert_eq!(fold_picks(&pool, &folds, |i| i > 0), vec![1, 2]);
+        assert!(fold_picks(&pool, &folds, |_| false).is_empty());
     }
 }

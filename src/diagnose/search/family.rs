@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::Data;
-use crate::diagnose::search::cv::{UnitLosses, pair_losses};
+use crate::diagnose::data::Folds;
+use crate::diagnose::search::cv::{UnitLosses, fold_picks, pair_losses};
 use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
@@ -53,6 +54,15 @@ impl Family {
     /// Each member's losses and the current model's in the same yardstick.
     pub(super) fn pool_losses(&self) -> Vec<(UnitLosses, UnitLosses)> {
         self.pool.iter().map(|m| (m.losses.clone(), m.reference.clone())).collect()
+    }
+
+    /// Where each fold's refit starts: the member of the family's named
+    /// form (its best full-data fit's) that fits the fold's other units
+    /// best ([`fold_picks`]); of any form where that one has no member.
+    pub(super) fn fold_starts(&self, folds: &Folds) -> Vec<usize> {
+        let pool = self.pool_losses();
+        let named = fold_picks(&pool, folds, |i| self.pool[i].form == self.form);
+        if named.is_empty() { fold_picks(&pool, folds, |_| true) } else { named }
     }
 }
 

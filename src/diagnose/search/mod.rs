@@ -17,8 +17,8 @@
 //! 3. **The contest** ([`cv::contest`]) leads with the family that closes
 //!    the largest share of the current model's out-of-sample gap, beyond
 //!    the noise. The leading contender is then refitted fold by fold from
-//!    scratch on each fold's own units, friction law included
-//!    ([`refit_folds`]), and must close a share beyond the noise that way
+//!    scratch on each fold's own units, friction law included, in the form
+//!    it is named by ([`refit_folds`]), and must close a share beyond the noise that way
 //!    too, and predict no withheld fold worse than the model before it
 //!    (beyond what its form leaves of that fold when it is fitted to it:
 //!    [`verdict`]).
@@ -41,10 +41,10 @@
 pub(crate) mod cv;
 mod family;
 pub(crate) mod fit;
+mod refit;
 pub(crate) mod verdict;
 
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
-use crate::diagnose::candidates::Context;
 use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
@@ -55,10 +55,11 @@ use cv::{
     Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses,
     own_losses_of, pair_losses, pair_losses_of, pool_predictions, unpaired,
 };
-use family::{Family, round, variant_named};
+use family::{Family, round};
 pub(crate) use fit::Fitted;
-use fit::{Trial, coordinate_search, evaluate, fits_per_task, law_can_stay, polish, search_settings, tracing};
+use fit::{fits_per_task, polish, search_settings, tracing};
 use rayon::prelude::*;
+use refit::refit_folds;
 
 /// At most this many effects are named.
 pub(crate) const MAX_EFFECTS: usize = 3;
@@ -240,7 +241,7 @@ impl Judged<'_> {
             Some(top) => {
                 let family = &self.families[top];
                 progress(&format!("refitting {} without each fold", family.effect));
-                refit_folds(family, &predictions[top].2, folds, slope, search, engine)?.map(|refits| {
+                refit_folds(family, folds, slope, search, engine)?.map(|refits| {
                     let refitted = pair(fold_pair_losses(&folds.current, &refits, &folds.data));
                     let ones = vec![1.0; self.units.len()];
                     let point = cv::Weights { units: self.units, w: &ones, null: self.null };
@@ -364,12 +365,8 @@ pub(crate) fn select(
             });
             break;
         }
-        let level_refits = if on_crossed {
-            let picks = pool_predictions(&family.pool_losses(), &data.folds).2;
-            refit_folds(family, &picks, &levels, slope, &search, engine)?
-        } else {
-            Some(refits)
-        };
+        let level_refits =
+            if on_crossed { refit_folds(family, &levels, slope, &search, engine)? } else { Some(refits) };
         let Some(level_refits) = level_refits else { break };
         let refitted_levels = fold_pair_losses(&levels.current, &level_refits, data);
         let joint = fold_pair_losses(&baseline_folds, &level_refits, data);
@@ -631,95 +628,6 @@ fn candidates_of(
         .collect();
     out.sort_by(|a, b| b.wins.total_cmp(&a.wins).then(b.cv_share.total_cmp(&a.cv_share)));
     out
-}
-
-/// The family refitted without each fold: its form at the parameters its
-/// pool chose for that fold (`picks[k]`, chosen on the fold's other units
-/// alone), put on the current model's fold refit (`current_folds[k]`), with
-/// the friction law recalibrated to that fold's own measured law and
-/// carried until it stops lowering the fold's fitting gap, scored on every
-/// unit. `None` where a fold's model cannot be built or run.
-#[allow(clippy::too_many_arguments)]
-fn refit_folds(
-    family: &Family,
-    picks: &[usize],
-    folds: &FoldSet<'_>,
-    slope: f64,
-    search: &DiagnoseSettings,
-    engine: &Engine,
-) -> Result<Option<Vec<Fitted>>> {
-    // Each fold's refit is independent of the others': side by side, then
-    // read in order, so the first fold without a model decides as a loop
-    // would have.
-    let each: Vec<Result<Option<Fitted>>> = folds
-        .views
-        .par_iter()
-        .with_min_len(fits_per_task(engine))
-        .enumerate()
-        .map(|(k, view)| -> Result<Option<Fitted>> {
-            let member = &family.pool[picks[k]];
-            let base = &folds.current[k];
-            let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
-            let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else {
-                return Ok(None);
-            };
-            let Some(mut start) =
-                evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
-            else {
-                return Ok(None);
-            };
-            // Where the pool's parameters with the fold's own law fit the
-            // fold's units no better than the model before the effect, they
-            // are searched again there, from the better of the two starts a
-            // coarse fit tries: the law recalibrated at those parameters, and
-            // the law the fold's model already has. One calibration step can
-            // hand part of an effect's signature to the law (a friction
-            // spread cut by half where a harmonic of the normal force adds
-            // its own), a basin the search, which keeps the law it starts
-            // from, never leaves.
-            if start.objective >= 1.0 {
-                if law_can_stay(view)
-                    && let Some(kept) =
-                        evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?
-                    && kept.objective < start.objective
-                {
-                    start = kept;
-                }
-                start = coordinate_search(
-                    &variant.params,
-                    start,
-                    |b: &Trial, v: &[f64]| {
-                        evaluate(&variant, v, &b.carry, &base.scores, 0, slope, view, search, engine)
-                    },
-                    &mut |_| {},
-                )?;
-            }
-            let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
-                Err(Error::Diverged { .. }) => return Ok(None),
-                other => other?,
-            };
-            if tracing() {
-                eprintln!(
-                    "fold {k} ({}): {} [{}] {:?}: fit {:.2} held out {:.2}",
-                    view.folds.folds[k].label,
-                    family.effect,
-                    variant.form,
-                    member.values,
-                    crate::diagnose::score::gap_of(&scores, false),
-                    crate::diagnose::score::gap_of(&scores, true)
-                );
-            }
-            Ok(Some(Fitted { model, scores }))
-        })
-        .collect();
-    let mut out = Vec::new();
-    for fitted in each {
-        match fitted? {
-            Some(f) => out.push(f),
-            None => return Ok(None),
-        }
-    }
-    Ok(Some(out))
 }
 
 /// Out of sample, the models before an effect and with it, both refitted

@@ -1,0 +1,117 @@
+//! A leading family refitted from scratch without each fold: what its
+//! out-of-sample share and the verdict's fold checks are measured on.
+
+use rayon::prelude::*;
+
+use super::FoldSet;
+use super::family::{Family, variant_named};
+use super::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay, tracing};
+use crate::diagnose::DiagnoseSettings;
+use crate::diagnose::calibrate::converge_law;
+use crate::diagnose::candidates::Context;
+use crate::diagnose::data::Data;
+use crate::diagnose::score::gap_of;
+use crate::engine::Engine;
+use crate::error::{Error, Result};
+
+/// The family refitted without each fold in the form it is named by (its
+/// best full-data fit's), from the member of that form its pool chose for
+/// the fold ([`Family::fold_starts`], chosen on the fold's other units
+/// alone): what the folds test is the model reported. With a few levels
+/// every form fits the other levels about alike, and the one that happens
+/// to fit them best need not extrapolate as the named one does (a two-term
+/// adhesion law through two loads rises far more steeply below them than a
+/// power law does). Scored on every unit. `None` where a fold's model
+/// cannot be built or run.
+pub(super) fn refit_folds(
+    family: &Family,
+    folds: &FoldSet<'_>,
+    slope: f64,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<Vec<Fitted>>> {
+    let starts = family.fold_starts(&folds.data.folds);
+    // Each fold's refit is independent of the others': side by side, then
+    // read in order, so the first fold without a model decides as a loop
+    // would have.
+    let each: Vec<Result<Option<Fitted>>> = starts
+        .par_iter()
+        .with_min_len(fits_per_task(engine))
+        .enumerate()
+        .map(|(k, &member)| refit_fold(family, member, k, folds, slope, search, engine))
+        .collect();
+    let mut out = Vec::new();
+    for fitted in each {
+        match fitted? {
+            Some(f) => out.push(f),
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(out))
+}
+
+/// Fold `k` refitted from pool member `member`: its form at its parameters
+/// put on the current model's fold refit, with the friction law
+/// recalibrated to the fold's own measured law and carried until it stops
+/// lowering the fold's fitting gap. `None` where the model cannot be
+/// built or run.
+fn refit_fold(
+    family: &Family,
+    member: usize,
+    k: usize,
+    folds: &FoldSet<'_>,
+    slope: f64,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<Fitted>> {
+    let member = &family.pool[member];
+    let (view, base): (&Data<'_>, &Fitted) = (&folds.views[k], &folds.current[k]);
+    let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
+    let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else {
+        return Ok(None);
+    };
+    let Some(mut start) =
+        evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
+    else {
+        return Ok(None);
+    };
+    // Where the pool's parameters with the fold's own law fit the fold's
+    // units no better than the model before the effect, they are searched
+    // again there, from the better of the two starts a coarse fit tries:
+    // the law recalibrated at those parameters, and the law the fold's
+    // model already has. One calibration step can hand part of an effect's
+    // signature to the law (a friction spread cut by half where a harmonic
+    // of the normal force adds its own), a basin the search, which keeps
+    // the law it starts from, never leaves.
+    if start.objective >= 1.0 {
+        if law_can_stay(view)
+            && let Some(kept) =
+                evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?
+            && kept.objective < start.objective
+        {
+            start = kept;
+        }
+        start = coordinate_search(
+            &variant.params,
+            start,
+            |b: &Trial, v: &[f64]| evaluate(&variant, v, &b.carry, &base.scores, 0, slope, view, search, engine),
+            &mut |_| {},
+        )?;
+    }
+    let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
+        Err(Error::Diverged { .. }) => return Ok(None),
+        other => other?,
+    };
+    if tracing() {
+        eprintln!(
+            "fold {k} ({}): {} [{}] {:?}: fit {:.2} held out {:.2}",
+            view.folds.folds[k].label,
+            family.effect,
+            variant.form,
+            member.values,
+            gap_of(&scores, false),
+            gap_of(&scores, true)
+        );
+    }
+    Ok(Some(Fitted { model, scores }))
+}
