@@ -6,8 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
-use crate::diagnose::data::Data;
-use crate::diagnose::data::Folds;
+use crate::diagnose::data::{Data, Folds};
 use crate::diagnose::search::cv::{UnitLosses, fold_picks, pair_losses};
 use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
 use crate::engine::{Effect, Engine, Model};
@@ -276,4 +275,41 @@ fn refine(
     }
     family.refined = true;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::data::{Fold, FoldKind};
+    use crate::diagnose::search::cv::UnitLoss;
+
+    /// A member of `form` with these losses at units 0, 1, 2 (the current
+    /// model's 5 at each).
+    fn member(form: SearchedForm, losses: [f64; 3]) -> Member {
+        let at = |l: &[f64]| l.iter().enumerate().map(|(u, &l)| (u, UnitLoss::whole(l, 1))).collect();
+        Member { form, values: vec![losses[0]], losses: at(&losses), reference: at(&[5.0; 3]) }
+    }
+
+    fn family(form: SearchedForm, pool: Vec<Member>) -> Family {
+        let model = Model::paper_rig(&[]).expect("the paper's rig");
+        let best =
+            Trial { values: Vec::new(), carry: model.clone(), model, scores: Vec::new(), gap_fit: 0.0, objective: 0.5 };
+        Family { effect: Effect::LoadDependentFriction, best, form, parameters: BTreeMap::new(), pool, refined: true }
+    }
+
+    /// Each fold's refit starts from the named form's member that fits the
+    /// other folds best, though another form's member fits them better;
+    /// from any form's where the named one has no member.
+    #[test]
+    fn fold_refits_start_from_the_named_form() {
+        let fold = |u: usize| Fold { label: format!("{u}"), units: vec![u], conditions: Vec::new() };
+        let folds = Folds { kind: FoldKind::LoadLevels, folds: (0..3).map(fold).collect() };
+        let pool = vec![
+            member(SearchedForm::Adhesion, [0.0, 0.0, 0.0]),
+            member(SearchedForm::Power, [1.0, 3.0, 4.0]),
+            member(SearchedForm::Power, [5.0, 2.0, 1.0]),
+        ];
+        assert_eq!(family(SearchedForm::Power, pool.clone()).fold_starts(&folds), vec![2, 1, 1]);
+        assert_eq!(family(SearchedForm::Linear, pool).fold_starts(&folds), vec![0, 0, 0]);
+    }
 }
