@@ -478,12 +478,19 @@ pub(crate) fn contest(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Losses of `k` scores per unit at z-score `z` for units 0..n.
     fn at(z: &[f64]) -> UnitLosses {
         z.iter().enumerate().map(|(u, &z)| (u, UnitLoss::whole(10.0 * loss(z), 10))).collect()
+    }
+
+    /// `n` folds, fold k holding out unit k.
+    pub(crate) fn one_unit_folds(n: usize) -> Folds {
+        use crate::diagnose::data::{Fold, FoldKind};
+        let fold = |u: usize| Fold { label: format!("{u}"), units: vec![u], conditions: Vec::new() };
+        Folds { kind: FoldKind::LoadLevels, folds: (0..n).map(fold).collect() }
     }
 
     const NULL: NullLoss = NullLoss { mean: 0.18, sd: 0.32 };
@@ -574,19 +581,12 @@ mod tests {
 
     #[test]
     fn each_fold_is_predicted_by_the_member_that_fits_the_other_folds() {
-        use crate::diagnose::data::{Fold, FoldKind};
-        let folds = Folds {
-            kind: FoldKind::LoadLevels,
-            folds: vec![
-                Fold { label: "a".into(), units: vec![0], conditions: Vec::new() },
-                Fold { label: "b".into(), units: vec![1], conditions: Vec::new() },
-            ],
-        };
+        let folds = one_unit_folds(2);
         // Member 0 fits unit 0 and misses unit 1; member 1 the reverse.
         let current = at(&[5.0, 5.0]);
         let pool = vec![(at(&[0.0, 5.0]), current.clone()), (at(&[5.0, 0.0]), current.clone())];
         let (predicted, reference, picks) = pool_predictions(&pool, &folds);
-        // Fold a (unit 0 held out) trains on unit 1: member 1, which misses unit 0.
+        // Fold 0 (unit 0 held out) trains on unit 1: member 1, which misses unit 0.
         assert_eq!(picks, vec![1, 0]);
         assert_eq!(predicted[&0], pool[1].0[&0]);
         assert_eq!(predicted[&1], pool[0].0[&1]);
@@ -598,14 +598,7 @@ mod tests {
     /// no member is eligible.
     #[test]
     fn fold_picks_choose_among_the_eligible_members() {
-        use crate::diagnose::data::{Fold, FoldKind};
-        let folds = Folds {
-            kind: FoldKind::LoadLevels,
-            folds: vec![
-                Fold { label: "a".into(), units: vec![0], conditions: Vec::new() },
-                Fold { label: "b".into(), units: vec![1], conditions: Vec::new() },
-            ],
-        };
+        let folds = one_unit_folds(2);
         let current = at(&[5.0, 5.0]);
         // Member 0 fits both folds' other units best; members 1 and 2 are
         // the eligible ones, 1 closer at unit 1 and 2 closer at unit 0.

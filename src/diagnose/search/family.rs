@@ -280,8 +280,8 @@ fn refine(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::data::{Fold, FoldKind};
     use crate::diagnose::search::cv::UnitLoss;
+    use crate::diagnose::search::cv::tests::one_unit_folds;
 
     /// A member of `form` with these losses at units 0, 1, 2 (the current
     /// model's 5 at each).
@@ -302,8 +302,7 @@ mod tests {
     /// from any form's where the named one has no member.
     #[test]
     fn fold_refits_start_from_the_named_form() {
-        let fold = |u: usize| Fold { label: format!("{u}"), units: vec![u], conditions: Vec::new() };
-        let folds = Folds { kind: FoldKind::LoadLevels, folds: (0..3).map(fold).collect() };
+        let folds = one_unit_folds(3);
         let pool = vec![
             member(SearchedForm::Adhesion, [0.0, 0.0, 0.0]),
             member(SearchedForm::Power, [1.0, 3.0, 4.0]),
