@@ -296,9 +296,6 @@ pub(crate) fn fold_picks(
     eligible: impl Fn(usize) -> bool,
 ) -> Vec<usize> {
     let members: Vec<usize> = (0..pool.len()).filter(|&i| eligible(i)).collect();
-    if members.is_empty() {
-        return Vec::new();
-    }
     folds
         .folds
         .iter()
@@ -307,9 +304,10 @@ pub(crate) fn fold_picks(
                 let units = || member.keys().copied().filter(|u| !fold.units.contains(u));
                 mean_loss(member, units()) / mean_loss(current, units()).max(1e-12)
             };
-            members.iter().copied().min_by(|&a, &b| training(&pool[a]).total_cmp(&training(&pool[b]))).unwrap_or(0)
+            members.iter().copied().min_by(|&a, &b| training(&pool[a]).total_cmp(&training(&pool[b])))
         })
-        .collect()
+        .collect::<Option<Vec<usize>>>()
+        .unwrap_or_default()
 }
 
 /// The losses at the held-out units of fold models: `per_fold[k]` is the

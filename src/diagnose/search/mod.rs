@@ -18,10 +18,10 @@
 //!    the largest share of the current model's out-of-sample gap, beyond
 //!    the noise. The leading contender is then refitted fold by fold from
 //!    scratch on each fold's own units, friction law included, in the form
-//!    it is named by ([`refit_folds`]), and must close a share beyond the noise that way
-//!    too, and predict no withheld fold worse than the model before it
-//!    (beyond what its form leaves of that fold when it is fitted to it:
-//!    [`verdict`]).
+//!    it is named by ([`refit_folds`]), and must close a share beyond the
+//!    noise that way too, and predict no withheld fold worse than the
+//!    model before it (beyond what its form leaves of that fold when it is
+//!    fitted to it: [`verdict`]).
 //!    Where no family predicts a withheld level beyond the noise in the
 //!    first round, an effect seen at one load alone may be why (fitted
 //!    without that load, it was never seen): the contest is held again on
