@@ -494,6 +494,15 @@ pub fn diagnose_set(
     if let Some(m) = misfit.as_mut() {
         m.hints.extend(misfit::fitting_only_hints(&selection.first_round, &named, selection.noise));
     }
+    if let Some((above, noise)) = selection.left_after_most {
+        notes.push(format!(
+            "{} effects were named, the most a verdict names; the model with them still leaves an out-of-sample \
+             gap {above:.2} above the floor of a right model (beyond its noise threshold, {noise:.2}), and that \
+             is not pinned on a further family: `verdict.misfit` lists what it misses and the families whose \
+             signatures stand out there",
+            named.len()
+        ));
+    }
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
         None => (None, selection.none_confidence),

@@ -61,8 +61,17 @@ use fit::{fits_per_task, polish, search_settings, tracing};
 use rayon::prelude::*;
 use refit::refit_folds;
 
-/// At most this many effects are named.
-pub(crate) const MAX_EFFECTS: usize = 3;
+/// At most this many effects are named. What two named effects leave
+/// beyond the noise is reported (a note, and `verdict.misfit`'s hints:
+/// [`Selection::left_after_most`]), not pinned on a third family: with the
+/// few loads a set holds, a third round's leader is judged on folds that
+/// two fitted effects and a recalibrated law have already bent to, and it
+/// closes what the first two forms leave (their form misfit, or a property
+/// of one of them, such as a telegraph noise's two-valued marginal beside
+/// its correlation) as readily as a third effect's signal. A set that does
+/// hold three strong effects loses the third name to the note. A third
+/// round also took as long as the two before it.
+pub(crate) const MAX_EFFECTS: usize = 2;
 
 /// One step of the selection: a named effect.
 #[derive(Clone, Debug)]
@@ -110,6 +119,11 @@ pub(crate) struct Selection {
     pub(crate) baseline_folds: Vec<Fitted>,
     /// The out-of-sample noise threshold of the gap, –.
     pub(crate) noise: f64,
+    /// Where [`MAX_EFFECTS`] were named and the model with them still
+    /// leaves a gap beyond the noise: how far that gap (mean loss over the
+    /// held-out units, –) stands above the floor of a right model, and its
+    /// noise threshold, –.
+    pub(crate) left_after_most: Option<(f64, f64)>,
     /// The loss of a model that is right, on the replicates models are
     /// compared on.
     pub(crate) null: NullLoss,
@@ -414,8 +428,14 @@ pub(crate) fn select(
         });
         levels.current = level_refits;
     }
+    // The most effects were added: is anything left beyond the noise?
+    let left =
+        (rounds.len() == MAX_EFFECTS).then(|| contest(&own_losses(&current.scores, data), &[], &units, null, seed));
     let fold_units: Vec<Vec<usize>> = data.folds.folds.iter().map(|f| f.units.clone()).collect();
     let (count, confidence, each) = verdict::judge(&rounds, &fold_units, &units, null, seed);
+    let left_after_most = left
+        .filter(|idle| count == MAX_EFFECTS && idle.gap - null.mean > idle.noise)
+        .map(|idle| (idle.gap - null.mean, idle.noise));
     if tracing() {
         for (j, r) in rounds.iter().enumerate() {
             for c in verdict::fold_checks(r, &fold_units, &units, null) {
@@ -487,6 +507,7 @@ pub(crate) fn select(
         noise,
         null,
         attribution_folds,
+        left_after_most,
     })
 }
 
