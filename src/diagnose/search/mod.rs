@@ -315,15 +315,23 @@ pub(crate) fn select(
             none_confidence = idle.fits / noise_thresholds_above(idle.gap, idle.noise, null).sqrt();
         }
     }
-    while rounds.len() < MAX_EFFECTS && !units.is_empty() {
+    let mut left = None;
+    while !units.is_empty() {
         let current_losses = own_losses(&current.scores, data);
         // Nothing above the noise to explain: no family can lead.
         let idle = contest(&current_losses, &[], &units, null, seed);
+        let within = idle.gap - null.mean <= idle.noise;
+        if rounds.len() == MAX_EFFECTS {
+            // The most effects were added: what they leave is noted, not
+            // searched.
+            left = (!within).then_some((idle.gap - null.mean, idle.noise));
+            break;
+        }
         noise = noise.max(idle.noise);
         if rounds.is_empty() {
             none_confidence = idle.fits;
         }
-        if idle.gap - null.mean <= idle.noise {
+        if within {
             if tracing() {
                 eprintln!(
                     "round {}: gap {:.2} within its noise {:.2} of the floor",
@@ -428,14 +436,9 @@ pub(crate) fn select(
         });
         levels.current = level_refits;
     }
-    // The most effects were added: is anything left beyond the noise?
-    let left =
-        (rounds.len() == MAX_EFFECTS).then(|| contest(&own_losses(&current.scores, data), &[], &units, null, seed));
     let fold_units: Vec<Vec<usize>> = data.folds.folds.iter().map(|f| f.units.clone()).collect();
     let (count, confidence, each) = verdict::judge(&rounds, &fold_units, &units, null, seed);
-    let left_after_most = left
-        .filter(|idle| count == MAX_EFFECTS && idle.gap - null.mean > idle.noise)
-        .map(|idle| (idle.gap - null.mean, idle.noise));
+    let left_after_most = left.filter(|_| count == MAX_EFFECTS);
     if tracing() {
         for (j, r) in rounds.iter().enumerate() {
             for c in verdict::fold_checks(r, &fold_units, &units, null) {
