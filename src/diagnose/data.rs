@@ -234,7 +234,7 @@ impl Folds {
 pub const MAX_FOLDS: usize = 5;
 
 /// Whether two nominal levels (N or Hz) are the same one: equal to 1e-6.
-fn same_level(a: f64, b: f64) -> bool {
+pub(crate) fn same_level(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * b.abs().max(1.0)
 }
 

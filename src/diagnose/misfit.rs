@@ -186,6 +186,29 @@ mod tests {
         assert!(!misfit.hints.iter().any(|h| h.contains("signature of friction_hysteresis")));
     }
 
+    /// A load dependence's signature is a misfit that differs between the
+    /// loads: the friction level missed alike at 4, 8 and 16 N (the law's
+    /// level, or another effect's misfit) does not point at it, and one
+    /// that grows with the load does.
+    #[test]
+    fn a_load_dependence_is_pointed_at_only_where_the_misfit_differs_between_loads() {
+        let at_loads = |z: [f64; 3]| -> Vec<Score> {
+            (0..6)
+                .map(|u| Score {
+                    normal_force_n: [4.0, 8.0, 16.0][u % 3],
+                    ..fitting_score(u, Observable::FrictionMuMean, z[u % 3])
+                })
+                .collect()
+        };
+        let null = crate::diagnose::search::cv::NullLoss { mean: 0.6, sd: 0.6 };
+        let points_at_load = |scores: &[Score]| {
+            misfit_of(scores, null, &[])
+                .is_some_and(|m| m.hints.iter().any(|h| h.contains("signature of load_dependent_friction")))
+        };
+        assert!(!points_at_load(&at_loads([-20.0, -20.0, -20.0])));
+        assert!(points_at_load(&at_loads([-20.0, 0.0, 20.0])));
+    }
+
     /// A first-round family with `shrink` of the gap `gap_before` in sample
     /// and `cv_share` out of sample.
     fn candidate(effect: Effect, gap_before: f64, shrink: f64, cv_share: f64) -> Candidate {

@@ -30,7 +30,7 @@ pub(crate) use load::bent;
 
 use std::collections::BTreeMap;
 
-use crate::diagnose::data::{Data, levels};
+use crate::diagnose::data::{Data, levels, same_level};
 use crate::diagnose::features::least_squares;
 use crate::diagnose::law::FrictionLaw;
 use crate::diagnose::mean;
@@ -363,19 +363,42 @@ pub(crate) fn variants(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
 /// Huber loss of z above its expectation under pure noise ([`NULL_HUBER`]),
 /// in units of that mean's noise (a Huber loss of a null z has a standard
 /// deviation of about [`NULL_HUBER_SD`]); the largest over the observables.
-/// Large means the data carry a trace the current model lacks.
+/// Large means the data carry a trace the current model lacks. A load
+/// dependence's trace is what differs between the loads
+/// ([`between_loads`]): a misfit alike at every load is the friction
+/// level's, or another effect's, and none can be seen at one load.
 pub(crate) fn signature_excess(effect: Effect, scores: &[Score]) -> f64 {
     signature(effect)
         .iter()
         .filter_map(|&o| {
-            let values: Vec<f64> = scores
-                .iter()
-                .filter(|s| !s.heldout && s.observable == o)
-                .map(|s| crate::diagnose::score::huber(s.z))
-                .collect();
-            (!values.is_empty()).then(|| (mean(&values) - NULL_HUBER) / (NULL_HUBER_SD / (values.len() as f64).sqrt()))
+            let fitting: Vec<&Score> = scores.iter().filter(|s| !s.heldout && s.observable == o).collect();
+            let z: Vec<f64> = match effect {
+                Effect::LoadDependentFriction => between_loads(&fitting),
+                _ => fitting.iter().map(|s| s.z).collect(),
+            };
+            let losses: Vec<f64> = z.iter().map(|&z| crate::diagnose::score::huber(z)).collect();
+            (!losses.is_empty()).then(|| (mean(&losses) - NULL_HUBER) / (NULL_HUBER_SD / (losses.len() as f64).sqrt()))
         })
         .fold(0.0, f64::max)
+}
+
+/// The part of `scores`' misfit that differs between normal-force levels:
+/// per level, its mean z less the mean over every score, times the square
+/// root of its count (about a unit-spread z under pure noise, as a score's
+/// own z is); none where the scores hold fewer than two levels.
+fn between_loads(scores: &[&Score]) -> Vec<f64> {
+    let loads = levels(scores.iter().map(|s| s.normal_force_n));
+    if loads.len() < 2 {
+        return Vec::new();
+    }
+    let overall = mean(&scores.iter().map(|s| s.z).collect::<Vec<_>>());
+    loads
+        .iter()
+        .map(|&n| {
+            let at: Vec<f64> = scores.iter().filter(|s| same_level(s.normal_force_n, n)).map(|s| s.z).collect();
+            (mean(&at) - overall) * (at.len() as f64).sqrt()
+        })
+        .collect()
 }
 
 /// A family's signature stands out of the noise when its excess
