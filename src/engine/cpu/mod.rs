@@ -371,7 +371,9 @@ mod tests {
     /// period (so lanes part at events), without effects, with effects held
     /// per interval (harmonics, coloured noise) and with a friction history
     /// (hysteresis by slip length, and by a friction memory, one more state
-    /// of the step: a time lag, the slip law, the ageing law with adhesion).
+    /// of the step: a time lag, the slip law, the ageing law with adhesion),
+    /// with the main stream's draws read from shared tables and drawn side
+    /// by side.
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
         let cases: [&[&str]; 6] = [
@@ -391,7 +393,8 @@ mod tests {
                 "load_dependent_friction.strength=0.5",
             ],
         ];
-        for (overrides, lanes) in cases.into_iter().flat_map(|c| LANE_WIDTHS.map(|w| (c, w))) {
+        for (case, overrides, lanes) in cases.into_iter().enumerate().flat_map(|(i, c)| LANE_WIDTHS.map(|w| (i, c, w)))
+        {
             let realisations: Vec<u32> = (3..3 + lanes as u32).collect();
             let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
             let model = Model::paper_rig(&overrides).expect("the paper rig");
@@ -400,18 +403,27 @@ mod tests {
                 let osc = Oscillator::new(&model, condition).expect("an oscillator");
                 let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
                 let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
-                let together = simulate_paths(&osc, 9, &realisations, plan, initial, true, None);
-                let mut stuck = 0;
-                for (r, path) in realisations.iter().zip(&together) {
-                    let alone = simulate_paths(&osc, 9, &[*r], plan, initial, false, None).remove(0);
-                    let what = format!("{overrides:?} at {hz} Hz, realisation {r}");
-                    assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
-                    assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
-                    assert_eq!(path.stick_time_s.to_bits(), alone.stick_time_s.to_bits(), "stuck time, {what}");
-                    stuck += usize::from(path.stick_time_s > 0.0);
-                }
-                if hz == 12.0 && overrides.is_empty() {
-                    assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
+                // With the draws from shared tables, and drawn side by side
+                // (under a seed of its own, which no table holds: a held
+                // table serves a path that would not make one).
+                for shared in [true, false] {
+                    let seed = if shared { 9 } else { 0x5EED_0000 + 100 * case as u64 + hz as u64 + lanes as u64 };
+                    let alone: Vec<PathResult> = realisations
+                        .iter()
+                        .map(|&r| simulate_paths(&osc, seed, &[r], plan, initial, false, None).remove(0))
+                        .collect();
+                    let together = simulate_paths(&osc, seed, &realisations, plan, initial, shared, None);
+                    let mut stuck = 0;
+                    for ((r, path), alone) in realisations.iter().zip(&together).zip(&alone) {
+                        let what = format!("{overrides:?} at {hz} Hz, realisation {r}, shared tables {shared}");
+                        assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
+                        assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
+                        assert_eq!(path.stick_time_s.to_bits(), alone.stick_time_s.to_bits(), "stuck time, {what}");
+                        stuck += usize::from(path.stick_time_s > 0.0);
+                    }
+                    if hz == 12.0 && overrides.is_empty() {
+                        assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
+                    }
                 }
                 let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial, true);
                 for (r, record) in realisations.iter().zip(&records) {

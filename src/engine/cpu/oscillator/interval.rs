@@ -9,16 +9,9 @@ const _: () = assert!(LANES.is_multiple_of(rng::SIDE_BY_SIDE));
 /// [`Path::draw_noise`] of every path in `lanes` (at the same interval of
 /// one oscillator): lanes without a table draw their pairs side by side;
 /// where the noise is white and nothing of it depends on the path's own
-/// state ([`Path::plain_noise`]), the parts common to all are computed once.
+/// state ([`Path::plain_noise`]), the parts common to all are computed once
+/// and each lane's values come straight from its pair.
 pub(super) fn draw_lanes_noise(lanes: &mut [Path<'_>]) {
-    if lanes[0].plain_noise() && !lanes.iter().any(Path::draws_pair_a) {
-        let (mean_n, harmonics_n) = lanes[0].interval_load();
-        for path in lanes.iter_mut() {
-            path.draw_plain_noise(mean_n, harmonics_n);
-            path.pair_a_table.prefetch(path.interval);
-        }
-        return;
-    }
     let mut pairs = [None; LANES];
     if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
         for (pairs, lanes) in pairs.chunks_mut(rng::SIDE_BY_SIDE).zip(lanes.chunks(rng::SIDE_BY_SIDE)) {
@@ -28,6 +21,15 @@ pub(super) fn draw_lanes_noise(lanes: &mut [Path<'_>]) {
                 *pair = Some(drawn);
             }
         }
+    }
+    if lanes[0].plain_noise() {
+        let (mean_n, harmonics_n) = lanes[0].interval_load();
+        for (path, pair) in lanes.iter_mut().zip(pairs) {
+            let pair = pair.unwrap_or_else(|| path.pair_a());
+            path.draw_plain_noise(pair, mean_n, harmonics_n);
+            path.pair_a_table.prefetch(path.interval);
+        }
+        return;
     }
     for (path, pair) in lanes.iter_mut().zip(pairs) {
         path.draw_noise_with(pair);
@@ -66,14 +68,13 @@ impl Path<'_> {
         (mean_n, harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m))
     }
 
-    /// [`Path::draw_noise`] where [`Path::plain_noise`] holds and the
-    /// table holds the interval's pair A, with [`Path::interval_load`]'s
+    /// [`Path::draw_noise`] where [`Path::plain_noise`] holds, with the
+    /// interval's pair A `(ξ_μ, ξ_N)` (–) and [`Path::interval_load`]'s
     /// `mean_n` and `harmonics_n` (N): the same operations on the same
     /// values.
     #[inline(always)]
-    fn draw_plain_noise(&mut self, mean_n: f64, harmonics_n: f64) {
+    fn draw_plain_noise(&mut self, (white, xi_n): (f64, f64), mean_n: f64, harmonics_n: f64) {
         let o = self.osc;
-        let (white, xi_n) = self.pair_a_table.get(self.interval).expect("a table holding the interval");
         self.friction_noise = o.friction_sigma * white;
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = o.effects.stiction_excess;
@@ -105,7 +106,6 @@ mod tests {
                 .expect("an oscillator");
             let initial = InitialState { x_m: 1e-4, v_m_per_s: 0.0 };
             let mut path = Path::new(&osc, 3, 5, initial);
-            path.pair_a_table = noise::PathPairs(noise::pair_a_table(rng::seed_key(3), 5, 300, true));
             assert_eq!(path.plain_noise(), plain, "{overrides:?}");
             for interval in 1..300 {
                 path.interval = interval;
@@ -114,7 +114,7 @@ mod tests {
                 let mut full = path.clone();
                 full.draw_noise();
                 let (mean_n, harmonics_n) = path.interval_load();
-                path.draw_plain_noise(mean_n, harmonics_n);
+                path.draw_plain_noise(path.pair_a(), mean_n, harmonics_n);
                 let bits = |p: &Path<'_>| [p.friction_noise, p.normal_force_n, p.stiction_excess].map(f64::to_bits);
                 if plain {
                     assert_eq!(bits(&path), bits(&full), "{overrides:?}, interval {interval}");

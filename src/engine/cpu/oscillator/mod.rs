@@ -344,6 +344,14 @@ impl<'a> Path<'a> {
         self.pair_a_table.get(self.interval).is_none()
     }
 
+    /// The current interval's pair A of the main stream, `(ξ_μ, ξ_N)` (–):
+    /// from the table where it holds the interval, else drawn.
+    fn pair_a(&self) -> (f64, f64) {
+        self.pair_a_table.get(self.interval).unwrap_or_else(|| {
+            rng::pair_a(rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, self.interval))
+        })
+    }
+
     /// [`Path::draw_noise`] with the current interval's pair A drawn
     /// already (`Some`: the same values as its own draw).
     fn draw_noise_with(&mut self, pair_a: Option<(f64, f64)>) {
@@ -351,10 +359,7 @@ impl<'a> Path<'a> {
         let e = &o.effects;
         let block = |interval: u64| rng::noise_block(self.key, self.realisation, rng::STREAM_MAIN, interval);
         let main = || block(self.interval);
-        let (white, xi_n) = match pair_a.or_else(|| self.pair_a_table.get(self.interval)) {
-            Some(pair) => pair,
-            None => rng::pair_a(main()),
-        };
+        let (white, xi_n) = pair_a.unwrap_or_else(|| self.pair_a());
         // The block the friction's value comes from (its interval's, or
         // the first of its hold): Philox is one-to-one on counters, so
         // the blocks are the same exactly when their intervals are.
