@@ -12,29 +12,35 @@ const _: () = assert!(LANES.is_multiple_of(rng::SIDE_BY_SIDE));
 /// state ([`Path::plain_noise`]), the parts common to all are computed once
 /// and each lane's values come straight from its pair.
 pub(super) fn draw_lanes_noise(lanes: &mut [Path<'_>]) {
-    let mut pairs = [None; LANES];
-    if lanes.len() > 1 && lanes.iter().all(Path::draws_pair_a) {
-        for (pairs, lanes) in pairs.chunks_mut(rng::SIDE_BY_SIDE).zip(lanes.chunks(rng::SIDE_BY_SIDE)) {
-            let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
-            let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
-            for (pair, drawn) in pairs.iter_mut().zip(drawn) {
-                *pair = Some(drawn);
-            }
-        }
-    }
+    // Lanes read their tables (the usual case: one lane's answer is all
+    // of theirs) or all draw: then side by side.
+    let drawn = (lanes.len() > 1 && lanes[0].draws_pair_a() && lanes.iter().all(Path::draws_pair_a))
+        .then(|| pairs_side_by_side(lanes));
     if lanes[0].plain_noise() {
         let (mean_n, harmonics_n) = lanes[0].interval_load();
-        for (path, pair) in lanes.iter_mut().zip(pairs) {
-            let pair = pair.unwrap_or_else(|| path.pair_a());
+        for (l, path) in lanes.iter_mut().enumerate() {
+            let pair = drawn.as_ref().map_or_else(|| path.pair_a(), |pairs| pairs[l]);
             path.draw_plain_noise(pair, mean_n, harmonics_n);
             path.pair_a_table.prefetch(path.interval);
         }
         return;
     }
-    for (path, pair) in lanes.iter_mut().zip(pairs) {
-        path.draw_noise_with(pair);
+    for (l, path) in lanes.iter_mut().enumerate() {
+        path.draw_noise_with(drawn.as_ref().map(|pairs| pairs[l]));
         path.pair_a_table.prefetch(path.interval);
     }
+}
+
+/// Pair A of the current interval of every path in `lanes`, drawn side by
+/// side (`rng::SIDE_BY_SIDE` at a time).
+fn pairs_side_by_side(lanes: &[Path<'_>]) -> [(f64, f64); LANES] {
+    let mut pairs = [(0.0, 0.0); LANES];
+    for (pairs, lanes) in pairs.chunks_mut(rng::SIDE_BY_SIDE).zip(lanes.chunks(rng::SIDE_BY_SIDE)) {
+        let realisations = std::array::from_fn(|l| lanes.get(l).map_or(0, |p| p.realisation));
+        let drawn = rng::pair_a_side_by_side(lanes[0].key, realisations, lanes.len(), lanes[0].interval);
+        pairs.copy_from_slice(&drawn[..pairs.len()]);
+    }
+    pairs
 }
 
 impl Path<'_> {
