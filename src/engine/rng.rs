@@ -212,10 +212,7 @@ pub const SIDE_BY_SIDE: usize = 16;
 crate::vector::widest_vectors! {
 /// [`pair_a`] of the main-stream blocks of interval `interval` of the first
 /// `count` of `realisations` (the rest are not drawn: their pairs are 0),
-/// side by side: the Philox rounds, logarithms and square roots as vector
-/// code, the turns looked up one value at a time. The same operations on
-/// each value as [`noise_block`] and [`pair_a`], so the same values, bit for
-/// bit.
+/// side by side ([`pairs_of_counters`]).
 pub fn pair_a_side_by_side(
     key: [u32; 2],
     realisations: [u32; SIDE_BY_SIDE],
@@ -223,16 +220,40 @@ pub fn pair_a_side_by_side(
     interval: u64,
 ) -> [(f64, f64); SIDE_BY_SIDE] {
     let counter = noise_counter(0, STREAM_MAIN, interval);
+    pairs_of_counters(key, [counter[0]; SIDE_BY_SIDE], [counter[1]; SIDE_BY_SIDE], realisations, count)
+}
+}
+
+crate::vector::widest_vectors! {
+/// [`pair_a`] of the main-stream blocks of realisation `realisation`'s
+/// intervals `first..first + count` (`count` at most [`SIDE_BY_SIDE`]; the
+/// rest of the array is 0), side by side ([`pairs_of_counters`]).
+pub fn pair_a_run(key: [u32; 2], realisation: u32, first: u64, count: usize) -> [(f64, f64); SIDE_BY_SIDE] {
+    let intervals: [u64; SIDE_BY_SIDE] = std::array::from_fn(|l| first.wrapping_add(l as u64));
+    let (lo, hi) = (intervals.map(|i| i as u32), intervals.map(|i| (i >> 32) as u32));
+    pairs_of_counters(key, lo, hi, [realisation; SIDE_BY_SIDE], count)
+}
+}
+
+/// [`pair_a`] of the main-stream blocks of counters `[lo[l], hi[l],
+/// realisations[l], STREAM_MAIN]` for the first `count` lanes (the rest
+/// are 0): the Philox rounds, logarithms and square roots as vector code,
+/// the turns looked up one value at a time. The same operations on each
+/// value as [`noise_block`] and [`pair_a`], so the same values, bit for bit.
+#[inline(always)]
+fn pairs_of_counters(
+    key: [u32; 2],
+    lo: [u32; SIDE_BY_SIDE],
+    hi: [u32; SIDE_BY_SIDE],
+    realisations: [u32; SIDE_BY_SIDE],
+    count: usize,
+) -> [(f64, f64); SIDE_BY_SIDE] {
     // Each word in a 64-bit lane of its own (its top half zero), so that a
     // round's 32×32→64 multiplies, shifts and exclusive-ors are one vector
     // instruction each, with no packing between 32- and 64-bit lanes.
     const LOW: u64 = 0xFFFF_FFFF;
-    let (mut c0, mut c1, mut c2, mut c3): ([u64; SIDE_BY_SIDE], [u64; SIDE_BY_SIDE], [u64; SIDE_BY_SIDE], [u64; SIDE_BY_SIDE]) = (
-        [u64::from(counter[0]); SIDE_BY_SIDE],
-        [u64::from(counter[1]); SIDE_BY_SIDE],
-        realisations.map(u64::from),
-        [u64::from(counter[3]); SIDE_BY_SIDE],
-    );
+    let (mut c0, mut c1, mut c2, mut c3) =
+        (lo.map(u64::from), hi.map(u64::from), realisations.map(u64::from), [u64::from(STREAM_MAIN); SIDE_BY_SIDE]);
     let mut k = key;
     for round in 0..10 {
         if round > 0 {
@@ -256,7 +277,6 @@ pub fn pair_a_side_by_side(
         pairs[l] = (radii[l] * cos, radii[l] * sin);
     }
     pairs
-}
 }
 
 /// Pair A of a block: the Gaussians of words 0 and 1.
@@ -359,6 +379,27 @@ mod tests {
         assert!(differ < (1 << 23) / 100, "{differ} of 2^23 values differ from libm's");
         for x in [1e-300, 0.1, 0.5, 1.0, 1.5, 2.0, 10.0, 1e300] {
             assert!(ln_noise(x).to_bits().abs_diff(x.ln().to_bits()) <= 1, "ln {x}");
+        }
+    }
+
+    /// A realisation's intervals drawn side by side are those drawn one
+    /// block at a time, bit for bit, across the interval index's 32-bit
+    /// carry; lanes past the count are not drawn.
+    #[test]
+    fn a_run_of_intervals_is_drawn_as_one_at_a_time() {
+        let key = seed_key(0x0FED_CBA9_8765_4321);
+        for first in [0, 17, (1 << 32) - 5, u64::MAX - 20] {
+            for count in [SIDE_BY_SIDE, 3] {
+                let pairs = pair_a_run(key, 42, first, count);
+                for (l, &(a, b)) in pairs.iter().enumerate() {
+                    let expected = if l < count {
+                        pair_a(noise_block(key, 42, STREAM_MAIN, first + l as u64))
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    assert_eq!((a.to_bits(), b.to_bits()), (expected.0.to_bits(), expected.1.to_bits()));
+                }
+            }
         }
     }
 

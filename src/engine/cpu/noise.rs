@@ -117,8 +117,13 @@ pub(crate) fn pair_a_table(key: [u32; 2], realisation: u32, intervals: u64, make
     // Drawn outside the lock, so that other threads' paths go on; two
     // threads asking for the same realisation at once both draw it (the
     // same values).
-    let table: PairTable =
-        (0..wanted as u64).map(|i| rng::pair_a(rng::noise_block(key, realisation, rng::STREAM_MAIN, i))).collect();
+    let table: PairTable = (0..wanted as u64)
+        .step_by(rng::SIDE_BY_SIDE)
+        .flat_map(|first| {
+            let count = (wanted as u64 - first).min(rng::SIDE_BY_SIDE as u64) as usize;
+            rng::pair_a_run(key, realisation, first, count).into_iter().take(count)
+        })
+        .collect();
     let mut guard = TABLES.lock().unwrap_or_else(|e| e.into_inner());
     let tables = guard.get_or_insert_with(Tables::default);
     if let Some((old, _)) = tables.by_path.remove(&(key, realisation)) {
