@@ -84,17 +84,6 @@ const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_0000_0000);
 /// `ln 2 − LN2_HI`, rounded to f64 (from a 60-digit `ln 2`).
 const LN2_LO: f64 = 4.749_325_039_031_672_6e-7;
 
-/// `ln x` (–) of a positive normal `x`, as straight-line arithmetic that the
-/// compiler runs lane by lane in vector registers (libm's `ln` is a call per
-/// value). With `x = 2^e (1 + g)`, `1 + g` in `[√½, √2)`, and `s = g / (2 + g)`:
-/// `ln(1 + g) = 2 atanh s = g − g²/2 + s (g²/2 + R)`, `R = 2 (s²/3 + s⁴/5 + …)`
-/// summed to `s²²` (`s² ≤ 0.0295`: the rest is below 1e-18 of `g`). Where
-/// `x` has at most 26 significant bits (every [`uniform_open`] value has 24)
-/// `g` and `g²/2` are exact and the rest is small beside them; the large
-/// terms are summed with their rounding errors kept. The result is within
-/// one unit in the last place of `ln x`: a test checks all 2²³ uniform
-/// values against libm's (and finds 0.5% of them one unit apart). The
-/// Box–Muller radius is the only use.
 /// `2/3, 2/5, …, 2/23`: [`ln_noise`]'s series in `s²`.
 const ATANH_TERMS: [f64; 11] = {
     let mut terms = [0.0; 11];
@@ -106,6 +95,17 @@ const ATANH_TERMS: [f64; 11] = {
     terms
 };
 
+/// `ln x` (–) of a positive normal `x`, as straight-line arithmetic that the
+/// compiler runs lane by lane in vector registers (libm's `ln` is a call per
+/// value). With `x = 2^e (1 + g)`, `1 + g` in `[√½, √2)`, and `s = g / (2 + g)`:
+/// `ln(1 + g) = 2 atanh s = g − g²/2 + s (g²/2 + R)`, `R = 2 (s²/3 + s⁴/5 + …)`
+/// summed to `s²²` (`s² ≤ 0.0295`: the rest is below 1e-18 of `g`). Where
+/// `x` has at most 26 significant bits (every [`uniform_open`] value has 24)
+/// `g` and `g²/2` are exact and the rest is small beside them; the large
+/// terms are summed with their rounding errors kept. The result is within
+/// one unit in the last place of `ln x`: a test checks all 2²³ uniform
+/// values against libm's (and finds 0.5% of them one unit apart). The
+/// Box–Muller radius is the only use.
 #[inline(always)]
 pub fn ln_noise(x: f64) -> f64 {
     let bits = x.to_bits();
@@ -203,8 +203,9 @@ pub fn noise_block(key: [u32; 2], realisation: u32, stream: u32, interval: u64) 
     philox4x32_10(noise_counter(realisation, stream, interval), key)
 }
 
-/// Realisations whose blocks [`pair_a_side_by_side`] draws at once: a
-/// group's sixteen lanes, two AVX-512 registers, so each Philox round is two
+/// Blocks drawn at once, of realisations ([`pair_a_side_by_side`]) or of
+/// intervals ([`pair_a_run`]): a group's sixteen lanes, two AVX-512
+/// registers, so each Philox round is two
 /// independent chains (eight, one chain, waited out each round's multiply:
 /// the noisy default's draws took 4% more of its time).
 pub const SIDE_BY_SIDE: usize = 16;
