@@ -141,17 +141,25 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
     (sum, (a - (sum - b_part)) + (b - b_part))
 }
 
+/// Box–Muller's radius `√(−2 ln u1)` of a uniform `u1` in (0, 1]: the one
+/// home of the formula, so that every draw (alone, side by side, into a
+/// table) gives the same bits.
+#[inline(always)]
+fn radius(u1: f64) -> f64 {
+    (-2.0 * ln_noise(u1)).sqrt()
+}
+
 /// Standard Gaussian from two uniforms (Box–Muller, cosine branch).
 #[inline]
 pub fn box_muller(u1: f64, u2: f64) -> f64 {
-    (-2.0 * ln_noise(u1)).sqrt() * (std::f64::consts::TAU * u2).cos()
+    radius(u1) * (std::f64::consts::TAU * u2).cos()
 }
 
 /// Two independent standard Gaussians from two uniforms: Box–Muller's
 /// cosine and sine branches, `r cos θ` and `r sin θ`.
 #[inline]
 pub fn box_muller_pair(u1: f64, u2: f64) -> (f64, f64) {
-    let r = (-2.0 * ln_noise(u1)).sqrt();
+    let r = radius(u1);
     let (sin, cos) = (std::f64::consts::TAU * u2).sin_cos();
     (r * cos, r * sin)
 }
@@ -192,7 +200,7 @@ pub fn turn_of_uniform(word: u32) -> (f64, f64) {
 /// `uniform_open(angle_word)`, its angle by [`turn_of_uniform`].
 #[inline]
 fn gaussian_pair(radius_word: u32, angle_word: u32) -> (f64, f64) {
-    let r = (-2.0 * ln_noise(uniform_open(radius_word))).sqrt();
+    let r = radius(uniform_open(radius_word));
     let (sin, cos) = turn_of_uniform(angle_word);
     (r * cos, r * sin)
 }
@@ -271,7 +279,7 @@ fn pairs_of_counters(
     }
     let (c0, c1) = (c0.map(|w| w as u32), c1.map(|w| w as u32));
     let count = count.min(SIDE_BY_SIDE);
-    let radii: [f64; SIDE_BY_SIDE] = std::array::from_fn(|l| (-2.0 * ln_noise(uniform_open(c0[l]))).sqrt());
+    let radii: [f64; SIDE_BY_SIDE] = std::array::from_fn(|l| radius(uniform_open(c0[l])));
     let mut pairs = [(0.0, 0.0); SIDE_BY_SIDE];
     for l in 0..count {
         let (sin, cos) = turn_of_uniform(c1[l]);
