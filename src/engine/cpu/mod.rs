@@ -369,19 +369,21 @@ mod tests {
     /// for bit: peaks, phases, stuck time and sampled records, at a
     /// condition that slips throughout and one that sticks much of each
     /// period (so lanes part at events), without effects, with effects held
-    /// per interval (harmonics, coloured noise) and with a friction history
-    /// (hysteresis by slip length, and by a friction memory, one more state
-    /// of the step: a time lag, the slip law, the ageing law with adhesion),
+    /// per interval (harmonics, coloured noise), with an adhesion force (on
+    /// the baseline's vector step) and with a friction history (hysteresis
+    /// by slip length, and by a friction memory, one more state of the
+    /// step: a time lag, the slip law, the ageing law with adhesion),
     /// with the main stream's draws read from shared tables and drawn side
     /// by side.
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
-        let cases: [&[&str]; 6] = [
+        let cases: [&[&str]; 7] = [
             &[],
             &[
                 "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
                 "coloured_friction_noise.correlation_time_s=0.01",
             ],
+            &["load_dependent_friction.form=\"adhesion\"", "load_dependent_friction.strength=-6.0"],
             &["friction_hysteresis.length_m=2e-4"],
             &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
             &["friction_hysteresis.form=\"slip\"", "friction_hysteresis.length_m=2e-4"],

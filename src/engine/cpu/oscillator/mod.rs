@@ -219,8 +219,9 @@ pub(crate) struct Path<'a> {
     drift_walk: f64,
     /// Whether sliding friction depends on more than the current velocity
     /// and interval (hysteresis, or a stiction excess carried into the
-    /// slip), or has an adhesion force: whether it takes more than the
-    /// baseline's arithmetic.
+    /// slip): whether its coefficient takes more than the baseline's
+    /// arithmetic. An adhesion force does not set it: it is one more term
+    /// on top of μN, which the baseline's step adds too.
     history: bool,
     /// Which friction memory is on ([`Memory::form`] of the effects).
     memory_form: Memory,
@@ -275,7 +276,6 @@ impl<'a> Path<'a> {
         };
         let history = memory_form != Memory::None
             || (e.hysteresis_length_m != 0.0 && build_up)
-            || e.adhesion_force_n != 0.0
             || e.stiction_form == StictionForm::Decaying
             || (e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0);
         let mut path = Path {
@@ -549,19 +549,14 @@ impl<'a> Path<'a> {
 
     /// The magnitude of the friction force while slipping, the arguments
     /// those of [`Path::friction_coefficient`]: μN, plus the adhesion force
-    /// under load dependence `adhesion` (the sum clipped at 0), N. The
-    /// adhesion is added on the history path only ([`Path::history`] is set
-    /// with it), so the baseline's stages test nothing more. Without an
-    /// adhesion force μN is left as it is (negative for a while under
+    /// under load dependence `adhesion` (the sum clipped at 0), N. Without
+    /// an adhesion force μN is left as it is (negative for a while under
     /// hysteresis `dahl`), as in the kernel.
     #[inline(always)]
     fn friction_force_n(&self, speed_m_per_s: f64, v_m_per_s: f64, x_m: f64, memory: f64) -> f64 {
         let friction_n = self.friction_coefficient(speed_m_per_s, v_m_per_s, x_m, memory) * self.normal_force_n;
         let adhesion_n = self.osc.effects.adhesion_force_n;
-        if !self.history || adhesion_n == 0.0 {
-            return friction_n;
-        }
-        friction_n + effects::adhesion(friction_n, adhesion_n)
+        if adhesion_n == 0.0 { friction_n } else { friction_n + effects::adhesion(friction_n, adhesion_n) }
     }
 
     /// The sliding coefficient of hysteresis `ageing` with contact age

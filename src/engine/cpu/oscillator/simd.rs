@@ -56,6 +56,8 @@ pub(super) struct SlipLaw {
     pub(super) damping_n_s_per_m: f64,
     /// 1 / m, 1/kg.
     pub(super) inv_mass: f64,
+    /// Adhesion force A of load dependence `adhesion`, N (0 without).
+    pub(super) adhesion_n: f64,
 }
 
 /// A slip step's results, one element per lane.
@@ -115,6 +117,11 @@ impl<const N: usize> V<N> {
     }
 
     #[inline(always)]
+    fn map(self, f: impl Fn(f64) -> f64) -> Self {
+        V(self.0.map(f))
+    }
+
+    #[inline(always)]
     fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         V(std::array::from_fn(|l| f(self.0[l], other.0[l])))
     }
@@ -153,7 +160,7 @@ impl<const N: usize> std::ops::Div for V<N> {
 }
 
 /// The acceleration (m/s²) of `Path::slip_rates` without a memory or a
-/// history, per lane: slipping in direction `sign` with the base at
+/// history (an adhesion force included), per lane: slipping in direction `sign` with the base at
 /// `cos_omega_t`, at `x_m` (m) and `v_m_per_s` (m/s).
 #[inline(always)]
 fn acceleration<const N: usize>(
@@ -176,6 +183,12 @@ fn acceleration<const N: usize>(
         V::splat(law.a_offset) + V::splat(law.b) * stribeck + V::splat(law.d_s2_per_m2) * v_m_per_s * v_m_per_s;
     let mu = (law_mean + V(lanes.friction_noise)).zip(V::splat(0.0), f64::max);
     let friction_n = mu * V(lanes.normal_force_n);
+    // `Path::friction_force_n`: μN plus `effects::adhesion`, A but no less than −μN.
+    let friction_n = if law.adhesion_n == 0.0 {
+        friction_n
+    } else {
+        friction_n + V::splat(law.adhesion_n).zip(friction_n.map(|f| -f), f64::max)
+    };
     // `spring_force`.
     let spring = V::splat(law.stiffness_n_per_m) * (V::splat(law.base_amplitude_m) * cos_omega_t - x_m);
     (spring - V::splat(law.damping_n_s_per_m) * v_m_per_s - sign * friction_n) * V::splat(law.inv_mass)
@@ -368,6 +381,7 @@ mod tests {
             base_amplitude_m: 1e-3,
             damping_n_s_per_m: 3.0,
             inv_mass: 1.0 / 1.6,
+            adhesion_n: 0.0,
         };
         let mut state = 0x9E37_79B9_7F4A_7C15u64;
         let mut uniform = || {
@@ -376,7 +390,10 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        for _ in 0..200 {
+        for iteration in 0..200 {
+            // Without an adhesion force, with one, and with one that μN
+            // clips (A < −μN at small loads).
+            let law = SlipLaw { adhesion_n: [0.0, 0.3, -2.0][iteration % 3], ..law };
             let mut lanes = SlipLanes::<N> {
                 x_m: [0.0; N],
                 v_m_per_s: [0.0; N],

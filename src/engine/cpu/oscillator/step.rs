@@ -506,6 +506,7 @@ impl Path<'_> {
             base_amplitude_m: o.base_amplitude_m,
             damping_n_s_per_m: o.damping_n_s_per_m,
             inv_mass: self.inv_mass,
+            adhesion_n: o.effects.adhesion_force_n,
         }
     }
 
