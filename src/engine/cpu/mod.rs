@@ -371,13 +371,14 @@ mod tests {
     /// period (so lanes part at events), without effects, with effects held
     /// per interval (harmonics, coloured noise), with an adhesion force (on
     /// the baseline's vector step) and with a friction history (hysteresis
-    /// by slip length, and by a friction memory, one more state of the
+    /// by slip length, Dahl's with a decaying stiction, a stiction released
+    /// over a slip length, and a friction memory, one more state of the
     /// step: a time lag, the slip law, the ageing law with adhesion),
     /// with the main stream's draws read from shared tables and drawn side
     /// by side.
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
-        let cases: [&[&str]; 7] = [
+        let cases: [&[&str]; 9] = [
             &[],
             &[
                 "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
@@ -385,6 +386,13 @@ mod tests {
             ],
             &["load_dependent_friction.form=\"adhesion\"", "load_dependent_friction.strength=-6.0"],
             &["friction_hysteresis.length_m=2e-4"],
+            &[
+                "friction_hysteresis.form=\"dahl\"",
+                "friction_hysteresis.length_m=2e-4",
+                "stiction.excess=0.15",
+                "stiction.form=\"decaying\"",
+            ],
+            &["stiction.excess=0.15", "stiction.release_length_m=3e-4"],
             &["friction_hysteresis.form=\"lag\"", "friction_hysteresis.time_constant_s=0.01"],
             &["friction_hysteresis.form=\"slip\"", "friction_hysteresis.length_m=2e-4"],
             &[

@@ -21,7 +21,7 @@
 //! - `interval.rs`: a group's noise at the start of each interval;
 //! - `period.rs`: a period of up to `LANES` paths stepped together, and the
 //!   output samples of records;
-//! - `simd.rs`: the baseline's slip step of all lanes as vector code, and
+//! - `simd.rs`: the slip step of all lanes as vector code, and
 //!   probes of their velocity zeros;
 //! - `zeros.rs`: the velocity zeros of several lanes located side by side.
 //!
@@ -40,7 +40,7 @@
 //! | a `bristle` stick's slider anchor w | kept in the path | recomputed from x at each dispatch's start (a period start), as the path states keep no anchor | the same w within f32 rounding; the states' layout is shared with the host |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
-//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all (the baseline's as vector code, `simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
+//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all as vector code (`simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
 //!
 //! Output samples (records) between noise boundaries split steps on the CPU
 //! only; records sampled at the noise boundaries split none, and the GPU

@@ -37,14 +37,10 @@ pub(crate) const LANE_WIDTHS: [usize; 3] = [LANES, HALF_LANES, QUARTER_LANES];
 /// slipping one told where that same step ended, so it takes it no second
 /// time), so the answers are those of one path at a time, bit for bit.
 fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
-    let memory = lanes[0].memory_form != Memory::None;
     match lanes.len() {
-        LANES if memory => slip_lanes::<LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
-        LANES => slip_lanes::<LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
-        QUARTER_LANES if memory => slip_lanes::<QUARTER_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
-        QUARTER_LANES => slip_lanes::<QUARTER_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
-        HALF_LANES if memory => slip_lanes::<HALF_LANES, true>(lanes, trigs, t_a, t_b, turn, measuring),
-        HALF_LANES => slip_lanes::<HALF_LANES, false>(lanes, trigs, t_a, t_b, turn, measuring),
+        LANES => slip_lanes::<LANES>(lanes, trigs, t_a, t_b, turn, measuring),
+        QUARTER_LANES => slip_lanes::<QUARTER_LANES>(lanes, trigs, t_a, t_b, turn, measuring),
+        HALF_LANES => slip_lanes::<HALF_LANES>(lanes, trigs, t_a, t_b, turn, measuring),
         _ => {
             for (path, trig) in lanes.iter_mut().zip(trigs.iter_mut()) {
                 *trig = path.advance_segment(t_a, t_b, *trig, Some(turn), measuring);
@@ -53,12 +49,12 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
     }
 }
 
-/// [`advance_lanes`] for `N` lanes, `MEMORY` = whether a friction memory is
-/// on (the same for all: it is the oscillator's). A stuck lane takes no slip step (at 12 Hz
-/// and 16.39 N, where the block sticks much of each period, that was a
-/// tenth of the time).
+/// [`advance_lanes`] for `N` lanes. The slip step is the baseline's vector
+/// step, or the vector step of a friction history where one is on (the
+/// same for all lanes: it is the oscillator's). A stuck lane's step is
+/// taken and thrown away: the vector code has no branch per lane.
 #[inline(always)]
-fn slip_lanes<const N: usize, const MEMORY: bool>(
+fn slip_lanes<const N: usize>(
     lanes: &mut [Path<'_>],
     trigs: &mut [Trig],
     t_a: f64,
@@ -73,46 +69,21 @@ fn slip_lanes<const N: usize, const MEMORY: bool>(
         Mode::Slip(s) => f64::from(s),
         Mode::Stick => 0.0,
     });
-    if !MEMORY && !lanes[0].history {
-        // The baseline's step as vector code: the same arithmetic.
-        let state = simd::SlipLanes {
-            x_m: std::array::from_fn(|l| lanes[l].x_m),
-            v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
-            sign: signs,
-            friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
-            normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
-            cos: std::array::from_fn(|l| trigs[l].cos),
-            sin: std::array::from_fn(|l| trigs[l].sin),
-        };
-        let step = simd::slip_step(&state, &lanes[0].slip_law(), h, turn);
-        let zero: [bool; N] = std::array::from_fn(|l| signs[l] != 0.0 && signs[l] * step.v_m_per_s[l] <= 0.0);
-        // Two or more zeros in the step are located side by side.
-        let mut located = [None; N];
-        if zero.iter().filter(|&&z| z).count() > 1 {
-            located = Path::locate_zeros(lanes, &state, zero, h, turn, step.v_m_per_s);
-        }
-        for l in 0..N {
-            trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
-                lanes[l].commit_slip_lane(&step, l, measuring)
-            } else {
-                let past_zero = zero[l].then_some(PastZero { full_step_v: step.v_m_per_s[l], located: located[l] });
-                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
-            };
-        }
-        return;
+    let state = Path::slip_state(lanes, trigs, signs);
+    let history = Path::history(lanes);
+    let step = simd::slip_step(&state, &lanes[0].slip_law(), history.as_ref(), h, turn);
+    let zero: [bool; N] = std::array::from_fn(|l| signs[l] != 0.0 && signs[l] * step.v_m_per_s[l] <= 0.0);
+    // Two or more zeros in the step are located side by side.
+    let mut located = [None; N];
+    if zero.iter().filter(|&&z| z).count() > 1 {
+        located = Path::locate_zeros(lanes, &state, history.as_ref(), zero, h, turn, step.v_m_per_s);
     }
-    let steps: [Option<SlipStep>; N] = std::array::from_fn(|l| {
-        let p = &lanes[l];
-        (signs[l] != 0.0).then(|| p.rk4_slip_with::<MEMORY>(trigs[l], p.x_m, p.v_m_per_s, h, turn, signs[l]))
-    });
     for l in 0..N {
-        trigs[l] = match &steps[l] {
-            Some(step) if signs[l] * step.v_m_per_s > 0.0 => lanes[l].commit_slip(h, step, measuring),
-            Some(step) => {
-                let past_zero = PastZero { full_step_v: step.v_m_per_s, located: None };
-                lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, Some(past_zero))
-            }
-            None => lanes[l].advance_segment(t_a, t_b, trigs[l], Some(turn), measuring),
+        trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
+            lanes[l].commit_slip_lane(&step, l, measuring)
+        } else {
+            let past_zero = zero[l].then_some(PastZero { full_step_v: step.v_m_per_s[l], located: located[l] });
+            lanes[l].advance_segment_past(t_a, t_b, trigs[l], Some(turn), measuring, past_zero)
         };
     }
 }

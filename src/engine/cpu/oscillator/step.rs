@@ -473,8 +473,7 @@ impl Path<'_> {
         }
     }
 
-    /// [`Path::commit_slip`] of lane `l` of a vector step ([`simd`]),
-    /// without a friction memory (its RK4 adds 0 to it).
+    /// [`Path::commit_slip`] of lane `l` of a vector step ([`simd`]).
     #[inline(always)]
     pub(super) fn commit_slip_lane<const N: usize>(
         &mut self,
@@ -488,10 +487,41 @@ impl Path<'_> {
         }
         self.x_m = step.x_m[l];
         self.v_m_per_s = step.v_m_per_s[l];
-        // As the scalar step's `m0 + h/6 · 0` (which turns −0 into +0).
-        self.memory += 0.0;
+        self.memory = step.memory[l];
         self.period_max_x_m = self.period_max_x_m.max(step.x_m[l]);
         Trig { cos: step.end_cos[l], sin: step.end_sin[l] }
+    }
+
+    /// The state of `lanes`, with base trigs `trigs` and slip directions
+    /// `signs` (0 for a stuck lane), as the vector step takes it.
+    pub(super) fn slip_state<const N: usize>(
+        lanes: &[Path<'_>; N],
+        trigs: &[Trig; N],
+        signs: [f64; N],
+    ) -> simd::SlipLanes<N> {
+        simd::SlipLanes {
+            x_m: std::array::from_fn(|l| lanes[l].x_m),
+            v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
+            sign: signs,
+            friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
+            normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
+            cos: trigs.map(|t| t.cos),
+            sin: trigs.map(|t| t.sin),
+            memory: std::array::from_fn(|l| lanes[l].memory),
+        }
+    }
+
+    /// The friction history of `lanes` as the vector step takes it, `None`
+    /// where none is on (the same for all: it is the oscillator's).
+    pub(super) fn history<'p, const N: usize>(lanes: &'p [Path<'_>; N]) -> Option<simd::History<'p, N>> {
+        let first = &lanes[0];
+        first.history.then(|| simd::History {
+            lanes: simd::HistoryLanes {
+                slip_start_x_m: std::array::from_fn(|l| lanes[l].slip_start_x_m),
+                stiction_excess: std::array::from_fn(|l| lanes[l].stiction_excess),
+            },
+            law: simd::HistoryLaw { effects: &first.osc.effects, memory: first.memory_form, dahl: first.dahl() },
+        })
     }
 
     /// The baseline law and the rig as the vector step takes them.

@@ -52,9 +52,11 @@ impl Path<'_> {
     /// and is left to its own search: `None`). `half` is the step's half turn as the
     /// vector step took it; where it is not `Trig::turn` of this step's
     /// length, the search takes its own full step, as the scalar one does.
+    /// `history` is the lanes' friction history where one is on.
     pub(super) fn locate_zeros<const N: usize>(
         lanes: &[Path<'_>; N],
         state: &simd::SlipLanes<N>,
+        history: Option<&simd::History<'_, N>>,
         zero: [bool; N],
         h_s: f64,
         half: Trig,
@@ -114,9 +116,9 @@ impl Path<'_> {
             let active = &active[..count];
             match count {
                 0 => break,
-                1..=4 => probe_packed::<N, 4>(lanes, state, &law, w, active, &mut s),
-                5..=8 => probe_packed::<N, 8>(lanes, state, &law, w, active, &mut s),
-                _ => probe_packed::<N, N>(lanes, state, &law, w, active, &mut s),
+                1..=4 => probe_packed::<N, 4>(state, history, &law, w, active, &mut s),
+                5..=8 => probe_packed::<N, 8>(state, history, &law, w, active, &mut s),
+                _ => probe_packed::<N, N>(state, history, &law, w, active, &mut s),
             }
         }
         std::array::from_fn(|l| searched[l].then(|| (s.hi[l], s.probed_hi[l].then_some(s.hi_step[l]))))
@@ -146,8 +148,8 @@ impl Path<'_> {
 /// [`Path::locate_velocity_zero`]'s loop takes it.
 #[inline(always)]
 fn probe_packed<const N: usize, const M: usize>(
-    lanes: &[Path<'_>; N],
     state: &simd::SlipLanes<N>,
+    history: Option<&simd::History<'_, N>>,
     law: &simd::SlipLaw,
     omega: f64,
     active: &[usize],
@@ -162,8 +164,17 @@ fn probe_packed<const N: usize, const M: usize>(
         normal_force_n: std::array::from_fn(|j| state.normal_force_n[lane(j)]),
         cos: std::array::from_fn(|j| state.cos[lane(j)]),
         sin: std::array::from_fn(|j| state.sin[lane(j)]),
+        memory: std::array::from_fn(|j| state.memory[lane(j)]),
     };
-    let probed = simd::probe_step(&packed, law, std::array::from_fn(|j| s.x[lane(j)]), omega);
+    let packed_history = history.map(|h| simd::History::<M> {
+        lanes: simd::HistoryLanes {
+            slip_start_x_m: std::array::from_fn(|j| h.lanes.slip_start_x_m[lane(j)]),
+            stiction_excess: std::array::from_fn(|j| h.lanes.stiction_excess[lane(j)]),
+        },
+        law: h.law,
+    });
+    let probes = std::array::from_fn(|j| s.x[lane(j)]);
+    let probed = simd::probe_step(&packed, law, packed_history.as_ref(), probes, omega);
     for (j, &l) in active.iter().enumerate() {
         let sign = packed.sign[j];
         let x = s.x[l];
@@ -176,12 +187,11 @@ fn probe_packed<const N: usize, const M: usize>(
         } else {
             s.hi[l] = x;
             s.probed_hi[l] = true;
-            // As the scalar RK4 step returns it (without a friction memory:
-            // its RK4 adds 0 to it).
+            // As the scalar RK4 step returns it.
             s.hi_step[l] = SlipStep {
                 x_m: probed.x_m[j],
                 v_m_per_s: probed.v_m_per_s[j],
-                memory: lanes[l].memory + x / 6.0 * 0.0,
+                memory: probed.memory[j],
                 stage_x_m: probed.stage_x_m.map(|x| x[j]),
                 trig: [
                     Trig { cos: packed.cos[j], sin: packed.sin[j] },
@@ -210,14 +220,29 @@ mod tests {
     /// The lanes' zeros located side by side are each lane's own search's,
     /// bit for bit, with lanes slipping either way (some stuck, some with no
     /// zero in the step), over a grid step whose half turn is the search's
-    /// and one whose is not, at each group width.
+    /// and one whose is not, at each group width, on the baseline and with
+    /// a friction history (a time-lag memory over a decaying stiction, and
+    /// Dahl's build-up).
     #[test]
     fn zeros_side_by_side_are_those_located_alone() {
-        let model = Model::paper_rig(&[]).expect("the paper rig");
-        let osc = Oscillator::new(&model, Condition { excitation_frequency_hz: 12.0, normal_force_n: 16.39 })
-            .expect("an oscillator");
-        let compared = compare::<16>(&osc) + compare::<8>(&osc) + compare::<4>(&osc);
-        assert!(compared > 500, "only {compared} zeros compared");
+        let histories: [&[&str]; 3] = [
+            &[],
+            &[
+                "friction_hysteresis.form=\"lag\"",
+                "friction_hysteresis.time_constant_s=0.01",
+                "stiction.excess=0.15",
+                "stiction.form=\"decaying\"",
+            ],
+            &["friction_hysteresis.form=\"dahl\"", "friction_hysteresis.length_m=2e-4"],
+        ];
+        for overrides in histories {
+            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            let model = Model::paper_rig(&overrides).expect("the paper rig");
+            let osc = Oscillator::new(&model, Condition { excitation_frequency_hz: 12.0, normal_force_n: 16.39 })
+                .expect("an oscillator");
+            let compared = compare::<16>(&osc) + compare::<8>(&osc) + compare::<4>(&osc);
+            assert!(compared > 500, "only {compared} zeros compared with {overrides:?}");
+        }
     }
 
     /// Zeros compared.
@@ -249,24 +274,22 @@ mod tests {
                 // Slow enough for the step to reverse many of them.
                 p.v_m_per_s = sign * 0.02 * uniform();
                 p.friction_noise = 0.1 * (uniform() - 0.5);
+                // What a history reads: a memory near the law, a slip
+                // started up to a few tenths of a mm back, an excess.
+                p.memory = 0.3 + 0.2 * uniform();
+                p.slip_start_x_m = p.x_m - sign * 4e-4 * uniform();
+                p.stiction_excess = 0.15 * uniform();
                 *trig = Trig::at(std::f64::consts::TAU * uniform());
             }
             let sign: [f64; N] = std::array::from_fn(|l| match lanes[l].mode {
                 Mode::Slip(s) => f64::from(s),
                 Mode::Stick => 0.0,
             });
-            let state = simd::SlipLanes {
-                x_m: std::array::from_fn(|l| lanes[l].x_m),
-                v_m_per_s: std::array::from_fn(|l| lanes[l].v_m_per_s),
-                sign,
-                friction_noise: std::array::from_fn(|l| lanes[l].friction_noise),
-                normal_force_n: std::array::from_fn(|l| lanes[l].normal_force_n),
-                cos: trigs.map(|t| t.cos),
-                sin: trigs.map(|t| t.sin),
-            };
-            let step = simd::slip_step(&state, &lanes[0].slip_law(), h_s, half);
+            let state = Path::slip_state(&lanes, &trigs, sign);
+            let history = Path::history(&lanes);
+            let step = simd::slip_step(&state, &lanes[0].slip_law(), history.as_ref(), h_s, half);
             let zero: [bool; N] = std::array::from_fn(|l| sign[l] != 0.0 && sign[l] * step.v_m_per_s[l] <= 0.0);
-            let located = Path::locate_zeros(&lanes, &state, zero, h_s, half, step.v_m_per_s);
+            let located = Path::locate_zeros(&lanes, &state, history.as_ref(), zero, h_s, half, step.v_m_per_s);
             let searched_half = Trig::turn(0.5 * w * h_s);
             let same_step = searched_half.cos.to_bits() == half.cos.to_bits();
             for l in 0..N {
