@@ -21,8 +21,9 @@
 //! - `interval.rs`: a group's noise at the start of each interval;
 //! - `period.rs`: a period of up to `LANES` paths stepped together, and the
 //!   output samples of records;
-//! - `simd.rs`: the slip step of all lanes as vector code, and
-//!   probes of their velocity zeros;
+//! - `simd/`: the slip step of all lanes as vector code, and probes of
+//!   their velocity zeros (the lanes' state and the law in files of their
+//!   own);
 //! - `zeros.rs`: the velocity zeros of several lanes located side by side.
 //!
 //! `shaders/oscillator.wgsl` is the same algorithm in f32; the functions

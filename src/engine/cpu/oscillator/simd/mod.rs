@@ -20,84 +20,20 @@
 //! two f64 a register), for AVX2 (four) and for AVX-512 (eight) — and the
 //! widest the processor has is chosen at run time.
 
+mod lanes;
+mod law;
+
 use super::Trig;
-use crate::engine::cpu::effects;
-use crate::engine::effects::{
-    AGEING_CUTOFF_SPEED_M_PER_S, AGEING_FLOOR_SPEED_M_PER_S, EffectParams, Memory, STICTION_DECAY_M, StictionForm,
-};
-
-/// The per-lane state a slip step starts from, one element per lane.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct SlipLanes<const N: usize> {
-    /// Displacement x, m.
-    pub(super) x_m: [f64; N],
-    /// Velocity v, m/s.
-    pub(super) v_m_per_s: [f64; N],
-    /// Slip direction ±1, or 0 for a stuck lane (stepped and discarded), –.
-    pub(super) sign: [f64; N],
-    /// Friction coefficient's random part in the current interval, –.
-    pub(super) friction_noise: [f64; N],
-    /// Normal force in the current interval, N.
-    pub(super) normal_force_n: [f64; N],
-    /// `cos Ωt` and `sin Ωt` of the base at the step's start, –.
-    pub(super) cos: [f64; N],
-    pub(super) sin: [f64; N],
-    /// The friction memory at the step's start (μ_f, –, or θ, s; see
-    /// [`Memory`]; carried unchanged without one).
-    pub(super) memory: [f64; N],
-}
-
-/// What a friction history reads of each lane besides [`SlipLanes`], one
-/// element per lane.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct HistoryLanes<const N: usize> {
-    /// Where the current slip started, m.
-    pub(super) slip_start_x_m: [f64; N],
-    /// The stiction excess carried into the slip, –.
-    pub(super) stiction_excess: [f64; N],
-}
-
-/// A friction history's law, the same for every lane (the oscillator's).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct HistoryLaw<'a> {
-    /// The effects (hysteresis and stiction forms and parameters).
-    pub(super) effects: &'a EffectParams,
-    /// Which friction memory is on.
-    pub(super) memory: Memory,
-    /// Whether hysteresis `dahl` or `bristle` is on (friction may point
-    /// along the motion for a while: no clip at 0).
-    pub(super) dahl: bool,
-}
+use lanes::V;
+pub(super) use lanes::{HistoryLanes, SlipLanes};
+pub(super) use law::{HistoryLaw, SlipLaw};
+use law::{acceleration, history_rates};
 
 /// A friction history of `N` lanes: what each lane carries, and the law.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct History<'a, const N: usize> {
     pub(super) lanes: HistoryLanes<N>,
     pub(super) law: HistoryLaw<'a>,
-}
-
-/// The baseline law and the rig, the same for every lane (they are the
-/// oscillator's).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct SlipLaw {
-    /// The law's `a` plus the effects' friction offset, –.
-    pub(super) a_offset: f64,
-    /// The law's `b`, –.
-    pub(super) b: f64,
-    /// The Stribeck rate `c`, s/m.
-    pub(super) c_s_per_m: f64,
-    /// The law's `d`, s²/m².
-    pub(super) d_s2_per_m2: f64,
-    /// Spring stiffness, N/m.
-    pub(super) stiffness_n_per_m: f64,
-    /// Base amplitude, m.
-    pub(super) base_amplitude_m: f64,
-    /// Damping, N·s/m.
-    pub(super) damping_n_s_per_m: f64,
-    /// 1 / m, 1/kg.
-    pub(super) inv_mass: f64,
-    /// Adhesion force A of load dependence `adhesion`, N (0 without).
-    pub(super) adhesion_n: f64,
 }
 
 /// A slip step's results, one element per lane.
@@ -165,182 +101,6 @@ fn slip_step_avx2<const N: usize>(
     half: Trig,
 ) -> SlippedLanes<N> {
     slip_step_lanes(lanes, law, history, h_s, half)
-}
-
-/// Lanes of f64, one operation for all: a vector where the target has one.
-#[derive(Clone, Copy)]
-struct V<const N: usize>([f64; N]);
-
-impl<const N: usize> V<N> {
-    #[inline(always)]
-    fn splat(value: f64) -> Self {
-        V([value; N])
-    }
-
-    #[inline(always)]
-    fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        V(self.0.map(f))
-    }
-
-    /// `f` of each lane's index: for a function of several lanes' values
-    /// that has no vector form (a library call).
-    #[inline(always)]
-    fn lanewise(f: impl Fn(usize) -> f64) -> Self {
-        V(std::array::from_fn(f))
-    }
-
-    #[inline(always)]
-    fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
-        V(std::array::from_fn(|l| f(self.0[l], other.0[l])))
-    }
-}
-
-impl<const N: usize> std::ops::Add for V<N> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, other: Self) -> Self {
-        self.zip(other, |a, b| a + b)
-    }
-}
-
-impl<const N: usize> std::ops::Sub for V<N> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, other: Self) -> Self {
-        self.zip(other, |a, b| a - b)
-    }
-}
-
-impl<const N: usize> std::ops::Mul for V<N> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, other: Self) -> Self {
-        self.zip(other, |a, b| a * b)
-    }
-}
-
-impl<const N: usize> std::ops::Div for V<N> {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, other: Self) -> Self {
-        self.zip(other, |a, b| a / b)
-    }
-}
-
-/// `Path::mean_law` per lane: `a + Δa + b S(c, s) + d v²` at speed
-/// `speed` and velocity `v_m_per_s` (m/s), –. `stribeck_factor`: both
-/// branches, then the one the speed's sign picks.
-#[inline(always)]
-fn mean_law<const N: usize>(law: &SlipLaw, speed: V<N>, v_m_per_s: V<N>) -> V<N> {
-    let c = V::splat(law.c_s_per_m);
-    let one = V::splat(1.0);
-    let under_way = one / (one + c * speed);
-    let past_zero = one - c * speed;
-    let stribeck = V(std::array::from_fn(|l| if speed.0[l] >= 0.0 { under_way.0[l] } else { past_zero.0[l] }));
-    V::splat(law.a_offset) + V::splat(law.b) * stribeck + V::splat(law.d_s2_per_m2) * v_m_per_s * v_m_per_s
-}
-
-/// `Path::slip_rates`' acceleration from the friction coefficient `mu`
-/// (–), per lane: μN plus an adhesion force (`Path::friction_force_n`),
-/// against the spring and the damper, m/s².
-#[inline(always)]
-fn acceleration_with<const N: usize>(
-    law: &SlipLaw,
-    lanes: &SlipLanes<N>,
-    cos_omega_t: V<N>,
-    x_m: V<N>,
-    v_m_per_s: V<N>,
-    mu: V<N>,
-) -> V<N> {
-    let sign = V(lanes.sign);
-    let friction_n = mu * V(lanes.normal_force_n);
-    // `Path::friction_force_n`: μN plus `effects::adhesion`, A but no less than −μN.
-    let friction_n = if law.adhesion_n == 0.0 {
-        friction_n
-    } else {
-        friction_n + V::splat(law.adhesion_n).zip(friction_n.map(|f| -f), f64::max)
-    };
-    // `spring_force`.
-    let spring = V::splat(law.stiffness_n_per_m) * (V::splat(law.base_amplitude_m) * cos_omega_t - x_m);
-    (spring - V::splat(law.damping_n_s_per_m) * v_m_per_s - sign * friction_n) * V::splat(law.inv_mass)
-}
-
-/// The acceleration (m/s²) of `Path::slip_rates` without a memory or a
-/// history (an adhesion force included), per lane: slipping in direction
-/// `sign` with the base at `cos_omega_t`, at `x_m` (m) and `v_m_per_s` (m/s).
-#[inline(always)]
-fn acceleration<const N: usize>(
-    law: &SlipLaw,
-    lanes: &SlipLanes<N>,
-    cos_omega_t: V<N>,
-    x_m: V<N>,
-    v_m_per_s: V<N>,
-) -> V<N> {
-    let speed = V(lanes.sign) * v_m_per_s;
-    // `steady_law`, clipped at 0 (`friction_coefficient`).
-    let mu = (mean_law(law, speed, v_m_per_s) + V(lanes.friction_noise)).zip(V::splat(0.0), f64::max);
-    acceleration_with(law, lanes, cos_omega_t, x_m, v_m_per_s, mu)
-}
-
-/// `Path::slip_rates` with a friction history, per lane: the acceleration
-/// (m/s²) and the friction memory's rate (`Path::memory_rate`; 0 without a
-/// memory), at `x_m` (m), `v_m_per_s` (m/s) and memory `memory`. The
-/// branches are on the law, the same for every lane; what has no vector
-/// form (`tanh`, `exp`, `ln`) is the effects' own function, lane by lane.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn history_rates<const N: usize>(
-    law: &SlipLaw,
-    history: &HistoryLaw<'_>,
-    lanes: &SlipLanes<N>,
-    past: &HistoryLanes<N>,
-    cos_omega_t: V<N>,
-    x_m: V<N>,
-    v_m_per_s: V<N>,
-    memory: V<N>,
-) -> (V<N>, V<N>) {
-    let e = history.effects;
-    let speed = V(lanes.sign) * v_m_per_s;
-    let mean = mean_law(law, speed, v_m_per_s);
-    let steady = mean + V(lanes.friction_noise);
-    let slipped_m = (x_m - V(past.slip_start_x_m)).map(f64::abs);
-    let length_m = e.hysteresis_length_m;
-    // `Path::friction_coefficient`'s history branch.
-    let mut mu = match history.memory {
-        Memory::Lag | Memory::Slip => memory + V(lanes.friction_noise),
-        Memory::Ageing => {
-            // `Path::ageing_coefficient`.
-            let steady_age_s = V::splat(length_m) / (v_m_per_s.map(f64::abs) + V::splat(AGEING_CUTOFF_SPEED_M_PER_S));
-            let floor_age_s = length_m / AGEING_FLOOR_SPEED_M_PER_S;
-            steady
-                + V::lanewise(|l| {
-                    effects::contact_age_term(e.hysteresis_strength, memory.0[l], steady_age_s.0[l], floor_age_s)
-                })
-        }
-        Memory::None => {
-            let steady = if history.dahl { steady.zip(V::splat(0.0), f64::max) } else { steady };
-            steady
-                * V::lanewise(|l| effects::hysteresis_factor(e.hysteresis_form, slipped_m.0[l], length_m, memory.0[l]))
-        }
-    };
-    if e.stiction_form == StictionForm::Decaying {
-        let decay = V::lanewise(|l| (-slipped_m.0[l] / STICTION_DECAY_M).exp());
-        mu = mu + V(past.stiction_excess) * decay;
-    } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
-        let left = (V::splat(1.0) - slipped_m / V::splat(e.stiction_release_m)).zip(V::splat(0.0), f64::max);
-        mu = mu + V(past.stiction_excess) * left;
-    }
-    // Dahl's friction may point along the motion just after a reversal.
-    let mu = if history.dahl { mu } else { mu.zip(V::splat(0.0), f64::max) };
-    let acceleration = acceleration_with(law, lanes, cos_omega_t, x_m, v_m_per_s, mu);
-    // `Path::memory_rate`.
-    let rate = match history.memory {
-        Memory::Lag => (mean - memory) / V::splat(e.hysteresis_lag_s),
-        Memory::Slip => V::lanewise(|l| effects::slip_law_rate(mean.0[l], memory.0[l], v_m_per_s.0[l].abs(), length_m)),
-        Memory::Ageing => V::lanewise(|l| effects::ageing_rate(memory.0[l], v_m_per_s.0[l].abs(), length_m)),
-        Memory::None => V::splat(0.0),
-    };
-    (acceleration, rate)
 }
 
 /// The RK4 stages of every lane from the step's start over `h` (s), with
@@ -580,7 +340,7 @@ fn probe_step_lanes<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::effects::HysteresisForm;
+    use crate::engine::effects::{EffectParams, HysteresisForm, Memory, StictionForm};
 
     /// Every compiled copy of the step gives the same bits (the one the
     /// processor runs is checked against the scalar path elsewhere), with
