@@ -207,6 +207,13 @@ fn coarse_fit(
 /// (`starts`, one trial per form in the order of its variants; with
 /// `given_only`, only the forms that have one; a linear load dependence
 /// that fitted is then bent), every trial joining the pool.
+///
+/// The forms' searches are independent of each other (each from its own
+/// start on the current model), so they run side by side
+/// ([`fits_per_task`]): a trial's ensembles are too small to keep every
+/// core busy alone. Their outcomes are merged in the forms' order, and the
+/// bent forms searched after all the others, so the pool and the best are
+/// those of the forms searched one after another.
 #[allow(clippy::too_many_arguments)]
 fn refine(
     family: &mut Family,
@@ -219,62 +226,71 @@ fn refine(
     search: &DiagnoseSettings,
     engine: &Engine,
 ) -> Result<()> {
-    let forms = variants(family.effect, ctx);
-    let starts_len = starts.len();
-    let mut queue: Vec<(Variant, Option<Trial>)> = forms.into_iter().zip(starts).collect();
-    let mut i = 0;
-    while i < queue.len() {
-        let start = queue[i].1.take();
-        let variant = &queue[i].0;
-        // Where only the given starts are searched, a form without one is
-        // passed over (its bent form, queued below, has none and is
-        // searched from its own start).
-        if given_only && start.is_none() && i < queue.len().min(starts_len) {
-            i += 1;
-            continue;
+    let mut batch: Vec<(Variant, Option<Trial>)> = variants(family.effect, ctx).into_iter().zip(starts).collect();
+    // Where only the given starts are searched, a form without one is
+    // passed over (a bent form, searched below, has none and is searched
+    // from its own start).
+    if given_only {
+        batch.retain(|(_, start)| start.is_some());
+    }
+    while !batch.is_empty() {
+        let (forms, starts): (Vec<Variant>, Vec<Option<Trial>>) = batch.into_iter().unzip();
+        let searched: Vec<Option<(Vec<Member>, Trial)>> = forms
+            .par_iter()
+            .zip(starts)
+            .with_min_len(fits_per_task(engine))
+            .map(|(variant, start)| search_form(variant, start, current, slope, data, search, engine))
+            .collect::<Result<_>>()?;
+        let mut bends = Vec::new();
+        for (variant, outcome) in forms.iter().zip(searched) {
+            let Some((seen, best)) = outcome else { continue };
+            family.pool.extend(seen);
+            let bend = (best.objective < 1.0).then(|| bent(family.effect, variant.form, &best.values, ctx)).flatten();
+            if best.objective < family.best.objective {
+                family.parameters = variant.describe(&best.values);
+                family.form = variant.form;
+                family.best = best;
+            }
+            bends.extend(bend.map(|b| (b, None)));
         }
-        let start = match start {
-            Some(t) => t,
-            None => match evaluate(
-                variant,
-                &variant.start(),
-                &current.model,
-                &current.scores,
-                1,
-                slope,
-                data,
-                search,
-                engine,
-            )? {
-                Some(t) => t,
-                None => {
-                    i += 1;
-                    continue;
-                }
-            },
-        };
-        let mut seen: Vec<Member> = Vec::new();
-        let mut record = |t: &Trial| seen.push(Member::of(variant.form, t, current, data));
-        let best = coordinate_search(
-            &variant.params,
-            start,
-            |b: &Trial, v: &[f64]| evaluate(variant, v, &b.carry, &current.scores, 0, slope, data, search, engine),
-            &mut record,
-        )?;
-        family.pool.extend(seen);
-        let bend = (best.objective < 1.0).then(|| bent(family.effect, variant.form, &best.values, ctx)).flatten();
-        if best.objective < family.best.objective {
-            family.parameters = variant.describe(&best.values);
-            family.form = variant.form;
-            family.best = best;
-        }
-        if let Some(b) = bend {
-            queue.push((b, None));
-        }
-        i += 1;
+        batch = bends;
     }
     family.refined = true;
     Ok(())
+}
+
+/// One form's full search: the coordinate search from `start` (else from
+/// the form's own start, its law stepped once), each trial as a member of
+/// the pool and the best; `None` where the form gives no valid model at
+/// its start.
+fn search_form(
+    variant: &Variant,
+    start: Option<Trial>,
+    current: &Fitted,
+    slope: f64,
+    data: &Data<'_>,
+    search: &DiagnoseSettings,
+    engine: &Engine,
+) -> Result<Option<(Vec<Member>, Trial)>> {
+    let start = match start {
+        Some(t) => t,
+        None => {
+            let own = variant.start();
+            match evaluate(variant, &own, &current.model, &current.scores, 1, slope, data, search, engine)? {
+                Some(t) => t,
+                None => return Ok(None),
+            }
+        }
+    };
+    let mut seen: Vec<Member> = Vec::new();
+    let mut record = |t: &Trial| seen.push(Member::of(variant.form, t, current, data));
+    let best = coordinate_search(
+        &variant.params,
+        start,
+        |b: &Trial, v: &[f64]| evaluate(variant, v, &b.carry, &current.scores, 0, slope, data, search, engine),
+        &mut record,
+    )?;
+    Ok(Some((seen, best)))
 }
 
 #[cfg(test)]
