@@ -202,15 +202,8 @@ fn solve_friction_level(
         // also scanned about the best point (the baseline's whole scan,
         // narrower): without it, trials that differ in their last bits can
         // end on different branches of the loss.
-        let mut around: Vec<(f64, f64)> = Vec::new();
-        for k in -TRIAL_SCAN..=TRIAL_SCAN {
-            let a = best + TRIAL_SCAN_STEP * f64::from(k);
-            if k != 0 && a >= lowest && a <= 5.0 {
-                around.push((a, residual(a)?.1));
-            } else if k == 0 {
-                around.push(tried.iter().copied().find(|t| t.0 == best).unwrap_or((best, f64::INFINITY)));
-            }
-        }
+        let centre = tried.iter().copied().find(|t| t.0 == best).unwrap_or((best, f64::INFINITY));
+        let mut around = scan_about(centre, lowest, targets.level != Observable::PeakMeanM, &residual)?;
         // The parabola's vertex is tried and kept in `around`; the best
         // of everything tried is taken below.
         scan_best(&mut around, &residual)?;
@@ -231,6 +224,42 @@ const TRIAL_SCAN: i32 = 3;
 
 /// The step of a trial's scan about its best level (of `a`).
 const TRIAL_SCAN_STEP: f64 = 0.02;
+
+/// The loss at the levels `TRIAL_SCAN_STEP` apart about `centre` (a level
+/// and its loss), at most [`TRIAL_SCAN`] steps either way and none below
+/// `lowest` or above 5, in increasing order, `centre` among them. Where
+/// the loss can jump (`jumps`: a level read from phases, whose error wraps
+/// where a load's phase passes a branch) every level of the window is
+/// tried, since a lower well can lie behind a jump. Where it cannot (a
+/// level read from mean peaks, continuous in `a`), each side is walked
+/// only while the loss falls: the lowest level walked to is the window's
+/// lowest wherever the loss has one well there, and the walk stops at the
+/// first rise, usually one level either side instead of all six.
+fn scan_about(
+    centre: (f64, f64),
+    lowest: f64,
+    jumps: bool,
+    loss_at: &impl Fn(f64) -> Result<(f64, f64)>,
+) -> Result<Vec<(f64, f64)>> {
+    let mut around = vec![centre];
+    for side in [-1.0, 1.0] {
+        let mut last = centre.1;
+        for k in 1..=TRIAL_SCAN {
+            let a = centre.0 + side * TRIAL_SCAN_STEP * f64::from(k);
+            if a < lowest || a > 5.0 {
+                break;
+            }
+            let loss = loss_at(a)?.1;
+            around.push((a, loss));
+            if !jumps && loss >= last {
+                break;
+            }
+            last = loss;
+        }
+    }
+    around.sort_by(|x, y| x.0.total_cmp(&y.0));
+    Ok(around)
+}
 
 /// The best of `scan` (levels `a` in increasing order, equally spaced, each
 /// with its loss), refined to the vertex of the parabola through it and its
@@ -608,6 +637,51 @@ mod tests {
         let mut edge: Vec<(f64, f64)> = [0.30, 0.32, 0.34].iter().map(|&a| (a, 1.0 - a)).collect();
         assert_eq!(scan_best(&mut edge, &loss).unwrap(), 0.34);
         assert_eq!(edge.len(), 3);
+    }
+
+    /// A level read from mean peaks walks each side of the window while
+    /// the loss falls: about a well it tries the two neighbours only, and
+    /// it follows a well two steps off to its bottom, each time ending
+    /// where the whole window's lowest lies. A level read from phases tries
+    /// the whole window, and so finds the lower well behind a jump that
+    /// the walk stops at.
+    #[test]
+    fn a_trial_scan_walks_a_continuous_loss_and_spans_a_jumping_one() {
+        let calls = std::cell::Cell::new(0);
+        let counted = |f: fn(f64) -> f64| {
+            let calls = &calls;
+            move |a: f64| -> Result<(f64, f64)> {
+                calls.set(calls.get() + 1);
+                Ok((0.0, f(a)))
+            }
+        };
+        let lowest_of = |scan: &[(f64, f64)]| scan.iter().copied().min_by(|x, y| x.1.total_cmp(&y.1)).unwrap().0;
+        let window = |f: fn(f64) -> f64, centre: f64| {
+            scan_about((centre, f(centre)), 0.0, true, &|a: f64| Ok((0.0, f(a)))).unwrap()
+        };
+        // A well at the centre: the neighbours only.
+        let well: fn(f64) -> f64 = |a| (a - 0.40) * (a - 0.40);
+        let walked = scan_about((0.40, well(0.40)), 0.0, false, &counted(well)).unwrap();
+        assert_eq!((calls.get(), walked.len()), (2, 3));
+        assert_eq!(lowest_of(&walked), lowest_of(&window(well, 0.40)));
+        // A well two steps down: walked to, one step past, and one step up.
+        calls.set(0);
+        let off: fn(f64) -> f64 = |a| (a - 0.44) * (a - 0.44);
+        let walked = scan_about((0.40, off(0.40)), 0.0, false, &counted(off)).unwrap();
+        assert_eq!(calls.get(), 4);
+        assert!(walked.windows(2).all(|w| w[0].0 < w[1].0), "in increasing order");
+        assert!((lowest_of(&walked) - 0.44).abs() < 1e-12 && lowest_of(&window(off, 0.40)) == lowest_of(&walked));
+        // The window's lower edge is `lowest`.
+        let edge = scan_about((0.03, off(0.03)), 0.005, true, &|a: f64| Ok((0.0, off(a)))).unwrap();
+        assert!(edge.iter().all(|p| p.0 >= 0.005) && edge.len() == 5, "{edge:?}");
+        // A jump beside the centre with a lower well behind it.
+        let jumping: fn(f64) -> f64 = |a| if (0.41..0.43).contains(&a) { 2.0 } else { (a - 0.44).abs() };
+        calls.set(0);
+        let spanned = scan_about((0.40, jumping(0.40)), 0.0, true, &counted(jumping)).unwrap();
+        assert_eq!(calls.get(), 6);
+        assert!((lowest_of(&spanned) - 0.44).abs() < 1e-12);
+        let walked = scan_about((0.40, jumping(0.40)), 0.0, false, &|a: f64| Ok((0.0, jumping(a)))).unwrap();
+        assert_eq!(lowest_of(&walked), 0.40, "the walk stops at the jump");
     }
 
     #[test]
