@@ -332,20 +332,41 @@ struct PlainState {
     started: Instant,
     last_print: Instant,
     step: String,
+    /// When the current step began.
+    step_started: Instant,
     fraction: Option<(u64, u64)>,
 }
 
 impl PlainState {
+    /// The line a new step (or the end) prints: the time since the start,
+    /// the share done where there is one, and the step.
     fn line(&self, what: &str) -> String {
+        let mut line = self.head(what);
+        if !self.step.is_empty() {
+            line.push(' ');
+            line.push_str(&self.step);
+        }
+        line
+    }
+
+    /// The heartbeat's line: as [`PlainState::line`], but a step still
+    /// under way is said to be, with how long it has taken so far, so that
+    /// a log does not read as the step starting again.
+    fn heartbeat_line(&self, what: &str) -> String {
+        let mut line = self.head(what);
+        if !self.step.is_empty() {
+            line.push_str(&format!(" still {} ({} s so far)", self.step, self.step_started.elapsed().as_secs()));
+        }
+        line
+    }
+
+    /// `what`, the seconds since the start and the share done, if known.
+    fn head(&self, what: &str) -> String {
         let elapsed = self.started.elapsed().as_secs();
         let mut line = format!("{what}: [{elapsed:>4} s]");
         if let Some((done, total)) = self.fraction {
             let pct = if total > 0 { 100.0 * done as f64 / total as f64 } else { 0.0 };
             line.push_str(&format!(" {pct:5.1}%"));
-        }
-        if !self.step.is_empty() {
-            line.push(' ');
-            line.push_str(&self.step);
         }
         line
     }
@@ -403,6 +424,7 @@ impl Progress {
                 started: now,
                 last_print: now,
                 step: String::new(),
+                step_started: now,
                 fraction: with_bar.then_some((0, 1)),
             }));
             p.plain = Some(state.clone());
@@ -412,7 +434,7 @@ impl Progress {
                 while let Err(RecvTimeoutError::Timeout) = stopped.recv_timeout(Duration::from_millis(250)) {
                     let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
                     if s.last_print.elapsed() >= HEARTBEAT {
-                        note(&s.line(&what));
+                        note(&s.heartbeat_line(&what));
                         s.last_print = Instant::now();
                     }
                 }
@@ -441,6 +463,7 @@ impl Progress {
         if let Some(state) = &self.plain {
             let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
             s.step = step.to_string();
+            s.step_started = Instant::now();
             note(&s.line(&self.what));
             s.last_print = Instant::now();
         }
@@ -500,6 +523,28 @@ fn check_fig8_frequency(hz: f64) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A step's line names it; the heartbeat's says it is still under way
+    /// and for how long, so a log does not read as the step starting again.
+    #[test]
+    fn a_heartbeat_says_the_step_goes_on() {
+        let now = Instant::now();
+        let ago = |s: u64| now.checked_sub(Duration::from_secs(s)).expect("a time in the past");
+        let mut state = PlainState {
+            started: ago(41),
+            last_print: now,
+            step: String::new(),
+            step_started: ago(41),
+            fraction: None,
+        };
+        assert_eq!(state.heartbeat_line("diagnose"), "diagnose: [  41 s]");
+        state.step = "trying every family".into();
+        state.step_started = ago(30);
+        assert_eq!(state.line("diagnose"), "diagnose: [  41 s] trying every family");
+        assert_eq!(state.heartbeat_line("diagnose"), "diagnose: [  41 s] still trying every family (30 s so far)");
+        state.fraction = Some((1, 4));
+        assert_eq!(state.heartbeat_line("sweep"), "sweep: [  41 s]  25.0% still trying every family (30 s so far)");
+    }
 
     #[test]
     fn cli_definition_is_valid() {
