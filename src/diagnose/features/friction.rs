@@ -257,6 +257,7 @@ pub(super) fn quantile_shape(values: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngExt, SeedableRng};
 
     /// The quantiles selected side by side are those of a full sort, bit
     /// for bit, with ties and at the smallest sizes.
@@ -272,18 +273,12 @@ mod tests {
             let tail = if mid > 0.0 { (q(0.975) - q(0.025)) / mid / GAUSSIAN_TAIL_RATIO - 1.0 } else { 0.0 };
             (skewness, tail)
         };
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(0x2545_F491_4F6C_DD1D);
         for n in [8, 9, 10, 17, 40, 101, 1000, 4097] {
             for ties in [false, true] {
                 let values: Vec<f64> = (0..n)
                     .map(|_| {
-                        let u = (next() >> 11) as f64 / (1u64 << 53) as f64;
+                        let u = rng.random::<f64>();
                         let x = (u - 0.3).powi(3);
                         if ties { (x * 20.0).round() } else { x }
                     })

@@ -216,6 +216,7 @@ fn probe_packed<const N: usize, const M: usize>(
 mod tests {
     use super::*;
     use crate::engine::{Condition, Model};
+    use rand::{RngExt, SeedableRng};
 
     /// The lanes' zeros located side by side are each lane's own search's,
     /// bit for bit, with lanes slipping either way (some stuck, some with no
@@ -248,13 +249,8 @@ mod tests {
     /// Zeros compared.
     fn compare<const N: usize>(osc: &Oscillator) -> usize {
         let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut uniform = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(0x2545_F491_4F6C_DD1D);
+        let mut uniform = || rng.random::<f64>();
         let w = osc.omega_rad_per_s;
         let mut compared = 0;
         for trial in 0..100 {

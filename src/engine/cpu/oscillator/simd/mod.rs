@@ -348,6 +348,7 @@ fn probe_step_lanes<const N: usize>(
 mod tests {
     use super::*;
     use crate::engine::effects::{EffectParams, HysteresisForm, Memory, StictionForm};
+    use rand::{RngExt, SeedableRng};
 
     /// Every compiled copy of the step gives the same bits (the one the
     /// processor runs is checked against the scalar path elsewhere), with
@@ -372,13 +373,8 @@ mod tests {
             inv_mass: 1.0 / 1.6,
             adhesion_n: 0.0,
         };
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut uniform = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(0x9E37_79B9_7F4A_7C15);
+        let mut uniform = || rng.random::<f64>();
         let history = |form, length_m, lag_s, stiction_form, release_m| EffectParams {
             hysteresis_form: form,
             hysteresis_length_m: length_m,
