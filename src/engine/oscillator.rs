@@ -197,6 +197,20 @@ impl Oscillator {
                 ),
             });
         }
+        let normal_force_mean_n =
+            condition.normal_force_n * model.effects.normal_force_drift.as_ref().map_or(1.0, |d| d.nominal_scale());
+        let effects = EffectParams::new(
+            &model.effects,
+            condition.normal_force_n,
+            model.friction.a + model.friction.b,
+            model.noise.interval_s,
+        );
+        let steps_per_period = Self::steps_resolving(model, condition)?.max(Self::steps_resolving_the_law(
+            model,
+            condition,
+            &effects,
+            normal_force_mean_n,
+        )?);
         Ok(Oscillator {
             mass_kg: model.rig.mass_kg,
             stiffness_n_per_m: model.stiffness_n_per_m(),
@@ -209,17 +223,11 @@ impl Oscillator {
             friction_c_s_per_m: model.friction.c,
             friction_d_s2_per_m2: model.friction.d,
             friction_sigma: model.friction.sigma,
-            normal_force_mean_n: condition.normal_force_n
-                * model.effects.normal_force_drift.as_ref().map_or(1.0, |d| d.nominal_scale()),
+            normal_force_mean_n,
             normal_force_sigma_n: model.normal_force.sigma,
-            steps_per_period: Self::steps_resolving(model, condition)?,
+            steps_per_period,
             noise_interval_s: model.noise.interval_s,
-            effects: EffectParams::new(
-                &model.effects,
-                condition.normal_force_n,
-                model.friction.a + model.friction.b,
-                model.noise.interval_s,
-            ),
+            effects,
             // Without noise there is nothing to hold: no boundaries split the steps.
             noise_interval_fixed: if noiseless { Self::NOISELESS_INTERVAL } else { noise_interval_fixed as u64 },
         })
@@ -300,6 +308,63 @@ impl Oscillator {
             });
         }
         Ok(steps.max(needed as u32))
+    }
+
+    /// Steps per excitation period that keep every slip step within the
+    /// time a slip's velocity takes to settle where the friction law
+    /// strengthens with speed: there the friction's slope `N ∂μ/∂|v|`
+    /// acts as a damping, and a slip relaxes towards the speed at which
+    /// friction balances the springs at the rate `λ = (c_r + N ∂μ/∂|v|)/m`
+    /// (1/s; `c_r` the rig's damping, N/(m/s)). Classical RK4 overshoots a
+    /// relaxation past its end once a step exceeds 2.8/λ: from rest, the
+    /// step's velocity comes out negative, which the integrator reads as a
+    /// stop, and the slip turns into a chatter of stops and starts, each
+    /// located exactly, up to the event limit of every step (a fitted law
+    /// rising from 0.06 at rest to 0.33 within a few mm/s, b = −0.27 and
+    /// c = 950 s/m, settles in 0.24 ms at 16 N on the paper's rig, a
+    /// seventh of a 600 Hz noise interval). As for a friction memory, no
+    /// step is longer than 1/λ.
+    ///
+    /// The slope is eq. 7's Stribeck term at rest, `−b c` where `b < 0`
+    /// (the term rising with speed, steepest at rest), scaled as this
+    /// point's law is ([`EffectParams::friction_scale`]); the load is
+    /// bounded by its mean, three standard deviations of its noise and its
+    /// harmonics' amplitudes. The quadratic term's slope `2 d v` is not
+    /// counted: it grows with a speed that the term itself holds down, so
+    /// no speed scale bounds it usefully, and a `d` steep enough to matter
+    /// at the model's steps is caught as a divergence. Unchanged for a law
+    /// that weakens with speed (the paper's), where `λ` is the rig's
+    /// damping alone. A law that would need more than
+    /// [`Solver::MAX_STEPS_PER_PERIOD`] is refused, by name.
+    fn steps_resolving_the_law(
+        model: &Model,
+        condition: Condition,
+        effects: &EffectParams,
+        normal_force_mean_n: f64,
+    ) -> Result<u32> {
+        let f = &model.friction;
+        let slope_s_per_m = effects.friction_scale * (-f.b * f.c).max(0.0);
+        let harmonics_n: f64 = effects.harmonic_amplitudes_n.iter().map(|a| a.abs()).sum();
+        let load_n = normal_force_mean_n.abs() + 3.0 * model.normal_force.sigma + harmonics_n;
+        let rate_per_s = (model.damping_n_s_per_m() + load_n * slope_s_per_m) / model.rig.mass_kg;
+        let needed = (rate_per_s / condition.excitation_frequency_hz).ceil();
+        if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
+            return Err(Error::InvalidParameter {
+                key: "friction.b".into(),
+                value: f.b.to_string(),
+                message: format!(
+                    "a friction law rising from rest by {slope_s_per_m:e} per m/s (b = {}, c = {} s/m) settles a \
+                     slip at {load_n:.3} N within {:.2e} s, which needs {needed:.3e} steps per period at {} Hz to be \
+                     integrated stably; at most {} are allowed",
+                    f.b,
+                    f.c,
+                    1.0 / rate_per_s,
+                    condition.excitation_frequency_hz,
+                    Solver::MAX_STEPS_PER_PERIOD
+                ),
+            });
+        }
+        Ok(needed as u32)
     }
 
     /// Steps per excitation period that give a swing at the rig's natural
