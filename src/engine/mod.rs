@@ -18,6 +18,7 @@ pub mod oscillator;
 pub mod reduce;
 pub mod rng;
 pub mod schedule;
+pub mod steps;
 
 use serde::{Deserialize, Serialize};
 
