@@ -86,21 +86,14 @@ fn steps_resolving_the_memory(model: &Model, condition: Condition) -> Result<u32
         }
         _ => return Ok(1),
     };
-    let needed = (period_s / memory_s).ceil();
     // NaN too (no finite speed scale): refused.
-    if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
-        return Err(Error::InvalidParameter {
-            key: key.into(),
-            value: value.to_string(),
-            message: format!(
-                "{what} needs {needed:e} steps per period at {} Hz to be integrated stably; at most {} are \
-                 allowed",
-                condition.excitation_frequency_hz,
-                Solver::MAX_STEPS_PER_PERIOD
-            ),
-        });
-    }
-    Ok(needed as u32)
+    allowed((period_s / memory_s).ceil(), key, value, |needed| {
+        format!(
+            "{what} needs {needed:e} steps per period at {} Hz to be integrated stably; at most {} are allowed",
+            condition.excitation_frequency_hz,
+            Solver::MAX_STEPS_PER_PERIOD
+        )
+    })
 }
 
 /// Steps per excitation period that keep every slip step within the
@@ -140,24 +133,18 @@ fn steps_resolving_the_law(
     let harmonics_n: f64 = effects.harmonic_amplitudes_n.iter().map(|a| a.abs()).sum();
     let load_n = normal_force_mean_n.abs() + 3.0 * model.normal_force.sigma + harmonics_n;
     let rate_per_s = (model.damping_n_s_per_m() + load_n * slope_s_per_m) / model.rig.mass_kg;
-    let needed = (rate_per_s / condition.excitation_frequency_hz).ceil();
-    if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
-        return Err(Error::InvalidParameter {
-            key: "friction.b".into(),
-            value: f.b.to_string(),
-            message: format!(
-                "a friction law rising from rest by {slope_s_per_m:e} per m/s (b = {}, c = {} s/m) settles a \
-                 slip at {load_n:.3} N within {:.2e} s, which needs {needed:.3e} steps per period at {} Hz to be \
-                 integrated stably; at most {} are allowed",
-                f.b,
-                f.c,
-                1.0 / rate_per_s,
-                condition.excitation_frequency_hz,
-                Solver::MAX_STEPS_PER_PERIOD
-            ),
-        });
-    }
-    Ok(needed as u32)
+    allowed((rate_per_s / condition.excitation_frequency_hz).ceil(), "friction.b", f.b, |needed| {
+        format!(
+            "a friction law rising from rest by {slope_s_per_m:e} per m/s (b = {}, c = {} s/m) settles a slip at \
+             {load_n:.3} N within {:.2e} s, which needs {needed:.3e} steps per period at {} Hz to be integrated \
+             stably; at most {} are allowed",
+            f.b,
+            f.c,
+            1.0 / rate_per_s,
+            condition.excitation_frequency_hz,
+            Solver::MAX_STEPS_PER_PERIOD
+        )
+    })
 }
 
 /// Steps per excitation period that give a swing at the rig's natural
@@ -168,19 +155,29 @@ fn steps_resolving_the_law(
 /// below the default. A rig that would need more than
 /// [`Solver::MAX_STEPS_PER_PERIOD`] is refused, by name.
 fn steps_resolving_the_rig(model: &Model, condition: Condition) -> Result<u32> {
-    let needed = (NATURAL_PERIOD_STEPS * model.rig.natural_frequency_hz / condition.excitation_frequency_hz).ceil();
-    if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
-        return Err(Error::InvalidParameter {
-            key: "rig.natural_frequency_hz".into(),
-            value: model.rig.natural_frequency_hz.to_string(),
-            message: format!(
+    let f0 = model.rig.natural_frequency_hz;
+    allowed(
+        (NATURAL_PERIOD_STEPS * f0 / condition.excitation_frequency_hz).ceil(),
+        "rig.natural_frequency_hz",
+        f0,
+        |needed| {
+            format!(
                 "a natural frequency {:e} times the excitation's ({} Hz) needs {needed:e} steps per period to be \
-                 integrated stably ({NATURAL_PERIOD_STEPS} per natural period); at most {} are allowed",
-                model.rig.natural_frequency_hz / condition.excitation_frequency_hz,
+             integrated stably ({NATURAL_PERIOD_STEPS} per natural period); at most {} are allowed",
+                f0 / condition.excitation_frequency_hz,
                 condition.excitation_frequency_hz,
                 Solver::MAX_STEPS_PER_PERIOD
-            ),
-        });
+            )
+        },
+    )
+}
+
+/// `needed` steps per period (–), or the refusal of the model parameter
+/// `key` at `value` that asks for them, with `message(needed)`, where they
+/// are more than [`Solver::MAX_STEPS_PER_PERIOD`] or not a number.
+fn allowed(needed: f64, key: &str, value: f64, message: impl FnOnce(f64) -> String) -> Result<u32> {
+    if needed.is_nan() || needed > f64::from(Solver::MAX_STEPS_PER_PERIOD) {
+        return Err(Error::InvalidParameter { key: key.into(), value: value.to_string(), message: message(needed) });
     }
     Ok(needed as u32)
 }
