@@ -168,7 +168,18 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
                     .join(", ")
             )
         } else {
-            String::new()
+            let blind: Vec<String> = report
+                .verdict
+                .power
+                .iter()
+                .filter(|p| !p.could_show())
+                .map(|p| format!("{} ({:.2})", p.effect, p.power))
+                .collect();
+            if blind.is_empty() {
+                String::new()
+            } else {
+                format!(", but these records could not show {}", blind.join(", "))
+            }
         },
         report.gap.baseline,
         report.gap.after,

@@ -298,6 +298,9 @@ pub struct Diagnosis {
     pub misfit: Option<Misfit>,
     /// The first family that led a round and is not named, where one did.
     pub refused: Option<Refusal>,
+    /// Where nothing is named: each family's power to show itself in these
+    /// records at its smallest size of interest (empty otherwise).
+    pub powers: Vec<search::power::Power>,
     pub conditions: Vec<Condition>,
     /// The baseline and the fitted model refitted without each fold (for
     /// checks against a known truth at a withheld level).
@@ -503,6 +506,21 @@ pub fn diagnose_set(
             named.len()
         ));
     }
+    let blind: Vec<String> = selection
+        .powers
+        .iter()
+        .filter(|p| !p.could_show())
+        .map(|p| format!("{} ({}: power {:.2})", p.effect, p.reference, p.power))
+        .collect();
+    if !blind.is_empty() {
+        notes.push(format!(
+            "nothing is named, but these records could not have shown {}: the `none` does not rule {} out, and \
+             its confidence is at most the least of these powers; records where such an effect would move what \
+             is measured (for a stiction, conditions where the block sticks) can test it",
+            blind.join("; "),
+            if blind.len() == 1 { "it" } else { "them" }
+        ));
+    }
     let (verdict, confidence) = match effects.first() {
         Some(e) => (Some(e.effect), e.confidence),
         None => (None, selection.none_confidence),
@@ -530,6 +548,7 @@ pub fn diagnose_set(
         attribution_folds: selection.attribution_folds.clone(),
         misfit,
         refused: selection.refused,
+        powers: selection.powers,
         conditions,
         fold_models,
         notes,

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
+use crate::diagnose::search::power::Power;
 use crate::diagnose::{Diagnosis, FoldGap, RefusalReason, Unexplained, chart, sd};
 use crate::engine::effects::HysteresisForm;
 use crate::error::{Error, Result};
@@ -43,7 +44,7 @@ pub struct Report {
 }
 
 /// How the confidence is defined, as `report.json` states it.
-pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline (up to the noise, and to what its form leaves of that fold when fitted to it too), over every observable and over the response's (peaks and phase) alone, and the response over every withheld fold together no worse than the baseline (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample";
+pub const CONFIDENCE_MEANING: &str = "the share of 2000 bootstrap resamples of the conditions (drawn with replacement) that give this verdict, times the share of the baseline's explainable out-of-sample gap the named effects close, or each named effect's margin over the best rival family of its round where that is smaller, over one half (at most 1): an effect is named in a resample when its family closes the largest share of the current model's explainable out-of-sample gap beyond the noise and the model with it and the effects named before it predicts every withheld fold no worse than the baseline (up to the noise, and to what its form leaves of that fold when fitted to it too), over every observable and over the response's (peaks and phase) alone, and the response over every withheld fold together no worse than the baseline (the last named effect also no worse than the model before it); `none` where no effect is named, and a `none` beside a gap far above its noise is divided by the square root of how many noise thresholds it stands above; where nothing can be held out (one run of one condition), `none` is judged so on the baseline's gap in sample; and a `none` is at most the least of `verdict.power`, each effect family's chance, at the smallest size of interest, of raising the baseline's gap above that noise in these records";
 
 /// `verdict`: the effect named (`none` when the baseline explains the data).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,6 +72,11 @@ pub struct VerdictReport {
     /// named, and why; absent where every leader is named.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refused: Option<RefusedReport>,
+    /// Where nothing is named: how surely these records would have shown
+    /// each effect family at its smallest size of interest; absent where
+    /// an effect is named.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub power: Vec<Power>,
 }
 
 /// A family that led a round and is not named ([`crate::diagnose::Refusal`]).
@@ -373,6 +379,7 @@ impl Diagnosis {
                     after_named: r.after_named,
                     reason: r.reason.clone(),
                 }),
+                power: self.powers.clone(),
             },
             gap: GapReport {
                 metric: GAP_METRIC.to_string(),
@@ -630,6 +637,31 @@ fn refusal_sentence(r: &crate::diagnose::Refusal) -> String {
     format!("{lead}{why}.")
 }
 
+/// What a `none`'s records could have shown: each family's power at its
+/// smallest size of interest, least first.
+fn power_table(powers: &[Power]) -> String {
+    if powers.is_empty() {
+        return String::new();
+    }
+    let mut sorted: Vec<&Power> = powers.iter().collect();
+    sorted.sort_by(|a, b| a.power.total_cmp(&b.power));
+    let mut s = String::from(
+        "<p>What these records could have shown: for each effect family, the chance that an effect of the smallest size of interest would have lifted the baseline's out-of-sample gap above its noise (an upper bound). The verdict's confidence is at most the least of them; a family the records cannot show is not ruled out by this <code>none</code>.</p><table><tr><th>effect</th><th>smallest size of interest</th><th>rise of the gap</th><th>noise threshold</th><th>power</th></tr>",
+    );
+    for p in sorted {
+        s.push_str(&format!(
+            "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.2}</td></tr>",
+            escape(p.effect.name()),
+            escape(&p.reference),
+            p.rise,
+            p.threshold,
+            p.power
+        ));
+    }
+    s.push_str("</table>");
+    s
+}
+
 fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> String {
     let gap = &report.gap;
     let num = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
@@ -670,6 +702,7 @@ fn html(d: &Diagnosis, report: &Report, run: &RunInfo, has_comparison: bool) -> 
     ));
     if d.effects.is_empty() {
         s.push_str("<p>No unmodelled effect is named: no effect family closed a share of the calibrated baseline's out-of-sample gap beyond the noise while predicting every withheld fold no worse than the baseline, or than its form fits that fold (see <i>Candidates</i> below for what each family closed).</p>");
+        s.push_str(&power_table(&d.powers));
     } else {
         s.push_str("<table><tr><th>effect</th><th>what it means</th><th>form</th><th>confidence</th><th>share of the gap closed (out of sample)</th><th>form misfit</th><th>fitted parameters (unit, meaning)</th></tr>");
         for e in &d.effects {

@@ -41,6 +41,7 @@
 pub(crate) mod cv;
 mod family;
 pub(crate) mod fit;
+pub mod power;
 mod refit;
 pub(crate) mod verdict;
 
@@ -115,6 +116,10 @@ pub(crate) struct Selection {
     /// explains any of the misfit beyond the noise the verdict is still
     /// `none`, but not a confident one.)
     pub(crate) none_confidence: f64,
+    /// Where nothing was named: each family's power to show itself in
+    /// these records at its smallest size of interest ([`power`]); a
+    /// `none`'s confidence is at most the least of them.
+    pub(crate) powers: Vec<power::Power>,
     /// The baseline refitted without each fold.
     pub(crate) baseline_folds: Vec<Fitted>,
     /// The out-of-sample noise threshold of the gap, –.
@@ -291,6 +296,7 @@ pub(crate) fn select(
     let baseline_folds = levels.current.clone();
     let mut attribution_folds = data.folds.clone();
     let mut current = Fitted { model: baseline.clone(), scores: score(engine, baseline, data, &search, Scope::All)? };
+    let baseline_scores = current.scores.clone();
     let mut rounds: Vec<verdict::Round> = Vec::new();
     let mut steps: Vec<Step> = Vec::new();
     let mut first_round = Vec::new();
@@ -500,12 +506,29 @@ pub(crate) fn select(
         let (gap, n) = point.gap(&first.current);
         none_confidence = confidence / noise_thresholds_above(gap, point.noise(n), null).sqrt();
     }
+    let powers = if count == 0 {
+        progress("nothing named; measuring what these records could have shown");
+        let powers = power::powers(baseline, &baseline_scores, &units, data, &search, engine, null)?;
+        if tracing() {
+            for p in &powers {
+                eprintln!(
+                    "power of {}: rise {:.3} against {:.3}, {:.3} ({})",
+                    p.effect, p.rise, p.threshold, p.power, p.reference
+                );
+            }
+        }
+        none_confidence = none_confidence.min(power::least(&powers));
+        powers
+    } else {
+        Vec::new()
+    };
     Ok(Selection {
         steps,
         refused,
         misfit_folds,
         first_round,
         none_confidence,
+        powers,
         baseline_folds,
         noise,
         null,
