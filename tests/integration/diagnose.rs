@@ -340,11 +340,12 @@ fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
 /// One run of one condition: nothing can be held out, so no effect can be
 /// tested and none is named. "None" is then only as sure as the
 /// baseline's fit in sample: on a record the baseline model made, as sure
-/// as one record's power to show the least visible family (a record of the
-/// paper's rig shows a 10% stiction too faintly to rule it out), not on one
-/// with a friction memory the baseline lacks (its gap in sample about 1.5,
-/// against about 0.2 for the baseline's own record on six seeds each), and
-/// the report says why nothing was named.
+/// as one record's power to show the least visible family (a 20 s record
+/// of the paper's rig shows a skewed friction noise too faintly to rule it
+/// out), and not sure at all on one with a friction memory the baseline
+/// lacks (its gap in sample about 1.5, against about 0.2 for the
+/// baseline's own record on six seeds each); the report says why nothing
+/// was named.
 #[test]
 fn one_record_alone_names_nothing_and_is_sure_of_none_only_where_the_baseline_fits() {
     let root = scratch("one-record");
@@ -386,9 +387,9 @@ fn one_record_alone_names_nothing_and_is_sure_of_none_only_where_the_baseline_fi
 /// reversal, so a stiction changes nothing in its records: its power is
 /// about 0 and so is the `none`'s confidence, with a note saying what the
 /// records could not show. The same rig loaded past the threshold sticks
-/// at reversals, and a 10% stiction there lifts the gap above its noise
-/// more often than not (power 0.71 on this seed; six conditions of 25 s
-/// records).
+/// at reversals, and a stiction a fifth above the law at rest lifts the
+/// gap above its noise there (power 1.00 on this seed, against 0.01 where
+/// it slides; six conditions of 25 s records).
 #[test]
 fn a_none_is_only_as_sure_as_the_records_could_show_each_family() {
     use stickslip::diagnose::synthetic::{SetShape, random_truth, write_set};
@@ -415,7 +416,7 @@ fn a_none_is_only_as_sure_as_the_records_could_show_each_family() {
     assert!(d.confidence < 0.05, "none at {}", d.confidence);
     assert!(d.notes.iter().any(|n| n.contains("could not have shown") && n.contains("stiction")), "{:?}", d.notes);
     let (sticking, d) = diagnose_at("sticking", &[1.2, 1.6, 2.2]);
-    assert!(sticking > 0.5, "a stiction where the block sticks: power {sticking}, {:?}", d.powers);
+    assert!(sticking > 0.9, "a stiction where the block sticks: power {sticking}, {:?}", d.powers);
     std::fs::remove_dir_all(&root).unwrap();
 }
 

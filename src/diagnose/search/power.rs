@@ -29,7 +29,7 @@
 //! | non-Gaussian friction | skew form, s = 0.7 (skewness of the friction noise about 0.5) |
 //! | friction hysteresis | Dahl, friction turning over in a twentieth of the base amplitude U0 |
 //! | coloured friction noise | AR(1), half the variance correlated over ten noise intervals |
-//! | stiction | constant, breakaway 10% above the law at rest, μ(0) = a + b |
+//! | stiction | constant, breakaway a fifth above the law at rest, μ(0) = a + b |
 //! | load-dependent friction | power law, μ 10% apart between the least and the greatest load |
 //! | normal-force drift | linear, N moving 5% over the longest record, the nominal force its mean |
 //!
@@ -201,11 +201,11 @@ fn reference(
             let at_rest = (baseline.friction.a + baseline.friction.b).max(baseline.friction.a);
             m.effects.stiction = Some(Stiction {
                 form: StictionForm::Constant,
-                excess: 0.1 * at_rest,
+                excess: 0.2 * at_rest,
                 release_length_m: 0.0,
                 dwell_time_s: 0.0,
             });
-            format!("a breakaway friction 10% above the law at rest (Δμ = {:.4})", 0.1 * at_rest)
+            format!("a breakaway friction 20% above the law at rest (Δμ = {:.4})", 0.2 * at_rest)
         }
         Effect::LoadDependentFriction => {
             let (&least, &most) = (loads.first()?, loads.last()?);
