@@ -200,6 +200,9 @@ pub struct BenchmarkRow {
     /// (in `truth`'s order): [`error_against_truth`] of the truth without
     /// that effect, over every condition. Empty otherwise.
     pub data_weights: Vec<f64>,
+    /// Where the verdict is `none`: the families the diagnosis said these
+    /// records could not show ([`crate::diagnose::search::power`]).
+    pub could_not_show: Vec<Effect>,
     /// Time of the diagnosis, s.
     pub seconds: f64,
 }
@@ -513,10 +516,11 @@ pub fn run_benchmark(
         };
         let truth_effects: Vec<Effect> = planned.hidden.iter().map(|h| h.effect).collect();
         let verdict: Vec<Effect> = d.effects.iter().map(|e| e.effect).collect();
+        let could_not_show: Vec<Effect> = d.powers.iter().filter(|p| !p.could_show()).map(|p| p.effect).collect();
         let forms: Vec<String> =
             planned.hidden.iter().map(|h| format!("{}{}", h.form, if h.level == 1 { "s" } else { "m" })).collect();
         line(&format!(
-            "set {i:3}: truth {:<40} [{}{}] -> {:<40} conf {:.2} held-out shrink {} truth shrink {}{}{} ({seconds:.0} s)",
+            "set {i:3}: truth {:<40} [{}{}] -> {:<40} conf {:.2} held-out shrink {} truth shrink {}{}{}{} ({seconds:.0} s)",
             name(&truth_effects),
             forms.join(","),
             if planned.phase_only { " phase-only" } else { "" },
@@ -534,6 +538,11 @@ pub fn run_benchmark(
                     data_weights.iter().map(|w| format!("{w:.1}")).collect::<Vec<_>>().join("/")
                 )
             },
+            if could_not_show.is_empty() {
+                String::new()
+            } else {
+                format!(" could not show {}", name(&could_not_show))
+            },
         ));
         rows.push(BenchmarkRow {
             truth: truth_effects,
@@ -546,6 +555,7 @@ pub fn run_benchmark(
             moves_statistics,
             baseline_within_noise,
             data_weights,
+            could_not_show,
             seconds,
         });
     }
@@ -634,6 +644,14 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         moved.len(),
         percent(moved_right, moved.len()),
         still.len(),
+    ));
+    // Whether a `none` on a single effect came with the warning that the
+    // records could not show that family: what keeps it from being sure.
+    let missed: Vec<&BenchmarkRow> = singles.iter().copied().filter(|r| r.verdict.is_empty()).collect();
+    let warned = count(&missed, &|r| r.truth.iter().any(|e| r.could_not_show.contains(e)));
+    text.push_str(&format!(
+        "  single-effect sets called none: {}; the diagnosis said the records could not show the hidden family on {warned} of them\n",
+        missed.len()
     ));
     let (both, lead) = (count(&pairs, &|r| r.all_right()), count(&pairs, &|r| r.leading_right()));
     text.push_str(&format!(
