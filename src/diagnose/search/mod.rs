@@ -37,6 +37,10 @@
 //! What a named form still leaves of the gap it was asked to explain is
 //! reported as its form misfit: real rigs never match a candidate's shape
 //! exactly, and an effect is named for the family, not the shape.
+//!
+//! Where nothing is named, [`power`] measures how surely these records
+//! would have shown each family at its smallest size of interest, and the
+//! `none` is no surer than the least of those.
 
 pub(crate) mod cv;
 mod family;
