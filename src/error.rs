@@ -53,6 +53,34 @@ impl Error {
     pub(crate) fn setting(what: impl Into<String>, message: impl Into<String>) -> Self {
         Error::InvalidSetting { what: what.into(), message: message.into() }
     }
+
+    /// Whether the engine cannot run the model it was given: it diverged,
+    /// or a parameter lies outside its range or where no allowed step count
+    /// resolves it. A search discards a trial model that fails so (its
+    /// parameters are the search's); a model a user gave is refused by it.
+    pub(crate) fn cannot_run(&self) -> bool {
+        matches!(self, Error::Diverged { .. } | Error::InvalidParameter { .. })
+    }
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A search discards a trial the engine cannot run, and only that: a
+    /// step count refused for a trial's parameters is such a failure, a
+    /// measurement or a file that cannot be read is not.
+    #[test]
+    fn only_a_model_the_engine_cannot_run_is_a_discarded_trial() {
+        let mut refused = crate::engine::Model::default();
+        refused.friction.b = f64::NAN;
+        let e = refused.validate().unwrap_err();
+        assert!(e.cannot_run(), "{e}");
+        assert!(Error::Diverged { point: "7 Hz".into(), message: "NaN".into() }.cannot_run());
+        let measurement = Error::Measurement { file: "run.csv".into(), line: Some(3), message: "bad".into() };
+        assert!(!measurement.cannot_run());
+        assert!(!Error::setting("cycles", "0").cannot_run());
+    }
+}

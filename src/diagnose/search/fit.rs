@@ -9,7 +9,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::score::{Scope, Score, add_heldout, count_of, gap_noise, gap_of, score};
 use crate::diagnose::search::cv::{mean_loss, pair_losses};
 use crate::engine::{Engine, Model};
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// One trial: a form's parameter values on top of a model, the friction
 /// law recalibrated, scored on the units of the view it was fitted on.
@@ -129,9 +129,9 @@ pub(crate) fn evaluate(
             .map(|(m, s, _)| (m, s))
     };
     let (model, scores) = match outcome {
-        Err(Error::Diverged { point, message }) => {
+        Err(e) if e.cannot_run() => {
             if tracing() {
-                eprintln!("{} [{}] {values:?}: diverged at {point}: {message}", variant.effect, variant.form);
+                eprintln!("{} [{}] {values:?}: {e}", variant.effect, variant.form);
             }
             return Ok(None);
         }
@@ -265,12 +265,12 @@ pub(crate) fn polish(
 ) -> Result<Option<Trial>> {
     let (model, scores, _) = match calibrate_and_score(&t.model, data, settings, engine, Some(slope), 1, Scope::Fitting)
     {
-        Err(Error::Diverged { .. }) => return Ok(None),
+        Err(e) if e.cannot_run() => return Ok(None),
         other => other?,
     };
     let (model, scores) = converge_law(model, scores, data, settings, engine)?;
     let searched_scores = match score(engine, &t.model, data, settings, Scope::Fitting) {
-        Err(Error::Diverged { .. }) => None,
+        Err(e) if e.cannot_run() => None,
         other => Some(other?),
     };
     let (model, scores) = match searched_scores {

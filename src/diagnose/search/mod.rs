@@ -55,7 +55,7 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexplained};
 use crate::engine::{Effect, Engine, Model};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use cv::{
     Contest, Entrant, NullLoss, UnitLosses, contest, fold_predictions, held_units, mean_loss, own_losses,
     own_losses_of, pair_losses, pair_losses_of, pool_predictions, unpaired,
@@ -566,7 +566,7 @@ fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettin
                 // without the effect, `wout` the fitted one.
                 mean_loss(&with, all()) - mean_loss(&wout, all())
             }
-            Err(Error::Diverged { .. }) => f64::NEG_INFINITY,
+            Err(e) if e.cannot_run() => f64::NEG_INFINITY,
             Err(e) => return Err(e),
         };
         if tracing() {

@@ -56,7 +56,7 @@ use crate::engine::effects::{
 };
 use crate::engine::reduce::wrap_angle;
 use crate::engine::{Effect, Engine, Model};
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// How surely the records would show one family at its reference size.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -113,7 +113,8 @@ pub(crate) fn powers(
         .map(|(effect, model, reference)| {
             let scores = match score(engine, &model, data, settings, Scope::All) {
                 Ok(s) => s,
-                Err(Error::Diverged { .. }) => return Ok(None),
+                // A reference the engine cannot run is skipped.
+                Err(e) if e.cannot_run() => return Ok(None),
                 Err(e) => return Err(e),
             };
             let rises: Vec<f64> = scores

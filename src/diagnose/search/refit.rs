@@ -12,7 +12,7 @@ use crate::diagnose::candidates::Context;
 use crate::diagnose::data::Data;
 use crate::diagnose::score::gap_of;
 use crate::engine::Engine;
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// The family refitted without each fold in the form it is named by (its
 /// best full-data fit's), from the member of that form its pool chose for
@@ -99,7 +99,7 @@ fn refit_fold(
         )?;
     }
     let (model, scores) = match converge_law(start.model, start.scores, view, search, engine) {
-        Err(Error::Diverged { .. }) => return Ok(None),
+        Err(e) if e.cannot_run() => return Ok(None),
         other => other?,
     };
     if tracing() {
