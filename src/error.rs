@@ -74,10 +74,12 @@ mod tests {
     /// measurement or a file that cannot be read is not.
     #[test]
     fn only_a_model_the_engine_cannot_run_is_a_discarded_trial() {
-        let mut refused = crate::engine::Model::default();
-        refused.friction.b = f64::NAN;
-        let e = refused.validate().unwrap_err();
-        assert!(e.cannot_run(), "{e}");
+        let refused = Error::InvalidParameter {
+            key: "friction.b".into(),
+            value: "-900".into(),
+            message: "needs 3e7 steps per period".into(),
+        };
+        assert!(refused.cannot_run(), "{refused}");
         assert!(Error::Diverged { point: "7 Hz".into(), message: "NaN".into() }.cannot_run());
         let measurement = Error::Measurement { file: "run.csv".into(), line: Some(3), message: "bad".into() };
         assert!(!measurement.cannot_run());
