@@ -325,6 +325,16 @@ impl Diagnosis {
     }
 }
 
+/// Where the simulated replicates' records lie in each run, s from its
+/// start: after the warm-up (its cycles at the data's mean frequency), for
+/// the longest record's length. What a drift's nominal force is the mean
+/// over, in a fitted model and in the power's reference.
+pub(crate) fn records_window_s(data: &Data<'_>, settings: &DiagnoseSettings) -> [f64; 2] {
+    let frequency = mean(&data.units.iter().map(|u| u.condition.excitation_frequency_hz).collect::<Vec<_>>());
+    let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
+    [start, start + data.longest_record_s.max(1e-3)]
+}
+
 /// Arithmetic mean; 0 for no values.
 pub(crate) fn mean(values: &[f64]) -> f64 {
     values.iter().sum::<f64>() / values.len().max(1) as f64
@@ -436,9 +446,7 @@ pub fn diagnose_set(
     // the records' window (the replicates' warm-up at the data's mean
     // frequency, then the records' length), and a sweep at it gives it.
     if let Some(d) = fitted.effects.normal_force_drift.as_mut() {
-        let frequency = mean(&data.units.iter().map(|u| u.condition.excitation_frequency_hz).collect::<Vec<_>>());
-        let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
-        d.mean_over_s = Some([start, start + data.longest_record_s.max(1e-3)]);
+        d.mean_over_s = Some(records_window_s(&data, settings));
     }
     let fitted_folds = selection.fitted_folds();
     let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())

@@ -48,7 +48,7 @@ use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::search::cv::{NullLoss, loss};
 use crate::diagnose::search::fit::fits_per_task;
-use crate::diagnose::{DiagnoseSettings, mean};
+use crate::diagnose::{DiagnoseSettings, mean, records_window_s};
 use crate::engine::effects::{
     ColourForm, ColouredFrictionNoise, DriftForm, FrictionHysteresis, HarmonicForm, HysteresisForm,
     LoadDependentFriction, LoadForm, NonGaussianForm, NonGaussianFriction, NormalForceDrift, NormalForceHarmonics,
@@ -199,42 +199,33 @@ fn reference(
             "half the friction noise's variance correlated over ten noise intervals".to_string()
         }
         Effect::Stiction => {
-            let at_rest = (baseline.friction.a + baseline.friction.b).max(baseline.friction.a);
-            m.effects.stiction = Some(Stiction {
-                form: StictionForm::Constant,
-                excess: 0.2 * at_rest,
-                release_length_m: 0.0,
-                dwell_time_s: 0.0,
-            });
-            format!("a breakaway friction 20% above the law at rest (Δμ = {:.4})", 0.2 * at_rest)
+            let excess = 0.2 * (baseline.friction.a + baseline.friction.b).max(baseline.friction.a);
+            m.effects.stiction =
+                Some(Stiction { form: StictionForm::Constant, excess, release_length_m: 0.0, dwell_time_s: 0.0 });
+            format!("a breakaway friction 20% above the law at rest (Δμ = {excess:.4})")
         }
         Effect::LoadDependentFriction => {
-            let (&least, &most) = (loads.first()?, loads.last()?);
-            if loads.len() < 2 || least <= 0.0 {
+            let (&lightest, &heaviest) = (loads.first()?, loads.last()?);
+            if loads.len() < 2 || lightest <= 0.0 {
                 return None;
             }
             m.effects.load_dependent_friction = Some(LoadDependentFriction {
                 form: LoadForm::Power,
-                strength: 1.1f64.ln() / (most / least).ln(),
+                strength: 1.1f64.ln() / (heaviest / lightest).ln(),
                 curvature_per_n2: 0.0,
-                reference_force_n: (least * most).sqrt(),
+                reference_force_n: (lightest * heaviest).sqrt(),
             });
-            format!("a friction 10% higher at {most:.3} N than at {least:.3} N (power law)")
+            format!("a friction 10% higher at {heaviest:.3} N than at {lightest:.3} N (power law)")
         }
         Effect::NormalForceDrift => {
-            let record_s = data.longest_record_s;
-            if record_s <= 0.0 {
+            if data.longest_record_s <= 0.0 {
                 return None;
             }
-            // The records start after the replicates' warm-up, at the
-            // data's mean frequency, as a fitted drift's mean is taken.
-            let frequency = mean(&data.units.iter().map(|u| u.condition.excitation_frequency_hz).collect::<Vec<_>>());
-            let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
             m.effects.normal_force_drift = Some(NormalForceDrift {
                 form: DriftForm::Linear,
-                rate_per_s: 0.05 / record_s,
+                rate_per_s: 0.05 / data.longest_record_s,
                 curvature_per_s2: 0.0,
-                mean_over_s: Some([start, start + record_s]),
+                mean_over_s: Some(records_window_s(data, settings)),
             });
             "a normal force moving 5% over the longest record".to_string()
         }
