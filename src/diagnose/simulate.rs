@@ -31,8 +31,8 @@ const REPLICATE_STRIDE: u32 = 1000;
 const REPLICATE_STEPS_PER_PERIOD: u32 = 32;
 
 /// Replicates `numbers` (of `0..settings.replicates`, say) of each unit of
-/// `units` under `model`, in one engine job (a point per unit; how many
-/// units a job should hold is the engine's [`Engine::record_points_per_job`]):
+/// `units` under `model`, in one engine job (a point per unit; which
+/// units a job should hold is the engine's [`Engine::record_jobs`]):
 /// records as long as the unit's, sampled like the data (at the noise
 /// boundaries, the noise interval being the data's sample interval), with
 /// the measurement noise estimated on the data added. Every unit of `units`
@@ -149,12 +149,18 @@ fn readings_of(
     if !short.is_empty() {
         let c = data.law_c;
         let sensor_v = data.sensor.v_m_per_s;
-        let per_job = engine.record_points_per_job();
         let mut added = BTreeMap::new();
         for ((have, _), group) in short {
             let numbers = have as u32..settings.replicates;
-            let read: Vec<Vec<Vec<RecordReading>>> = group
-                .par_chunks(per_job)
+            let frequencies: Vec<f64> =
+                group.iter().map(|&u| data.units[u].condition.excitation_frequency_hz).collect();
+            let jobs: Vec<Vec<usize>> = engine
+                .record_jobs(&frequencies)
+                .into_iter()
+                .map(|job| job.iter().map(|&i| group[i]).collect())
+                .collect();
+            let read: Vec<Vec<Vec<RecordReading>>> = jobs
+                .par_iter()
                 .map(|units| {
                     let runs = replicates(engine, model, data, settings, units, numbers.clone())?;
                     // Read record by record, in parallel, each on its unit's
@@ -179,7 +185,7 @@ fn readings_of(
                     Ok(runs.iter().map(|r| readings.by_ref().take(r.len()).collect()).collect())
                 })
                 .collect::<Result<_>>()?;
-            for (u, readings) in group.into_iter().zip(read.into_iter().flatten()) {
+            for (&u, readings) in jobs.iter().flatten().zip(read.into_iter().flatten()) {
                 let all = kept.entry(u).or_default();
                 all.extend(readings);
                 added.insert(u, all.clone());

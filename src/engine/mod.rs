@@ -475,18 +475,38 @@ impl Engine {
         self.backend.kind()
     }
 
-    /// How many points a job of time-series records should hold where
-    /// such jobs run side by side on rayon's threads (a diagnosis's
-    /// measured units). One on the CPU reference: the job then runs on the
-    /// thread that asked, and its records are read there while only they
-    /// are in memory (one job of every unit holds all of a trial's records
-    /// at once, hundreds of megabytes, and pays for them in page faults).
-    /// Every point on a GPU that samples the records itself: its dispatch
+    /// Whether jobs of time-series records run side by side on rayon's
+    /// threads, each on the CPU reference (true there, and where a GPU
+    /// leaves records to the CPU), rather than one at a time on a GPU
+    /// that samples them itself.
+    pub fn records_side_by_side(&self) -> bool {
+        self.backend.kind() == BackendKind::Cpu || self.records_on_cpu
+    }
+
+    /// The points of a set of time-series records (a diagnosis's measured
+    /// units, at `frequencies_hz`) cut into jobs, as indices. Where records
+    /// run side by side ([`Engine::records_side_by_side`]), a job holds the
+    /// points of one frequency: their realisations step together in lane
+    /// groups whatever their loads, and the job runs on the thread that
+    /// asked, its records read there while only they are in memory (one job
+    /// of every unit holds all of a trial's records at once, hundreds of
+    /// megabytes, and pays for them in page faults). On a GPU that samples
+    /// the records itself, up to [`Job::MAX_POINTS`] a job: its dispatch
     /// integrates all of a job's realisations at once, where jobs of one
-    /// unit each would take turns on it, all but idle
-    /// (`benches/RESULTS.md`).
-    pub fn record_points_per_job(&self) -> usize {
-        if self.backend.kind() == BackendKind::Cpu || self.records_on_cpu { 1 } else { Job::MAX_POINTS }
+    /// unit each would take turns on it, all but idle (`benches/RESULTS.md`).
+    pub fn record_jobs(&self, frequencies_hz: &[f64]) -> Vec<Vec<usize>> {
+        let points: Vec<usize> = (0..frequencies_hz.len()).collect();
+        if !self.records_side_by_side() {
+            return points.chunks(Job::MAX_POINTS).map(<[usize]>::to_vec).collect();
+        }
+        let mut jobs: Vec<(u64, Vec<usize>)> = Vec::new();
+        for (p, f) in frequencies_hz.iter().enumerate() {
+            match jobs.iter_mut().find(|(bits, _)| *bits == f.to_bits()) {
+                Some((_, job)) => job.push(p),
+                None => jobs.push((f.to_bits(), vec![p])),
+            }
+        }
+        jobs.into_iter().map(|(_, job)| job).collect()
     }
 
     /// One line: the backend, its adapter or threads, and why it was chosen.

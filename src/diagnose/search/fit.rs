@@ -56,14 +56,14 @@ pub(crate) fn search_settings(settings: &DiagnoseSettings) -> DiagnoseSettings {
 /// How many of a round's independent fits (coarse fits, full searches,
 /// refits without each fold) one rayon task takes, for
 /// `with_min_len`: one, so all run side by side, where a trial's records
-/// are a job per unit read where it ran (a few MB each, on the CPU
+/// are a job per frequency read where it ran (a few MB each, on the CPU
 /// reference); all of them, one after another, where a trial's records
 /// are one job (a GPU that samples them), which holds every record of the
 /// trial in host memory at once (some 90 MB for 18 runs on search
 /// replicates, nine times that for 162): side by side on every thread,
 /// that would multiply by the threads.
 pub(crate) fn fits_per_task(engine: &Engine) -> usize {
-    if engine.record_points_per_job() == 1 { 1 } else { usize::MAX }
+    if engine.records_side_by_side() { 1 } else { usize::MAX }
 }
 
 /// A model with its scores.

@@ -4,8 +4,9 @@
 //!
 //! Work is done in chunks of at most [`PATHS_PER_CHUNK`] realisations, so
 //! memory stays bounded (for [`Record::Sums`]) whatever the ensemble size;
-//! within a chunk, groups of realisations of one point run in parallel,
-//! each group stepped together (`oscillator::LANES` of them). The sums are
+//! within a chunk, groups of realisations run in parallel, each group
+//! stepped together (`oscillator::LANES` of them, of one point or of
+//! several loads at one frequency, `oscillator::steps_beside`). The sums are
 //! integers, so the result does not depend on the chunking or the number
 //! of threads.
 
@@ -64,18 +65,16 @@ impl Backend for CpuBackend {
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
                 let end = (start + chunk).min(total_paths);
-                let records: Vec<Vec<Sample>> = lane_groups(job, start, end, lane_width(end - start))
+                let records: Vec<Vec<Sample>> = lane_groups(job, &oscillators, start, end, lane_width(end - start))
                     .into_par_iter()
-                    .flat_map_iter(|(p, realisations)| {
+                    .flat_map_iter(|group| {
                         sample_records(
-                            &oscillators[p],
                             job.seed,
-                            &realisations,
+                            &lanes_of(job, &oscillators, &group),
                             job.plan.warmup_cycles,
                             duration_s,
                             interval_s,
                             at_noise_boundaries,
-                            job.points[p].initial,
                             shared,
                         )
                     })
@@ -95,11 +94,10 @@ impl Backend for CpuBackend {
         let mut done = 0u64;
         for start in (0..total_paths).step_by(chunk) {
             let end = (start + chunk).min(total_paths);
-            let paths: Vec<PathResult> = lane_groups(job, start, end, lane_width(end - start))
+            let paths: Vec<PathResult> = lane_groups(job, &oscillators, start, end, lane_width(end - start))
                 .into_par_iter()
-                .flat_map_iter(|(p, realisations)| {
-                    let initial = job.points[p].initial;
-                    simulate_paths(&oscillators[p], job.seed, &realisations, job.plan, initial, shared, None)
+                .flat_map_iter(|group| {
+                    simulate_paths(job.seed, &lanes_of(job, &oscillators, &group), job.plan, shared, None)
                 })
                 .collect();
             for (i, path) in (start..end).zip(&paths) {
@@ -182,7 +180,25 @@ fn diverged(job: &Job<'_>, point: usize, realisation: u32, what: &str) -> Error 
 /// Most samples a record reserves room for before it is taken.
 const MAX_RESERVED_SAMPLES: f64 = 1e7;
 
-/// Realisations (at most [`LANES`], stepped together) sampled like a
+/// One realisation of a lane group: its point's oscillator and initial
+/// state, and its realisation number.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lane<'a> {
+    pub(crate) osc: &'a Oscillator,
+    pub(crate) realisation: u32,
+    pub(crate) initial: InitialState,
+}
+
+/// The lanes of a group of the job's tasks (point, realisation).
+fn lanes_of<'a>(job: &Job<'_>, oscillators: &'a [Oscillator], group: &[(usize, u32)]) -> Vec<Lane<'a>> {
+    group
+        .iter()
+        .map(|&(p, realisation)| Lane { osc: &oscillators[p], realisation, initial: job.points[p].initial })
+        .collect()
+}
+
+/// Realisations (at most [`LANES`], of oscillators that step together,
+/// [`oscillator::steps_beside`]) stepped together and sampled like a
 /// measured record: `seconds` of samples every `sample_interval_s`, starting
 /// after `warmup_cycles` periods, with times measured from the end of the
 /// warm-up. With `at_noise_boundaries` and samples as far apart as the noise
@@ -190,18 +206,17 @@ const MAX_RESERVED_SAMPLES: f64 = 1e7;
 /// boundaries themselves, from the first one at or after the warm-up's end
 /// (so the first sample's time is within one interval of 0): samples then
 /// split no steps.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_records(
-    osc: &Oscillator,
     seed: u64,
-    realisations: &[u32],
+    lanes: &[Lane<'_>],
     warmup_cycles: u32,
     seconds: f64,
     sample_interval_s: f64,
     at_noise_boundaries: bool,
-    initial: InitialState,
     shared: bool,
 ) -> Vec<Vec<Sample>> {
+    // The step grid is every lane's.
+    let osc = lanes[0].osc;
     let start_s = f64::from(warmup_cycles) * osc.period_s;
     let cycles = record_cycles(osc, seconds);
     let aligned = samples_at_noise_boundaries(osc, sample_interval_s, at_noise_boundaries);
@@ -210,7 +225,7 @@ pub(crate) fn sample_records(
     // record grows as before).
     let expected = (f64::from(cycles) * osc.period_s / sample_interval_s).ceil();
     let room = if (0.0..=MAX_RESERVED_SAMPLES).contains(&expected) { expected as usize + 2 } else { 0 };
-    let mut samplers: Vec<Sampler> = realisations
+    let mut samplers: Vec<Sampler> = lanes
         .iter()
         .map(|_| {
             let mut sampler = if aligned {
@@ -223,7 +238,7 @@ pub(crate) fn sample_records(
         })
         .collect();
     let plan = RunPlan { warmup_cycles, measured_cycles: cycles };
-    simulate_paths(osc, seed, realisations, plan, initial, shared, Some(&mut samplers));
+    simulate_paths(seed, lanes, plan, shared, Some(&mut samplers));
     samplers
         .into_iter()
         .map(|sampler| {
@@ -237,34 +252,36 @@ pub(crate) fn sample_records(
         .collect()
 }
 
-/// Runs realisations `realisations` (at most [`LANES`]) of `osc`, stepped
-/// together, and returns each one's per-period peaks and phases; with
-/// `samplers` (one per realisation), samples each. With `shared`, each
-/// realisation's main-stream draws come from a shared table ([`noise`]),
-/// made now unless held; without, from one if it is held. The answers are
-/// the same either way.
+/// Runs `lanes` (at most [`LANES`], of oscillators that step together,
+/// [`oscillator::steps_beside`]) stepped together, and returns each one's
+/// per-period peaks and phases; with `samplers` (one per lane), samples
+/// each. With `shared`, each realisation's main-stream draws come from a
+/// shared table ([`noise`]), made now unless held; without, from one if it
+/// is held. The answers are the same either way, and each lane's are those
+/// it has stepped alone.
 pub(crate) fn simulate_paths(
-    osc: &Oscillator,
     seed: u64,
-    realisations: &[u32],
+    lanes: &[Lane<'_>],
     plan: RunPlan,
-    initial: InitialState,
     shared: bool,
     mut samplers: Option<&mut [Sampler]>,
 ) -> Vec<PathResult> {
-    // The intervals the run draws (the last boundary's included).
-    let intervals = osc.noise_intervals_in(u64::from(plan.warmup_cycles + plan.measured_cycles)) + 1;
-    let mut lanes: Vec<Path<'_>> = realisations
+    // The intervals the run draws (the last boundary's included; the step
+    // grid is every lane's).
+    let intervals = lanes[0].osc.noise_intervals_in(u64::from(plan.warmup_cycles + plan.measured_cycles)) + 1;
+    let mut paths: Vec<Path<'_>> = lanes
         .iter()
-        .map(|&r| {
-            let mut path = Path::new(osc, seed, r, initial);
+        .map(|lane| {
+            debug_assert!(oscillator::steps_beside(lanes[0].osc, lane.osc));
+            let r = lane.realisation;
+            let mut path = Path::new(lane.osc, seed, r, lane.initial);
             let table =
                 u64::try_from(intervals).ok().and_then(|n| noise::pair_a_table(rng::seed_key(seed), r, n, shared));
             path.pair_a_table = noise::PathPairs(table);
             path
         })
         .collect();
-    let mut results: Vec<PathResult> = realisations
+    let mut results: Vec<PathResult> = lanes
         .iter()
         .map(|_| PathResult {
             peaks_m: Vec::with_capacity(plan.measured_cycles as usize),
@@ -274,9 +291,9 @@ pub(crate) fn simulate_paths(
         .collect();
     for cycle in 0..plan.warmup_cycles + plan.measured_cycles {
         let measuring = cycle >= plan.warmup_cycles;
-        run_period(&mut lanes, measuring, samplers.as_deref_mut());
+        run_period(&mut paths, measuring, samplers.as_deref_mut());
         if measuring {
-            for (path, result) in lanes.iter().zip(&mut results) {
+            for (path, result) in paths.iter().zip(&mut results) {
                 result.peaks_m.push(path.period_max_x_m);
                 result.phases_rad.push(phase_of(path.period_cos_integral, path.period_sin_integral));
                 result.stick_time_s += path.period_stick_s;
@@ -290,7 +307,7 @@ pub(crate) fn simulate_paths(
 /// widest of [`LANE_WIDTHS`] (else 1) that still leaves a group for
 /// every thread, so a small run (`simulate`'s three records, one point of
 /// eight) keeps both cores busy; [`LANES`] when the run is itself one of
-/// several in parallel (a diagnosis simulates its units side by side), whose
+/// several in parallel (a diagnosis simulates each frequency's units side by side), whose
 /// caller fills the cores.
 fn lane_width(tasks: usize) -> usize {
     if rayon::current_thread_index().is_some() {
@@ -301,21 +318,35 @@ fn lane_width(tasks: usize) -> usize {
 }
 
 /// The job's tasks from `start` to `end` (numbered point-major,
-/// `job.realisations` each) cut into groups of realisations of one point
-/// that step together, in order, at most `width` ([`lane_width`]) each:
-/// the widest of [`LANE_WIDTHS`] there are as many left for, then one
-/// by one (fewer step one by one anyway, and alone they run in parallel):
-/// (point, realisations).
-fn lane_groups(job: &Job<'_>, start: usize, end: usize, width: usize) -> Vec<(usize, Vec<u32>)> {
+/// `job.realisations` each) cut into groups that step together, in order,
+/// at most `width` ([`lane_width`]) each: the widest of [`LANE_WIDTHS`]
+/// there are as many left for, then one by one (fewer step one by one
+/// anyway, and alone they run in parallel). A group may run on from one
+/// point into the next where their oscillators step together
+/// ([`oscillator::steps_beside`]: the loads of one frequency), so a
+/// diagnosis's few realisations per load fill wide groups. Each task is
+/// (point, realisation).
+fn lane_groups(
+    job: &Job<'_>,
+    oscillators: &[Oscillator],
+    start: usize,
+    end: usize,
+    width: usize,
+) -> Vec<Vec<(usize, u32)>> {
     let n = job.realisations as usize;
+    // Where the run of points that step beside each one ends (stepping
+    // beside is sameness but for the load: a chain is a run).
+    let mut run_end = vec![oscillators.len(); oscillators.len()];
+    for p in (0..oscillators.len().saturating_sub(1)).rev() {
+        run_end[p] =
+            if oscillator::steps_beside(&oscillators[p], &oscillators[p + 1]) { run_end[p + 1] } else { p + 1 };
+    }
     let mut groups = Vec::new();
     let mut i = start;
     while i < end {
-        let point = i / n;
-        let left = end.min((point + 1) * n) - i;
+        let left = end.min(run_end[i / n] * n) - i;
         let group_end = i + LANE_WIDTHS.into_iter().find(|&w| w <= width && left >= w).unwrap_or(1);
-        let realisations = (i..group_end).map(|k| job.realisation(point, (k % n) as u32)).collect();
-        groups.push((point, realisations));
+        groups.push((i..group_end).map(|k| (k / n, job.realisation(k / n, (k % n) as u32))).collect());
         i = group_end;
     }
     groups
@@ -327,17 +358,19 @@ mod tests {
     use crate::engine::{Condition, Model, Point};
     use oscillator::QUARTER_LANES;
 
-    /// Lane groups cover the chunk's tasks once, in order, never straddle
-    /// two points, and take sixteen while sixteen are left, then eight, then
-    /// four, then one by one (29 realisations per point: 16, 8, 4, 1), none
-    /// wider than asked.
+    /// Lane groups cover the chunk's tasks once, in order, and take sixteen
+    /// while sixteen are left, then eight, then four, then one by one
+    /// (29 realisations per point: 16, 8, 4, 1), none wider than asked;
+    /// they run on from one point into the next at the same frequency
+    /// (the loads of one model step together) and never into another
+    /// frequency's.
     #[test]
-    fn lane_groups_cover_the_tasks_in_order_within_points() {
+    fn lane_groups_cover_the_tasks_in_order_within_a_frequency() {
         let model = Model::paper_rig(&[]).expect("the paper rig");
-        let points: Vec<Point> = [4.0, 8.0]
-            .iter()
-            .map(|&n| Point::steady(&model, Condition { excitation_frequency_hz: 7.0, normal_force_n: n }))
-            .collect();
+        let at = |f: f64, n: f64| Point::steady(&model, Condition { excitation_frequency_hz: f, normal_force_n: n });
+        let points = [at(7.0, 4.0), at(8.0, 8.0), at(8.0, 12.0)];
+        let oscillators: Vec<Oscillator> =
+            points.iter().map(|p| Oscillator::new(&model, p.condition).expect("an oscillator")).collect();
         let job = Job {
             model: &model,
             points: &points,
@@ -347,18 +380,29 @@ mod tests {
             plan: RunPlan { warmup_cycles: 0, measured_cycles: 1 },
             record: Record::Sums,
         };
-        let sizes = |start, end| lane_groups(&job, start, end, LANES).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        let groups = |start, end, width| lane_groups(&job, &oscillators, start, end, width);
+        let sizes = |start, end| groups(start, end, LANES).iter().map(Vec::len).collect::<Vec<_>>();
         let (half, quarter) = (LANES / 2, QUARTER_LANES);
-        assert_eq!(sizes(0, 58), [LANES, half, quarter, 1, LANES, half, quarter, 1]);
-        let narrow = lane_groups(&job, 0, 29, quarter).iter().map(|(_, r)| r.len()).collect::<Vec<_>>();
+        // 7 Hz alone; then 8 Hz's two loads, 58 tasks: 16, 16, 16, 8, 1, 1.
+        assert_eq!(sizes(0, 87), [LANES, half, quarter, 1, LANES, LANES, LANES, half, 1, 1]);
+        let straddling = &groups(0, 87, LANES)[5];
+        assert_eq!(straddling.first().map(|t| t.0), Some(1));
+        assert_eq!(straddling.last().map(|t| t.0), Some(2));
+        let narrow = groups(0, 29, quarter).iter().map(Vec::len).collect::<Vec<_>>();
         assert_eq!(narrow, [quarter, quarter, quarter, quarter, quarter, quarter, quarter, 1]);
-        assert_eq!(lane_groups(&job, 0, 3, 1).len(), 3);
+        assert_eq!(groups(0, 3, 1).len(), 3);
         // A chunk that starts and ends inside points.
-        let groups = lane_groups(&job, 5, 43, LANES);
-        let tasks: Vec<(usize, u32)> = groups.iter().flat_map(|(p, rs)| rs.iter().map(move |&r| (*p, r))).collect();
+        let tasks: Vec<(usize, u32)> = groups(5, 43, LANES).into_iter().flatten().collect();
         let expected: Vec<(usize, u32)> = (5..43).map(|i| (i / 29, 100 + (i % 29) as u32)).collect();
         assert_eq!(tasks, expected);
         assert_eq!(sizes(5, 43), [LANES, half, half, quarter, 1, 1]);
+        // Another model's oscillator at the same frequency and load does
+        // not step beside this one's.
+        let rough = Model::paper_rig(&["friction.a=0.3".to_string()]).expect("a rougher rig");
+        let other = Oscillator::new(&rough, points[1].condition).expect("an oscillator");
+        assert!(!oscillator::steps_beside(&oscillators[1], &other));
+        assert!(oscillator::steps_beside(&oscillators[1], &oscillators[2]));
+        assert!(!oscillator::steps_beside(&oscillators[0], &oscillators[1]));
     }
 
     fn bits(values: &[f64]) -> Vec<u64> {
@@ -375,10 +419,13 @@ mod tests {
     /// over a slip length, and a friction memory, one more state of the
     /// step: a time lag, the slip law, the ageing law with adhesion),
     /// with the main stream's draws read from shared tables and drawn side
-    /// by side.
+    /// by side; and with every other lane at a second load, under effects
+    /// whose terms differ between loads (a friction offset, the law scaled
+    /// by the load, harmonics in proportion to it, a non-Gaussian noise
+    /// that grows with it).
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
-        let cases: [&[&str]; 9] = [
+        let cases: [&[&str]; 13] = [
             &[],
             &[
                 "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
@@ -402,6 +449,16 @@ mod tests {
                 "load_dependent_friction.form=\"adhesion\"",
                 "load_dependent_friction.strength=0.5",
             ],
+            &["load_dependent_friction.form=\"power\"", "load_dependent_friction.strength=-0.3"],
+            &[
+                "load_dependent_friction.form=\"scaled\"",
+                "load_dependent_friction.strength=-0.4",
+                "normal_force_harmonics.amplitudes_per_n0=[0.03, 0.0, 0.01, 0.0]",
+            ],
+            &["non_gaussian_friction.strength=0.3", "non_gaussian_friction.load_exponent=1.0"],
+            // A law that rises with speed from rest: more steps per
+            // period at the heavier load, all longer than the noise's.
+            &["friction.b=-0.1", "friction.c=300.0", "friction.a=0.35"],
         ];
         for (case, overrides, lanes) in cases.into_iter().enumerate().flat_map(|(i, c)| LANE_WIDTHS.map(|w| (i, c, w)))
         {
@@ -409,43 +466,62 @@ mod tests {
             let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
             let model = Model::paper_rig(&overrides).expect("the paper rig");
             for hz in [7.0, 12.0] {
-                let condition = Condition { excitation_frequency_hz: hz, normal_force_n: 16.39 };
-                let osc = Oscillator::new(&model, condition).expect("an oscillator");
                 let initial = InitialState { x_m: 0.0, v_m_per_s: 0.0 };
-                let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
-                // With the draws from shared tables, and drawn side by side
-                // (under a seed of its own, which no table holds: a held
-                // table serves a path that would not make one).
-                for shared in [true, false] {
-                    let seed = if shared { 9 } else { 0x5EED_0000 + 100 * case as u64 + hz as u64 + lanes as u64 };
-                    let alone: Vec<PathResult> = realisations
-                        .iter()
-                        .map(|&r| simulate_paths(&osc, seed, &[r], plan, initial, false, None).remove(0))
-                        .collect();
-                    let together = simulate_paths(&osc, seed, &realisations, plan, initial, shared, None);
-                    let mut stuck = 0;
-                    for ((r, path), alone) in realisations.iter().zip(&together).zip(&alone) {
-                        let what = format!("{overrides:?} at {hz} Hz, realisation {r}, shared tables {shared}");
-                        assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
-                        assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
-                        assert_eq!(path.stick_time_s.to_bits(), alone.stick_time_s.to_bits(), "stuck time, {what}");
-                        stuck += usize::from(path.stick_time_s > 0.0);
-                    }
-                    if hz == 12.0 && overrides.is_empty() {
-                        assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
-                    }
+                let at = |n: f64| {
+                    Oscillator::new(&model, Condition { excitation_frequency_hz: hz, normal_force_n: n })
+                        .expect("an oscillator")
+                };
+                let (heavy, light) = (at(16.39), at(9.0));
+                assert!(oscillator::steps_beside(&heavy, &light), "{overrides:?} at {hz} Hz");
+                if case == 12 && hz == 7.0 {
+                    assert!(heavy.steps_per_period > light.steps_per_period, "{overrides:?} at {hz} Hz");
                 }
-                let records = sample_records(&osc, 9, &realisations, 3, 1.0, 1.0 / 600.0, true, initial, true);
-                for (r, record) in realisations.iter().zip(&records) {
-                    let alone = sample_records(&osc, 9, &[*r], 3, 1.0, 1.0 / 600.0, true, initial, false).remove(0);
-                    assert_eq!(record.len(), 600);
-                    let flat = |s: &[Sample]| -> Vec<u64> {
-                        s.iter()
-                            .flat_map(|s| [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n])
-                            .map(f64::to_bits)
-                            .collect()
-                    };
-                    assert_eq!(flat(record), flat(&alone), "record, {overrides:?} at {hz} Hz, realisation {r}");
+                let one_load: Vec<Lane<'_>> =
+                    realisations.iter().map(|&realisation| Lane { osc: &heavy, realisation, initial }).collect();
+                let mut two_loads = one_load.clone();
+                two_loads.iter_mut().skip(1).step_by(2).for_each(|lane| lane.osc = &light);
+                let plan = RunPlan { warmup_cycles: 3, measured_cycles: 12 };
+                for (loads, group) in [(1, &one_load), (2, &two_loads)] {
+                    // With the draws from shared tables, and drawn side by
+                    // side (under a seed of its own, which no table holds: a
+                    // held table serves a path that would not make one).
+                    for shared in [true, false] {
+                        let seed = if shared { 9 } else { 0x5EED_0000 + 100 * case as u64 + hz as u64 + lanes as u64 };
+                        let alone: Vec<PathResult> = group
+                            .iter()
+                            .map(|lane| simulate_paths(seed, &[*lane], plan, false, None).remove(0))
+                            .collect();
+                        let together = simulate_paths(seed, group, plan, shared, None);
+                        let mut stuck = 0;
+                        for ((lane, path), alone) in group.iter().zip(&together).zip(&alone) {
+                            let (r, n) = (lane.realisation, lane.osc.normal_force_mean_n);
+                            let what = format!("{overrides:?} at {hz} Hz and {n} N, realisation {r}, shared {shared}");
+                            assert_eq!(bits(&path.peaks_m), bits(&alone.peaks_m), "peaks, {what}");
+                            assert_eq!(bits(&path.phases_rad), bits(&alone.phases_rad), "phases, {what}");
+                            assert_eq!(path.stick_time_s.to_bits(), alone.stick_time_s.to_bits(), "stuck, {what}");
+                            stuck += usize::from(path.stick_time_s > 0.0);
+                        }
+                        if hz == 12.0 && overrides.is_empty() && loads == 1 {
+                            assert_eq!(stuck, lanes, "every realisation sticks at 12 Hz");
+                        }
+                    }
+                    let records = sample_records(9, group, 3, 1.0, 1.0 / 600.0, true, true);
+                    for (lane, record) in group.iter().zip(&records) {
+                        let alone = sample_records(9, &[*lane], 3, 1.0, 1.0 / 600.0, true, false).remove(0);
+                        assert_eq!(record.len(), 600);
+                        let flat = |s: &[Sample]| -> Vec<u64> {
+                            s.iter()
+                                .flat_map(|s| [s.t_s, s.x_m, s.v_m_per_s, s.normal_force_n, s.friction_force_n])
+                                .map(f64::to_bits)
+                                .collect()
+                        };
+                        let (r, n) = (lane.realisation, lane.osc.normal_force_mean_n);
+                        assert_eq!(
+                            flat(record),
+                            flat(&alone),
+                            "record, {overrides:?} at {hz} Hz and {n} N, realisation {r}"
+                        );
+                    }
                 }
             }
         }

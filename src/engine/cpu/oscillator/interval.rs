@@ -7,9 +7,10 @@ use super::*;
 const _: () = assert!(LANES.is_multiple_of(rng::SIDE_BY_SIDE));
 
 /// [`Path::draw_noise`] of every path in `lanes` (at the same interval of
-/// one oscillator): lanes without a table draw their pairs side by side;
-/// where the noise is white and nothing of it depends on the path's own
-/// state ([`Path::plain_noise`]), the parts common to all are computed once
+/// oscillators that step together, [`steps_beside`]): lanes without a
+/// table draw their pairs side by side; where the noise is white and
+/// nothing of it depends on the path's own state ([`Path::plain_noise`]),
+/// the parts common to an oscillator's lanes are computed once for them
 /// and each lane's values come straight from its pair.
 pub(super) fn draw_lanes_noise(lanes: &mut [Path<'_>]) {
     // Lanes read their tables (the usual case: one lane's answer is all
@@ -17,8 +18,18 @@ pub(super) fn draw_lanes_noise(lanes: &mut [Path<'_>]) {
     let drawn = (lanes.len() > 1 && lanes[0].draws_pair_a() && lanes.iter().all(Path::draws_pair_a))
         .then(|| pairs_side_by_side(lanes));
     if lanes[0].plain_noise() {
-        let (mean_n, harmonics_n) = lanes[0].interval_load();
+        // The lanes of one load are usually neighbours: the last load's
+        // parts serve until the oscillator changes.
+        let mut load: Option<(&Oscillator, (f64, f64))> = None;
         for (l, path) in lanes.iter_mut().enumerate() {
+            let (mean_n, harmonics_n) = match load {
+                Some((osc, parts)) if std::ptr::eq(osc, path.osc) => parts,
+                _ => {
+                    let parts = path.interval_load();
+                    load = Some((path.osc, parts));
+                    parts
+                }
+            };
             let pair = drawn.as_ref().map_or_else(|| path.pair_a(), |pairs| pairs[l]);
             path.draw_plain_noise(pair, mean_n, harmonics_n);
             path.pair_a_table.prefetch(path.interval);

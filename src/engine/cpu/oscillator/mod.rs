@@ -41,7 +41,7 @@
 //! | a `bristle` stick's slider anchor w | kept in the path | recomputed from x at each dispatch's start (a period start), as the path states keep no anchor | the same w within f32 rounding; the states' layout is shared with the host |
 //! | noise interval index | u64 | u32 (runs are refused past 2³² intervals) | WGSL has no u64 |
 //! | normal-force harmonics' `cos((k+1)θ + φ)` per interval | one `sin_cos` of θ, rotated to (k+1)θ, turned by φ's stored (cos, sin) | a `cos` per harmonic | libm's `cos` was 13% of a diagnosis of harmonics in the CPU reference; the CPU's sum is within 1e-14 N of the direct one (`harmonics_by_angle_addition_match_a_cos_per_harmonic`) |
-//! | realisations per thread | up to `LANES` of one point, stepped together: each grid step's slip step for all as vector code (`simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
+//! | realisations per thread | up to `LANES` of one point, or of several loads at one frequency (`steps_beside`), stepped together: each grid step's slip step for all as vector code (`simd`), then events one lane at a time (`run_period`), velocity zeros met in the same step located side by side (`zeros`); their noise drawn side by side, or read from tables their realisations' other paths share (`noise`) | one per invocation | the GPU's SIMD already runs invocations side by side; on the CPU one realisation alone waits out each stage's latency. The answers are those of one at a time, bit for bit |
 //!
 //! Output samples (records) between noise boundaries split steps on the CPU
 //! only; records sampled at the noise boundaries split none, and the GPU
@@ -57,7 +57,8 @@ mod zeros;
 
 #[cfg(test)]
 pub(crate) use period::QUARTER_LANES;
-pub(crate) use period::{LANE_WIDTHS, LANES, Sampler, run_period};
+pub(crate) use period::{LANE_WIDTHS, Sampler, run_period};
+pub(crate) use simd::LANES;
 
 use crate::engine::cpu::{effects, noise};
 use crate::engine::effects::{
@@ -68,6 +69,53 @@ use crate::engine::oscillator::{InitialState, Oscillator, Sample};
 use crate::engine::rng;
 use crate::engine::schedule::FIXED_ONE;
 use zeros::PastZero;
+
+/// Whether paths of oscillators `a` and `b` may step in one lane group
+/// ([`run_period`]): the same model at the same frequency, apart from the
+/// load. A group shares its step grid (period, noise boundaries, steps per
+/// period where those are shorter than the noise interval), its noise key
+/// and the law's forms; what depends on the load is
+/// each lane's own: the mean normal force (with the drift's nominal
+/// scale), and the effects' terms at that load (the harmonics'
+/// amplitudes, the non-Gaussian noise's strength, the friction offset and
+/// scale), which the vector step reads lane by lane
+/// ([`Path::slip_law`]) and the noise draws oscillator by oscillator,
+/// each zero at one load where it is zero at the other (so what a group
+/// decides on its first lane's, such as whether its noise is plain, holds
+/// for all). Anything else that differs keeps them apart.
+pub(crate) fn steps_beside(a: &Oscillator, b: &Oscillator) -> bool {
+    if std::ptr::eq(a, b) {
+        return true;
+    }
+    let (ea, eb) = (&a.effects, &b.effects);
+    let zero_alike = |x: f64, y: f64| (x == 0.0) == (y == 0.0);
+    let per_load_alike = zero_alike(ea.non_gaussian_strength, eb.non_gaussian_strength)
+        && zero_alike(ea.non_gaussian_cubic, eb.non_gaussian_cubic)
+        && zero_alike(ea.friction_offset, eb.friction_offset)
+        && ea.harmonic_amplitudes_n.iter().zip(&eb.harmonic_amplitudes_n).all(|(&x, &y)| zero_alike(x, y));
+    if !per_load_alike {
+        return false;
+    }
+    let mut as_a = b.clone();
+    as_a.normal_force_mean_n = a.normal_force_mean_n;
+    // A step longer than the noise interval is never taken whole: every
+    // span between noise boundaries (at most one interval) is one step at
+    // either count, so two such counts (the law's rule raises them with
+    // the load) make the same grid. The margin covers the boundaries'
+    // fixed-point rounding.
+    let noise_sets_the_steps =
+        |o: &Oscillator| o.period_s / f64::from(o.steps_per_period) > o.noise_interval_s * 1.000_001;
+    if noise_sets_the_steps(a) && noise_sets_the_steps(b) {
+        as_a.steps_per_period = a.steps_per_period;
+    }
+    let (e, from) = (&mut as_a.effects, &a.effects);
+    e.harmonic_amplitudes_n = from.harmonic_amplitudes_n;
+    e.non_gaussian_strength = from.non_gaussian_strength;
+    e.non_gaussian_cubic = from.non_gaussian_cubic;
+    e.friction_offset = from.friction_offset;
+    e.friction_scale = from.friction_scale;
+    as_a == *a
+}
 
 /// Whether the block sticks or slips, and in which direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,21 +1,9 @@
-//! A period of up to [`LANES`] realisations of one oscillator stepped
+//! A period of up to [`LANES`] realisations of one model at one frequency stepped
 //! together, grid step by grid step, and the samples a record takes on the
 //! way.
 
 use super::*;
 use super::{interval, simd};
-
-/// Realisations of one oscillator stepped together, grid step by grid step.
-/// Their step grids are the same (the noise boundaries and samples fall at
-/// the same times), so each grid step's RK4 for all of them is one run of
-/// straight-line code: independent dependency chains the core overlaps
-/// instead of waiting out one chain's latency (one realisation at a time,
-/// the reference was latency-bound: each stage's division and sums wait on
-/// the last). Sixteen are two AVX-512 registers' worth, two chains: eight,
-/// one register, still waited out each stage's latency (the main job took
-/// 12% more CPU time); 32 took 15% more than 16 (the step's values no longer
-/// fit the registers).
-pub(crate) const LANES: usize = 16;
 
 /// Half of [`LANES`]: a group of fewer steps this many together.
 const HALF_LANES: usize = LANES / 2;
@@ -36,11 +24,18 @@ pub(crate) const LANE_WIDTHS: [usize; 3] = [LANES, HALF_LANES, QUARTER_LANES];
 /// lane takes [`Path::advance_segment_past`] from the step's start (a
 /// slipping one told where that same step ended, so it takes it no second
 /// time), so the answers are those of one path at a time, bit for bit.
-fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64, turn: Trig, measuring: bool) {
+fn advance_lanes(
+    lanes: &mut [Path<'_>],
+    trigs: &mut [Trig],
+    law: &simd::SlipLaw,
+    (t_a, t_b): (f64, f64),
+    turn: Trig,
+    measuring: bool,
+) {
     match lanes.len() {
-        LANES => slip_lanes::<LANES>(lanes, trigs, t_a, t_b, turn, measuring),
-        QUARTER_LANES => slip_lanes::<QUARTER_LANES>(lanes, trigs, t_a, t_b, turn, measuring),
-        HALF_LANES => slip_lanes::<HALF_LANES>(lanes, trigs, t_a, t_b, turn, measuring),
+        LANES => slip_lanes::<LANES>(lanes, trigs, law, t_a, t_b, turn, measuring),
+        QUARTER_LANES => slip_lanes::<QUARTER_LANES>(lanes, trigs, law, t_a, t_b, turn, measuring),
+        HALF_LANES => slip_lanes::<HALF_LANES>(lanes, trigs, law, t_a, t_b, turn, measuring),
         _ => {
             for (path, trig) in lanes.iter_mut().zip(trigs.iter_mut()) {
                 *trig = path.advance_segment(t_a, t_b, *trig, Some(turn), measuring);
@@ -51,12 +46,13 @@ fn advance_lanes(lanes: &mut [Path<'_>], trigs: &mut [Trig], t_a: f64, t_b: f64,
 
 /// [`advance_lanes`] for `N` lanes. The slip step is the baseline's vector
 /// step, or the vector step of a friction history where one is on (the
-/// same for all lanes: it is the oscillator's). A stuck lane's step is
+/// same for all lanes: it is the model's). A stuck lane's step is
 /// taken and thrown away: the vector code has no branch per lane.
 #[inline(always)]
 fn slip_lanes<const N: usize>(
     lanes: &mut [Path<'_>],
     trigs: &mut [Trig],
+    law: &simd::SlipLaw,
     t_a: f64,
     t_b: f64,
     turn: Trig,
@@ -71,12 +67,12 @@ fn slip_lanes<const N: usize>(
     });
     let state = Path::slip_state(lanes, trigs, signs);
     let history = Path::history(lanes);
-    let step = simd::slip_step(&state, &lanes[0].slip_law(), history.as_ref(), h, turn);
+    let step = simd::slip_step(&state, law, history.as_ref(), h, turn);
     let zero: [bool; N] = std::array::from_fn(|l| signs[l] != 0.0 && signs[l] * step.v_m_per_s[l] <= 0.0);
     // Two or more zeros in the step are located side by side.
     let mut located = [None; N];
     if zero.iter().filter(|&&z| z).count() > 1 {
-        located = Path::locate_zeros(lanes, &state, history.as_ref(), zero, h, turn, step.v_m_per_s);
+        located = Path::locate_zeros(lanes, &state, law, history.as_ref(), zero, h, turn, step.v_m_per_s);
     }
     for l in 0..N {
         trigs[l] = if signs[l] * step.v_m_per_s[l] > 0.0 {
@@ -89,7 +85,8 @@ fn slip_lanes<const N: usize>(
 }
 
 /// Integrates one excitation period of every path in `lanes` (at most
-/// [`LANES`] realisations of one oscillator, in the same period; with
+/// [`LANES`] realisations of oscillators that step together,
+/// [`steps_beside`], in the same period; with
 /// `samplers`, one per path). Noise-interval boundaries, output samples and
 /// the period's end are step boundaries: each span between them is divided
 /// into the fewest equal steps no longer than `T / S` (`S` =
@@ -99,7 +96,7 @@ fn slip_lanes<const N: usize>(
 pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: Option<&mut [Sampler]>) {
     assert!(!lanes.is_empty() && lanes.len() <= LANES, "1 to {LANES} paths step together, not {}", lanes.len());
     let o = lanes[0].osc;
-    debug_assert!(lanes.iter().all(|p| std::ptr::eq(p.osc, o) && p.next_boundary == lanes[0].next_boundary));
+    debug_assert!(lanes.iter().all(|p| steps_beside(p.osc, o) && p.next_boundary == lanes[0].next_boundary));
     let w = o.omega_rad_per_s;
     let max_step_s = o.period_s / f64::from(o.steps_per_period);
     let period_start_s = lanes[0].period as f64 * o.period_s;
@@ -109,6 +106,8 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
         path.period_cos_integral = 0.0;
         path.period_sin_integral = 0.0;
     }
+    // The lanes' law, the same all period.
+    let law = Path::slip_law(lanes);
     let mut t = 0.0;
     let mut trigs = [Trig { cos: 1.0, sin: 0.0 }; LANES];
     let trigs = &mut trigs[..lanes.len()];
@@ -133,7 +132,7 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
             let mut step_start = t;
             for k in 1..=steps {
                 let step_end = if k == steps { target } else { t + f64::from(k) * h };
-                advance_lanes(lanes, trigs, step_start, step_end, turn, measuring);
+                advance_lanes(lanes, trigs, &law, (step_start, step_end), turn, measuring);
                 step_start = step_end;
             }
         }

@@ -512,7 +512,7 @@ impl Path<'_> {
     }
 
     /// The friction history of `lanes` as the vector step takes it, `None`
-    /// where none is on (the same for all: it is the oscillator's).
+    /// where none is on (the same for all: it is the model's).
     pub(super) fn history<'p, const N: usize>(lanes: &'p [Path<'_>; N]) -> Option<simd::History<'p, N>> {
         let first = &lanes[0];
         first.history.then(|| simd::History {
@@ -524,18 +524,21 @@ impl Path<'_> {
         })
     }
 
-    /// The baseline law and the rig as the vector step takes them.
-    pub(super) fn slip_law(&self) -> simd::SlipLaw {
-        let o = self.osc;
+    /// The baseline law and the rig as the vector step takes them for the
+    /// group `lanes` (at most [`LANES`]): the law's terms at each lane's
+    /// load, the rest the first lane's (the same for all: [`steps_beside`]).
+    pub(super) fn slip_law(lanes: &[Path<'_>]) -> simd::SlipLaw {
+        let o = lanes[0].osc;
+        let per_lane = |term: &dyn Fn(&Path<'_>) -> f64| std::array::from_fn(|l| lanes.get(l).map_or(0.0, term));
         simd::SlipLaw {
-            a_offset: self.law_a + o.effects.friction_offset,
-            b: self.law_b,
+            a_offset: per_lane(&|p| p.law_a + p.osc.effects.friction_offset),
+            b: per_lane(&|p| p.law_b),
+            d_s2_per_m2: per_lane(&|p| p.law_d),
             c_s_per_m: o.friction_c_s_per_m,
-            d_s2_per_m2: self.law_d,
             stiffness_n_per_m: o.stiffness_n_per_m,
             base_amplitude_m: o.base_amplitude_m,
             damping_n_s_per_m: o.damping_n_s_per_m,
-            inv_mass: self.inv_mass,
+            inv_mass: lanes[0].inv_mass,
             adhesion_n: o.effects.adhesion_force_n,
         }
     }

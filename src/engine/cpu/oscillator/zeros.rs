@@ -53,9 +53,11 @@ impl Path<'_> {
     /// vector step took it; where it is not `Trig::turn` of this step's
     /// length, the search takes its own full step, as the scalar one does.
     /// `history` is the lanes' friction history where one is on.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn locate_zeros<const N: usize>(
         lanes: &[Path<'_>; N],
         state: &simd::SlipLanes<N>,
+        law: &simd::SlipLaw,
         history: Option<&simd::History<'_, N>>,
         zero: [bool; N],
         h_s: f64,
@@ -64,7 +66,6 @@ impl Path<'_> {
     ) -> [Option<Located>; N] {
         let o = lanes[0].osc;
         let w = o.omega_rad_per_s;
-        let law = lanes[0].slip_law();
         let searched_half = Trig::turn(0.5 * w * h_s);
         let same_step =
             searched_half.cos.to_bits() == half.cos.to_bits() && searched_half.sin.to_bits() == half.sin.to_bits();
@@ -116,9 +117,9 @@ impl Path<'_> {
             let active = &active[..count];
             match count {
                 0 => break,
-                1..=4 => probe_packed::<N, 4>(state, history, &law, w, active, &mut s),
-                5..=8 => probe_packed::<N, 8>(state, history, &law, w, active, &mut s),
-                _ => probe_packed::<N, N>(state, history, &law, w, active, &mut s),
+                1..=4 => probe_packed::<N, 4>(state, history, law, w, active, &mut s),
+                5..=8 => probe_packed::<N, 8>(state, history, law, w, active, &mut s),
+                _ => probe_packed::<N, N>(state, history, law, w, active, &mut s),
             }
         }
         std::array::from_fn(|l| searched[l].then(|| (s.hi[l], s.probed_hi[l].then_some(s.hi_step[l]))))
@@ -173,8 +174,12 @@ fn probe_packed<const N: usize, const M: usize>(
         },
         law: h.law,
     });
+    // The law's per-lane terms packed like the lanes.
+    let pack = |terms: &[f64; LANES]| std::array::from_fn(|j| if j < M { terms[lane(j)] } else { 0.0 });
+    let law =
+        simd::SlipLaw { a_offset: pack(&law.a_offset), b: pack(&law.b), d_s2_per_m2: pack(&law.d_s2_per_m2), ..*law };
     let probes = std::array::from_fn(|j| s.x[lane(j)]);
-    let probed = simd::probe_step(&packed, law, packed_history.as_ref(), probes, omega);
+    let probed = simd::probe_step(&packed, &law, packed_history.as_ref(), probes, omega);
     for (j, &l) in active.iter().enumerate() {
         let sign = packed.sign[j];
         let x = s.x[l];
@@ -283,9 +288,10 @@ mod tests {
             });
             let state = Path::slip_state(&lanes, &trigs, sign);
             let history = Path::history(&lanes);
-            let step = simd::slip_step(&state, &lanes[0].slip_law(), history.as_ref(), h_s, half);
+            let law = Path::slip_law(&lanes);
+            let step = simd::slip_step(&state, &law, history.as_ref(), h_s, half);
             let zero: [bool; N] = std::array::from_fn(|l| sign[l] != 0.0 && sign[l] * step.v_m_per_s[l] <= 0.0);
-            let located = Path::locate_zeros(&lanes, &state, history.as_ref(), zero, h_s, half, step.v_m_per_s);
+            let located = Path::locate_zeros(&lanes, &state, &law, history.as_ref(), zero, h_s, half, step.v_m_per_s);
             let searched_half = Trig::turn(0.5 * w * h_s);
             let same_step = searched_half.cos.to_bits() == half.cos.to_bits();
             for l in 0..N {

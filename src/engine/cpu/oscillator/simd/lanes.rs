@@ -1,6 +1,20 @@
 //! The lanes of a vector step: each lane's state as structure of arrays,
-//! and `V`, lanes of f64 on which one operation acts on all. (The module is
-//! private to `simd`, which hands the state's types on to the oscillator.)
+//! `V`, lanes of f64 on which one operation acts on all, and how many lanes
+//! a group steps at most. (The module is private to `simd`, which hands
+//! the state's types on to the oscillator.)
+
+/// Realisations of one model at one frequency (at one load or several)
+/// stepped together, grid step by grid step.
+/// Their step grids are the same (the noise boundaries and samples fall at
+/// the same times), so each grid step's RK4 for all of them is one run of
+/// straight-line code: independent dependency chains the core overlaps
+/// instead of waiting out one chain's latency (one realisation at a time,
+/// the reference was latency-bound: each stage's division and sums wait on
+/// the last). Sixteen are two AVX-512 registers' worth, two chains: eight,
+/// one register, still waited out each stage's latency (the main job took
+/// 12% more CPU time); 32 took 15% more than 16 (the step's values no longer
+/// fit the registers).
+pub(crate) const LANES: usize = 16;
 
 /// The per-lane state a slip step starts from, one element per lane.
 #[derive(Clone, Copy, Debug)]

@@ -3,13 +3,13 @@
 //! the scalar path's operations in the same order. (The module is private
 //! to `simd`, which hands the law's types on to the oscillator.)
 
-use super::lanes::{HistoryLanes, SlipLanes, V};
+use super::lanes::{HistoryLanes, LANES, SlipLanes, V};
 use crate::engine::cpu::effects;
 use crate::engine::effects::{
     AGEING_CUTOFF_SPEED_M_PER_S, AGEING_FLOOR_SPEED_M_PER_S, EffectParams, Memory, STICTION_DECAY_M, StictionForm,
 };
 
-/// A friction history's law, the same for every lane (the oscillator's).
+/// A friction history's law, the same for every lane (the model's).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HistoryLaw<'a> {
     /// The effects (hysteresis and stiction forms and parameters).
@@ -21,18 +21,20 @@ pub(crate) struct HistoryLaw<'a> {
     pub(crate) dahl: bool,
 }
 
-/// The baseline law and the rig, the same for every lane (they are the
-/// oscillator's).
+/// The baseline law and the rig as a group's lanes step them: the law's
+/// terms at each lane's load (lanes of one group may be at different
+/// loads; the elements past the group's lanes are unused), the rest the
+/// same for every lane (the model's).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct SlipLaw {
-    /// The law's `a` plus the effects' friction offset, –.
-    pub(crate) a_offset: f64,
-    /// The law's `b`, –.
-    pub(crate) b: f64,
+    /// The law's `a` plus the effects' friction offset, per lane, –.
+    pub(crate) a_offset: [f64; LANES],
+    /// The law's `b`, per lane, –.
+    pub(crate) b: [f64; LANES],
+    /// The law's `d`, per lane, s²/m².
+    pub(crate) d_s2_per_m2: [f64; LANES],
     /// The Stribeck rate `c`, s/m.
     pub(crate) c_s_per_m: f64,
-    /// The law's `d`, s²/m².
-    pub(crate) d_s2_per_m2: f64,
     /// Spring stiffness, N/m.
     pub(crate) stiffness_n_per_m: f64,
     /// Base amplitude, m.
@@ -46,8 +48,9 @@ pub(crate) struct SlipLaw {
 }
 
 /// `Path::mean_law` per lane: `a + Δa + b S(c, s) + d v²` at speed
-/// `speed` and velocity `v_m_per_s` (m/s), –. `stribeck_factor`: both
-/// branches, then the one the speed's sign picks.
+/// `speed` and velocity `v_m_per_s` (m/s), –, with each lane's `a + Δa`,
+/// `b` and `d`. `stribeck_factor`: both branches, then the one the speed's
+/// sign picks.
 #[inline(always)]
 pub(super) fn mean_law<const N: usize>(law: &SlipLaw, speed: V<N>, v_m_per_s: V<N>) -> V<N> {
     let c = V::splat(law.c_s_per_m);
@@ -55,7 +58,8 @@ pub(super) fn mean_law<const N: usize>(law: &SlipLaw, speed: V<N>, v_m_per_s: V<
     let under_way = one / (one + c * speed);
     let past_zero = one - c * speed;
     let stribeck = V(std::array::from_fn(|l| if speed.0[l] >= 0.0 { under_way.0[l] } else { past_zero.0[l] }));
-    V::splat(law.a_offset) + V::splat(law.b) * stribeck + V::splat(law.d_s2_per_m2) * v_m_per_s * v_m_per_s
+    let per_lane = |terms: &[f64; LANES]| V::lanewise(|l| terms[l]);
+    per_lane(&law.a_offset) + per_lane(&law.b) * stribeck + per_lane(&law.d_s2_per_m2) * v_m_per_s * v_m_per_s
 }
 
 /// `Path::slip_rates`' acceleration from the friction coefficient `mu`

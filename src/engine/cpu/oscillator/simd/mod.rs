@@ -1,4 +1,4 @@
-//! The slip step of up to [`LANES`](super::LANES) realisations at once as vector
+//! The slip step of up to [`LANES`] realisations at once as vector
 //! code: the RK4 step laid out as structure of arrays, one array element per
 //! lane, so that each operation is one vector instruction over the lanes
 //! instead of a scalar one per lane. The baseline's law (an adhesion force
@@ -24,6 +24,7 @@ mod lanes;
 mod law;
 
 use super::Trig;
+pub(crate) use lanes::LANES;
 use lanes::V;
 pub(super) use lanes::{HistoryLanes, SlipLanes};
 pub(super) use law::{HistoryLaw, SlipLaw};
@@ -362,11 +363,11 @@ mod tests {
     }
 
     fn copies_give_the_same_bits<const N: usize>() {
-        let law = SlipLaw {
-            a_offset: 0.35,
-            b: 0.1,
+        let mut law = SlipLaw {
+            a_offset: [0.35; LANES],
+            b: [0.1; LANES],
+            d_s2_per_m2: [0.02; LANES],
             c_s_per_m: 40.0,
-            d_s2_per_m2: 0.02,
             stiffness_n_per_m: 2.0e4,
             base_amplitude_m: 1e-3,
             damping_n_s_per_m: 3.0,
@@ -394,7 +395,7 @@ mod tests {
         for iteration in 0..200 {
             // Without an adhesion force, with one, and with one that μN
             // clips (A < −μN at small loads).
-            let law = SlipLaw { adhesion_n: [0.0, 0.3, -2.0][iteration % 3], ..law };
+            law.adhesion_n = [0.0, 0.3, -2.0][iteration % 3];
             let mut lanes = SlipLanes::<N> {
                 x_m: [0.0; N],
                 v_m_per_s: [0.0; N],
@@ -415,6 +416,10 @@ mod tests {
                 lanes.normal_force_n[l] = 16.0 * uniform();
                 (lanes.cos[l], lanes.sin[l]) = (angle.cos(), angle.sin());
                 lanes.memory[l] = 0.5 * uniform();
+                // Each lane's law at a load of its own.
+                law.a_offset[l] = 0.3 + 0.1 * uniform();
+                law.b[l] = 0.1 * uniform();
+                law.d_s2_per_m2[l] = 0.04 * uniform();
                 past.slip_start_x_m[l] = 2e-3 * (uniform() - 0.5);
                 past.stiction_excess[l] = 0.1 * uniform();
             }
