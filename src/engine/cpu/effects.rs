@@ -58,11 +58,26 @@ pub fn non_gaussian(form: NonGaussianForm, s: f64, d: f64, g: f64, g2: f64) -> f
     }
 }
 
+/// `e^(−x)` (x ≥ 0) as the library gives it, but 0 without the call past
+/// x = 746, where the result underflows to 0 anyway: glibc takes a slow
+/// path there (it sets `errno`), and a slip many build-up lengths long
+/// asks for it at every stage.
+pub fn exp_neg(x: f64) -> f64 {
+    if x > 746.0 { 0.0 } else { (-x).exp() }
+}
+
+/// `1 − e^(−x)` (x ≥ 0) as the library's `exp` gives it, but 1 without the
+/// call past x = 40: there `e^(−x)` < 4.3e-18, under half the spacing of
+/// f64 below 1 (2⁻⁵³), so the difference rounds to exactly 1 either way.
+pub fn one_minus_exp_neg(x: f64) -> f64 {
+    if x > 40.0 { 1.0 } else { 1.0 - (-x).exp() }
+}
+
 /// Excess of the static coefficient after `dwell_s` seconds stuck, with
 /// ageing time `ageing_s` (stiction `dwell`): `Δ (1 − e^(−t_d/τ_d))`, the
 /// full `Δ` at once when `τ_d` is 0.
 pub fn dwell_excess(excess: f64, dwell_s: f64, ageing_s: f64) -> f64 {
-    if ageing_s == 0.0 { excess } else { excess * (1.0 - (-dwell_s.max(0.0) / ageing_s).exp()) }
+    if ageing_s == 0.0 { excess } else { excess * one_minus_exp_neg(dwell_s.max(0.0) / ageing_s) }
 }
 
 /// Build-up of sliding friction with displacement `d` (m) since slip start,
@@ -78,8 +93,11 @@ pub fn hysteresis_factor(form: HysteresisForm, d: f64, length: f64, start: f64) 
     match form {
         HysteresisForm::Tanh => r.tanh(),
         HysteresisForm::Rational => r / (r + 1.0),
-        HysteresisForm::Exponential => 1.0 - (-r).exp(),
-        HysteresisForm::Dahl | HysteresisForm::Bristle => 1.0 - (1.0 - start) * (-r).exp(),
+        HysteresisForm::Exponential => one_minus_exp_neg(r),
+        // Past 40 lengths (1 − φ₀) e^(−r) is under 8 · 4.3e-18 < 2⁻⁵⁴ for
+        // any φ₀ within ±7, and 1 minus it rounds to exactly 1.
+        HysteresisForm::Dahl | HysteresisForm::Bristle if r > 40.0 && (1.0 - start).abs() <= 8.0 => 1.0,
+        HysteresisForm::Dahl | HysteresisForm::Bristle => 1.0 - (1.0 - start) * exp_neg(r),
         HysteresisForm::Lag | HysteresisForm::Slip | HysteresisForm::Ageing => 1.0,
     }
 }
@@ -130,6 +148,24 @@ pub fn adhesion(friction_n: f64, adhesion_n: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The exponentials that skip the library call past their thresholds
+    /// give its bits everywhere: on a fine sweep across each threshold,
+    /// over the whole range a slip reaches, and for the Dahl factor from
+    /// every start within ±7.
+    #[test]
+    fn skipped_exponentials_are_the_library_s_bits() {
+        let sweep = (0..200_000).map(|i| f64::from(i) * 0.005).chain((0..20_000).map(|i| 700.0 + f64::from(i) * 0.005));
+        for x in sweep.chain([1e4, 1e300, f64::INFINITY]) {
+            assert_eq!(exp_neg(x).to_bits(), (-x).exp().to_bits(), "e^-{x}");
+            assert_eq!(one_minus_exp_neg(x).to_bits(), (1.0 - (-x).exp()).to_bits(), "1 - e^-{x}");
+            for start in [-7.0, -1.0, -0.3, 0.0, 0.7, 1.0, 7.0] {
+                let direct = 1.0 - (1.0 - start) * (-x).exp();
+                let factor = hysteresis_factor(HysteresisForm::Dahl, x, 1.0, start);
+                assert_eq!(factor.to_bits(), direct.to_bits(), "Dahl from {start} at {x} lengths");
+            }
+        }
+    }
 
     /// E[f(z)] over a standard normal z, by Simpson's rule on ±12.
     fn expect(f: impl Fn(f64) -> f64) -> f64 {

@@ -588,7 +588,7 @@ impl<'a> Path<'a> {
             }
         };
         if e.stiction_form == StictionForm::Decaying {
-            mu += self.stiction_excess * (-slipped_m / STICTION_DECAY_M).exp();
+            mu += self.stiction_excess * effects::exp_neg(slipped_m / STICTION_DECAY_M);
         } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
             mu += self.stiction_excess * (1.0 - slipped_m / e.stiction_release_m).max(0.0);
         }

@@ -146,7 +146,7 @@ pub(super) fn history_rates<const N: usize>(
         }
     };
     if e.stiction_form == StictionForm::Decaying {
-        let decay = V::lanewise(|l| (-slipped_m.0[l] / STICTION_DECAY_M).exp());
+        let decay = V::lanewise(|l| effects::exp_neg(slipped_m.0[l] / STICTION_DECAY_M));
         mu = mu + V(past.stiction_excess) * decay;
     } else if e.stiction_form == StictionForm::Constant && e.stiction_release_m > 0.0 {
         let left = (V::splat(1.0) - slipped_m / V::splat(e.stiction_release_m)).zip(V::splat(0.0), f64::max);
