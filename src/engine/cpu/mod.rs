@@ -61,11 +61,12 @@ impl Backend for CpuBackend {
         let per_path = job.plan.total_cycles();
         let chunk = paths_per_chunk(total_paths);
         let shared = shares_draws(job, &oscillators);
+        let runs = point_runs(&oscillators);
         let mut output = Output::default();
         if let Record::Samples { interval_s, duration_s, at_noise_boundaries } = job.record {
             for start in (0..total_paths).step_by(chunk) {
                 let end = (start + chunk).min(total_paths);
-                let records: Vec<Vec<Sample>> = lane_groups(job, &oscillators, start, end, lane_width(end - start))
+                let records: Vec<Vec<Sample>> = lane_groups(job, &runs, start, end, lane_width(end - start))
                     .into_par_iter()
                     .flat_map_iter(|group| {
                         sample_records(
@@ -94,7 +95,7 @@ impl Backend for CpuBackend {
         let mut done = 0u64;
         for start in (0..total_paths).step_by(chunk) {
             let end = (start + chunk).min(total_paths);
-            let paths: Vec<PathResult> = lane_groups(job, &oscillators, start, end, lane_width(end - start))
+            let paths: Vec<PathResult> = lane_groups(job, &runs, start, end, lane_width(end - start))
                 .into_par_iter()
                 .flat_map_iter(|group| {
                     simulate_paths(job.seed, &lanes_of(job, &oscillators, &group), job.plan, shared, None)
@@ -317,30 +318,29 @@ fn lane_width(tasks: usize) -> usize {
     LANE_WIDTHS.into_iter().find(|&w| tasks.div_ceil(w) >= threads).unwrap_or(1)
 }
 
-/// The job's tasks from `start` to `end` (numbered point-major,
-/// `job.realisations` each) cut into groups that step together, in order,
-/// at most `width` ([`lane_width`]) each: the widest of [`LANE_WIDTHS`]
-/// there are as many left for, then one by one (fewer step one by one
-/// anyway, and alone they run in parallel). A group may run on from one
-/// point into the next where their oscillators step together
-/// ([`oscillator::steps_beside`]: the loads of one frequency), so a
-/// diagnosis's few realisations per load fill wide groups. Each task is
-/// (point, realisation).
-fn lane_groups(
-    job: &Job<'_>,
-    oscillators: &[Oscillator],
-    start: usize,
-    end: usize,
-    width: usize,
-) -> Vec<Vec<(usize, u32)>> {
-    let n = job.realisations as usize;
-    // Where the run of points that step beside each one ends (stepping
-    // beside is sameness but for the load: a chain is a run).
+/// Where the run of points that step together from each point on ends
+/// ([`oscillator::steps_beside`]: the loads of one frequency, in a row):
+/// one past its last point. Stepping beside is sameness but for the
+/// load, so a chain of neighbours is a run.
+fn point_runs(oscillators: &[Oscillator]) -> Vec<usize> {
     let mut run_end = vec![oscillators.len(); oscillators.len()];
     for p in (0..oscillators.len().saturating_sub(1)).rev() {
         run_end[p] =
             if oscillator::steps_beside(&oscillators[p], &oscillators[p + 1]) { run_end[p + 1] } else { p + 1 };
     }
+    run_end
+}
+
+/// The job's tasks from `start` to `end` (numbered point-major,
+/// `job.realisations` each) cut into groups that step together, in order,
+/// at most `width` ([`lane_width`]) each: the widest of [`LANE_WIDTHS`]
+/// there are as many left for, then one by one (fewer step one by one
+/// anyway, and alone they run in parallel). A group may run on from one
+/// point into the next within a run of points that step together
+/// (`run_end`, [`point_runs`]), so a diagnosis's few realisations per load
+/// fill wide groups. Each task is (point, realisation).
+fn lane_groups(job: &Job<'_>, run_end: &[usize], start: usize, end: usize, width: usize) -> Vec<Vec<(usize, u32)>> {
+    let n = job.realisations as usize;
     let mut groups = Vec::new();
     let mut i = start;
     while i < end {
@@ -380,7 +380,7 @@ mod tests {
             plan: RunPlan { warmup_cycles: 0, measured_cycles: 1 },
             record: Record::Sums,
         };
-        let groups = |start, end, width| lane_groups(&job, &oscillators, start, end, width);
+        let groups = |start, end, width| lane_groups(&job, &point_runs(&oscillators), start, end, width);
         let sizes = |start, end| groups(start, end, LANES).iter().map(Vec::len).collect::<Vec<_>>();
         let (half, quarter) = (LANES / 2, QUARTER_LANES);
         // 7 Hz alone; then 8 Hz's two loads, 58 tasks: 16, 16, 16, 8, 1, 1.
