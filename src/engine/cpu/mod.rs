@@ -425,7 +425,7 @@ mod tests {
     /// that grows with it).
     #[test]
     fn realisations_stepped_together_are_those_stepped_alone() {
-        let cases: [&[&str]; 13] = [
+        let cases: [&[&str]; 14] = [
             &[],
             &[
                 "normal_force_harmonics.amplitudes_n=[0.4, 0.3, 0.0, 0.1]",
@@ -450,6 +450,12 @@ mod tests {
                 "load_dependent_friction.strength=0.5",
             ],
             &["load_dependent_friction.form=\"power\"", "load_dependent_friction.strength=-0.3"],
+            // No offset at the heavier load, one at the lighter.
+            &[
+                "load_dependent_friction.form=\"linear\"",
+                "load_dependent_friction.strength=0.004",
+                "load_dependent_friction.reference_force_n=16.39",
+            ],
             &[
                 "load_dependent_friction.form=\"scaled\"",
                 "load_dependent_friction.strength=-0.4",
@@ -473,7 +479,7 @@ mod tests {
                 };
                 let (heavy, light) = (at(16.39), at(9.0));
                 assert!(oscillator::steps_beside(&heavy, &light), "{overrides:?} at {hz} Hz");
-                if case == 12 && hz == 7.0 {
+                if case == 13 && hz == 7.0 {
                     assert!(heavy.steps_per_period > light.steps_per_period, "{overrides:?} at {hz} Hz");
                 }
                 let one_load: Vec<Lane<'_>> =

@@ -79,10 +79,11 @@ use zeros::PastZero;
 /// scale), and the effects' terms at that load (the harmonics'
 /// amplitudes, the non-Gaussian noise's strength, the friction offset and
 /// scale), which the vector step reads lane by lane
-/// ([`Path::slip_law`]) and the noise draws oscillator by oscillator,
-/// each zero at one load where it is zero at the other (so what a group
-/// decides on its first lane's, such as whether its noise is plain, holds
-/// for all). Anything else that differs keeps them apart.
+/// ([`Path::slip_law`]) and the noise draws oscillator by oscillator.
+/// The noise's terms (harmonics, non-Gaussian) must be zero at one load
+/// where they are zero at the other, since the group decides on its first
+/// lane's whether its noise is plain. Anything else that differs keeps
+/// them apart.
 pub(crate) fn steps_beside(a: &Oscillator, b: &Oscillator) -> bool {
     if std::ptr::eq(a, b) {
         return true;
@@ -91,7 +92,6 @@ pub(crate) fn steps_beside(a: &Oscillator, b: &Oscillator) -> bool {
     let zero_alike = |x: f64, y: f64| (x == 0.0) == (y == 0.0);
     let per_load_alike = zero_alike(ea.non_gaussian_strength, eb.non_gaussian_strength)
         && zero_alike(ea.non_gaussian_cubic, eb.non_gaussian_cubic)
-        && zero_alike(ea.friction_offset, eb.friction_offset)
         && ea.harmonic_amplitudes_n.iter().zip(&eb.harmonic_amplitudes_n).all(|(&x, &y)| zero_alike(x, y));
     if !per_load_alike {
         return false;
