@@ -117,12 +117,21 @@ impl FittingTargets {
 
 /// Solves for the friction level `a` (with everything else fixed) so the
 /// simulated mean peaks (or, in phase-only data, mean phases) match the
-/// measured ones on the fitting units, on average, with small ensembles:
-/// a secant search, whose first step is a Newton step on `slope` (d
-/// residual / d a, from the baseline's solve) where given (an effect's
+/// measured ones on the fitting units, with small ensembles. The loss that
+/// decides is the mean square of the units' level errors. Mean peaks are
+/// continuous in `a`, so it is minimised by Gauss-Newton steps whose units'
+/// slopes (d error / d a) are read from the last two levels tried: an
+/// effect that moves the loads apart (a load dependence) has its least
+/// loss away from where the mean error is zero, and these steps go
+/// straight there. Phases wrap where a load's passes a branch, so their
+/// loss jumps and no straight line tells where its least lies: the mean
+/// error is zeroed by a secant instead, and a trial then scans the window
+/// about the best level. Either's first step is a Newton step on `slope`
+/// (the mean error's, from the baseline's solve) where given (an effect's
 /// trial moves the level a long way where the response is steep in it, as
-/// phases are near the no-stop threshold, so one step is not enough).
-/// Returns the slope found.
+/// phases are near the no-stop threshold); for Gauss-Newton it is at least
+/// a scan step long, so each unit's slope is read over a span its noise
+/// does not swamp. Returns the mean error's slope found.
 fn solve_friction_level(
     model: &Model,
     data: &Data<'_>,
@@ -133,21 +142,21 @@ fn solve_friction_level(
 ) -> Result<(Model, f64)> {
     let slope_given = slope.is_some();
     let fitting = FittingTargets::of(model, data, settings, targets.level);
-    // The mean error (signed, what the secant zeroes) and the mean squared
-    // error (what decides between the points tried) at level `a`.
-    let residual = |a: f64| -> Result<(f64, f64)> {
+    let level_at = |a: f64| -> Result<Level> {
         let mut m = model.clone();
         m.friction.a = a;
         m.validate()?;
         let stats = fitting.simulate(engine, &m, settings, 0xA5A5)?;
-        let errs: Vec<f64> = stats
+        let errors: Vec<f64> = stats
             .iter()
             .zip(&fitting.measured)
             .filter(|(_, t)| t.is_finite())
             .filter_map(|(s, &t)| targets.level_error(s, t))
             .collect();
-        Ok((mean(&errs), mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())))
+        Ok(Level::new(a, errors))
     };
+    // The mean error and the loss at level `a`, for the scans.
+    let residual = |a: f64| level_at(a).map(|l| (l.mean, l.loss));
     let lowest = (-model.friction.b).max(0.0);
     let with_a = |a: f64| {
         let mut out = model.clone();
@@ -167,43 +176,60 @@ fn solve_friction_level(
         }
         a0 = scan_best(&mut tried, &residual)?;
     }
-    let (mut r0, l0) = residual(a0)?;
-    tried.push((a0, l0));
-    // The second point: a Newton step on the known slope, or a small step.
-    let mut a1 = match slope {
-        Some(s) if r0.abs() < 5e-4 => return Ok((with_a(a0), s)),
-        Some(s) => (a0 - r0 / s).clamp(lowest, a0 + 0.5).min(5.0),
-        None => (a0 + 0.02).max(lowest + 0.01),
+    // Where the loss can jump (a level read from phases, whose errors wrap
+    // where a load's phase passes a branch), no straight line through two
+    // levels' errors tells where its least lies: there the mean error is
+    // zeroed by a secant and the window about the best level scanned.
+    let jumps = targets.level != Observable::PeakMeanM;
+    let mut previous = level_at(a0)?;
+    tried.push((previous.a, previous.loss));
+    // The second level: a Newton step on the known slope (for Gauss-Newton
+    // at least a scan step long), or a scan step up.
+    let step = match slope {
+        Some(s) if jumps && previous.mean.abs() < MEAN_TOLERANCE => {
+            return Ok((with_a(a0), s));
+        }
+        Some(s) if jumps => -previous.mean / s,
+        Some(s) if s != 0.0 && previous.mean != 0.0 => {
+            let newton = -previous.mean / s;
+            newton.signum() * newton.abs().max(TRIAL_SCAN_STEP)
+        }
+        _ => TRIAL_SCAN_STEP,
     };
-    let (mut r1, l1) = residual(a1)?;
-    tried.push((a1, l1));
-    let mut slope = (r1 - r0) / (a1 - a0);
+    let mut a1 = (a0 + step).clamp(lowest, a0 + 0.5).min(5.0);
+    if a1 == a0 && !jumps {
+        a1 = (a0 + TRIAL_SCAN_STEP).min(5.0);
+    }
+    let mut current = level_at(a1)?;
+    tried.push((current.a, current.loss));
+    let mut slope = previous.mean_slope(&current);
     for _ in 0..5 {
-        if r1.abs() < 5e-4 || (r1 - r0).abs() < 1e-12 {
+        let next = if jumps {
+            if current.mean.abs() < MEAN_TOLERANCE || (current.mean - previous.mean).abs() < 1e-12 {
+                break;
+            }
+            current.a - current.mean * (current.a - previous.a) / (current.mean - previous.mean)
+        } else {
+            match previous.gauss_newton(&current) {
+                Some(next) => next,
+                None => break,
+            }
+        };
+        let next = next.clamp(lowest, current.a + 0.5).min(5.0);
+        if !jumps && ((next - current.a).abs() < LEVEL_TOLERANCE || tried.iter().any(|t| t.0 == next)) {
             break;
         }
-        let a2 = (a1 - r1 * (a1 - a0) / (r1 - r0)).clamp(lowest, a1 + 0.5).min(5.0);
-        (a0, r0) = (a1, r1);
-        a1 = a2;
-        let l;
-        (r1, l) = residual(a1)?;
-        tried.push((a1, l));
-        if (a1 - a0).abs() > 1e-9 {
-            slope = (r1 - r0) / (a1 - a0);
-        }
+        previous = std::mem::replace(&mut current, level_at(next)?);
+        tried.push((current.a, current.loss));
+        slope = previous.mean_slope(&current).or(slope);
     }
-    let mut best = tried.iter().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(a1, |t| t.0);
-    if slope_given {
-        // A trial's secant zeroes the mean error from where the last trial
-        // left `a`, but the loss that decides need not be least there: an
-        // effect that moves the loads apart (a load dependence) leaves the
-        // mean at zero with the loads off in opposite directions, and the
-        // loss jumps where a load's phase passes a branch. So the loss is
-        // also scanned about the best point (the baseline's whole scan,
-        // narrower): without it, trials that differ in their last bits can
-        // end on different branches of the loss.
+    let mut best = tried.iter().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(current.a, |t| t.0);
+    if slope_given && jumps {
+        // A trial's loss is also scanned about the best point (the
+        // baseline's whole scan, narrower): without it, trials that differ
+        // in their last bits can end on different branches of the loss.
         let centre = tried.iter().copied().find(|t| t.0 == best).unwrap_or((best, f64::INFINITY));
-        let mut around = scan_about(centre, lowest, targets.level != Observable::PeakMeanM, &residual)?;
+        let mut around = scan_about(centre, lowest, &residual)?;
         // The parabola's vertex is tried and kept in `around`; the best
         // of everything tried is taken below.
         scan_best(&mut around, &residual)?;
@@ -211,8 +237,56 @@ fn solve_friction_level(
         best = tried.iter().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(best, |t| t.0);
     }
     let fallback = targets.fallback_slope();
-    Ok((with_a(best), if slope.is_finite() && slope * fallback > 0.0 { slope } else { fallback }))
+    let slope = slope.filter(|s| s.is_finite() && s * fallback > 0.0).unwrap_or(fallback);
+    Ok((with_a(best), slope))
 }
+
+/// A friction level tried and the fitting units' level errors there.
+struct Level {
+    /// The level, –.
+    a: f64,
+    /// Each unit's level error (relative for mean peaks, rad for phases).
+    errors: Vec<f64>,
+    /// Their mean.
+    mean: f64,
+    /// Their mean square: the loss that decides between levels.
+    loss: f64,
+}
+
+impl Level {
+    fn new(a: f64, errors: Vec<f64>) -> Level {
+        let (m, loss) = (mean(&errors), mean(&errors.iter().map(|e| e * e).collect::<Vec<_>>()));
+        Level { a, errors, mean: m, loss }
+    }
+
+    /// The mean error's slope from this level to `other`, per unit of `a`.
+    fn mean_slope(&self, other: &Level) -> Option<f64> {
+        let da = other.a - self.a;
+        (da.abs() > 1e-9).then(|| (other.mean - self.mean) / da)
+    }
+
+    /// The level of least loss where each unit's error is the straight
+    /// line through its errors at this level and at `other`: a Gauss-Newton
+    /// step from `other`. `None` where the two levels cannot tell the
+    /// slopes.
+    fn gauss_newton(&self, other: &Level) -> Option<f64> {
+        let da = other.a - self.a;
+        if da.abs() <= 1e-9 || self.errors.len() != other.errors.len() {
+            return None;
+        }
+        let slopes: Vec<f64> = self.errors.iter().zip(&other.errors).map(|(e0, e1)| (e1 - e0) / da).collect();
+        let curvature: f64 = slopes.iter().map(|s| s * s).sum();
+        let gradient: f64 = slopes.iter().zip(&other.errors).map(|(s, e)| s * e).sum();
+        (curvature > 1e-18).then(|| other.a - gradient / curvature)
+    }
+}
+
+/// A Gauss-Newton step shorter than this (of `a`) ends the solve: a scan
+/// step's fortieth, below what the small ensembles' noise tells apart.
+const LEVEL_TOLERANCE: f64 = 5e-4;
+
+/// A mean level error smaller than this ends the secant (relative, or rad).
+const MEAN_TOLERANCE: f64 = 5e-4;
 
 /// Levels the baseline's level search scans first: `a` from 0.02 above
 /// its lowest in steps of 0.05 (to about 1).
@@ -226,35 +300,22 @@ const TRIAL_SCAN: i32 = 3;
 const TRIAL_SCAN_STEP: f64 = 0.02;
 
 /// The loss at the levels `TRIAL_SCAN_STEP` apart about `centre` (a level
-/// and its loss), at most [`TRIAL_SCAN`] steps either way and none below
-/// `lowest` or above 5, in increasing order, `centre` among them. Where
-/// the loss can jump (`jumps`: a level read from phases, whose error wraps
-/// where a load's phase passes a branch) every level of the window is
-/// tried, since a lower well can lie behind a jump. Where it cannot (a
-/// level read from mean peaks, continuous in `a`), each side is walked
-/// only while the loss falls: the lowest level walked to is the window's
-/// lowest wherever the loss has one well there, and the walk stops at the
-/// first rise, usually one level either side instead of all six.
+/// and its loss), [`TRIAL_SCAN`] steps either way and none below `lowest`
+/// or above 5, in increasing order, `centre` among them: every level of the
+/// window, since a lower well can lie behind a jump of the loss.
 fn scan_about(
     centre: (f64, f64),
     lowest: f64,
-    jumps: bool,
     loss_at: &impl Fn(f64) -> Result<(f64, f64)>,
 ) -> Result<Vec<(f64, f64)>> {
     let mut around = vec![centre];
     for side in [-1.0, 1.0] {
-        let mut last = centre.1;
         for k in 1..=TRIAL_SCAN {
             let a = centre.0 + side * TRIAL_SCAN_STEP * f64::from(k);
             if a < lowest || a > 5.0 {
                 break;
             }
-            let loss = loss_at(a)?.1;
-            around.push((a, loss));
-            if !jumps && loss >= last {
-                break;
-            }
-            last = loss;
+            around.push((a, loss_at(a)?.1));
         }
     }
     around.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -639,49 +700,42 @@ mod tests {
         assert_eq!(edge.len(), 3);
     }
 
-    /// A level read from mean peaks walks each side of the window while
-    /// the loss falls: about a well it tries the two neighbours only, and
-    /// it follows a well two steps off to its bottom, each time ending
-    /// where the whole window's lowest lies. A level read from phases tries
-    /// the whole window, and so finds the lower well behind a jump that
-    /// the walk stops at.
+    /// A phase level's scan tries the whole window about its centre, and so
+    /// finds the lower well behind a jump of the loss beside the centre;
+    /// the window's lower edge is `lowest`.
     #[test]
-    fn a_trial_scan_walks_a_continuous_loss_and_spans_a_jumping_one() {
+    fn a_trial_scan_spans_a_jumping_loss() {
         let calls = std::cell::Cell::new(0);
-        let counted = |f: fn(f64) -> f64| {
-            let calls = &calls;
-            move |a: f64| -> Result<(f64, f64)> {
-                calls.set(calls.get() + 1);
-                Ok((0.0, f(a)))
-            }
+        let jumping = |a: f64| -> Result<(f64, f64)> {
+            calls.set(calls.get() + 1);
+            Ok((0.0, if (0.41..0.43).contains(&a) { 2.0 } else { (a - 0.44).abs() }))
         };
-        let lowest_of = |scan: &[(f64, f64)]| scan.iter().copied().min_by(|x, y| x.1.total_cmp(&y.1)).unwrap().0;
-        let window = |f: fn(f64) -> f64, centre: f64| {
-            scan_about((centre, f(centre)), 0.0, true, &|a: f64| Ok((0.0, f(a)))).unwrap()
-        };
-        // A well at the centre: the neighbours only.
-        let well: fn(f64) -> f64 = |a| (a - 0.40) * (a - 0.40);
-        let walked = scan_about((0.40, well(0.40)), 0.0, false, &counted(well)).unwrap();
-        assert_eq!((calls.get(), walked.len()), (2, 3));
-        assert_eq!(lowest_of(&walked), lowest_of(&window(well, 0.40)));
-        // A well two steps down: walked to, one step past, and one step up.
-        calls.set(0);
-        let off: fn(f64) -> f64 = |a| (a - 0.44) * (a - 0.44);
-        let walked = scan_about((0.40, off(0.40)), 0.0, false, &counted(off)).unwrap();
-        assert_eq!(calls.get(), 4);
-        assert!(walked.windows(2).all(|w| w[0].0 < w[1].0), "in increasing order");
-        assert!((lowest_of(&walked) - 0.44).abs() < 1e-12 && lowest_of(&window(off, 0.40)) == lowest_of(&walked));
-        // The window's lower edge is `lowest`.
-        let edge = scan_about((0.03, off(0.03)), 0.005, true, &|a: f64| Ok((0.0, off(a)))).unwrap();
-        assert!(edge.iter().all(|p| p.0 >= 0.005) && edge.len() == 5, "{edge:?}");
-        // A jump beside the centre with a lower well behind it.
-        let jumping: fn(f64) -> f64 = |a| if (0.41..0.43).contains(&a) { 2.0 } else { (a - 0.44).abs() };
-        calls.set(0);
-        let spanned = scan_about((0.40, jumping(0.40)), 0.0, true, &counted(jumping)).unwrap();
+        let spanned = scan_about((0.40, 0.04), 0.0, &jumping).unwrap();
         assert_eq!(calls.get(), 6);
-        assert!((lowest_of(&spanned) - 0.44).abs() < 1e-12);
-        let walked = scan_about((0.40, jumping(0.40)), 0.0, false, &|a: f64| Ok((0.0, jumping(a)))).unwrap();
-        assert_eq!(lowest_of(&walked), 0.40, "the walk stops at the jump");
+        assert!(spanned.windows(2).all(|w| w[0].0 < w[1].0), "in increasing order");
+        let lowest = spanned.iter().copied().min_by(|x, y| x.1.total_cmp(&y.1)).unwrap().0;
+        assert!((lowest - 0.44).abs() < 1e-12, "{spanned:?}");
+        let edge = scan_about((0.03, 0.0), 0.005, &|a: f64| Ok((0.0, a))).unwrap();
+        assert!(edge.iter().all(|p| p.0 >= 0.005) && edge.len() == 5, "{edge:?}");
+    }
+
+    /// Where the units' level errors are straight lines in `a` of different
+    /// slopes (an effect that moves the loads apart), one Gauss-Newton step
+    /// from any two levels lands on the least mean square, which is not
+    /// where the mean error is zero (where a secant on the mean stopped),
+    /// and has the lower loss; two levels at one `a` tell no slopes.
+    #[test]
+    fn a_gauss_newton_step_lands_on_the_least_square_not_the_zero_mean() {
+        let errors = |a: f64| vec![0.5 * (a - 0.40) - 0.01, 2.0 * (a - 0.40) + 0.01, a - 0.40];
+        let least = 0.40 - (0.5 * -0.01 + 2.0 * 0.01) / (0.25 + 4.0 + 1.0);
+        for (a0, a1) in [(0.30, 0.45), (0.50, 0.41), (0.395, 0.40)] {
+            let next = Level::new(a0, errors(a0)).gauss_newton(&Level::new(a1, errors(a1))).unwrap();
+            assert!((next - least).abs() < 1e-12, "from {a0}, {a1}: {next} against {least}");
+        }
+        let zero_mean = Level::new(0.40, errors(0.40));
+        assert!(zero_mean.mean.abs() < 1e-15 && (least - 0.40).abs() > 2e-3);
+        assert!(Level::new(least, errors(least)).loss < zero_mean.loss);
+        assert_eq!(zero_mean.gauss_newton(&Level::new(0.40, errors(0.40))), None);
     }
 
     #[test]
