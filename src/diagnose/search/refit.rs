@@ -77,12 +77,17 @@ fn refit_fold(
     };
     // Where the pool's parameters with the fold's own law fit the fold's
     // units no better than the model before the effect, they are searched
-    // again there, from the better of the two starts a coarse fit tries:
-    // the law recalibrated at those parameters, and the law the fold's
-    // model already has. One calibration step can hand part of an effect's
-    // signature to the law (a friction spread cut by half where a harmonic
-    // of the normal force adds its own), a basin the search, which keeps
-    // the law it starts from, never leaves.
+    // again there, from the best of three starts: the law recalibrated at
+    // those parameters, the law the fold's model already has (as a coarse
+    // fit tries both), and the law the family's full-data fit calibrated
+    // with the effect on, recalibrated to the fold's records. One
+    // calibration step can hand part of an effect's signature to the law
+    // (a friction spread cut by half where a harmonic of the normal force
+    // adds its own), a basin the search, which keeps the law it starts
+    // from, never leaves. And the fold's law can hold part of the effect in
+    // its own terms (a Stribeck peak standing in for a stiction): the
+    // effect put on it counts that part twice, the block barely slips, and
+    // its records' law is then no guide for a step back.
     if start.objective >= 1.0 {
         if law_can_stay(view)
             && let Some(kept) =
@@ -90,6 +95,15 @@ fn refit_fold(
             && kept.objective < start.objective
         {
             start = kept;
+        }
+        let mut with_law = base.model.clone();
+        with_law.friction = family.best.model.friction.clone();
+        if with_law.friction != base.model.friction
+            && let Some(t) =
+                evaluate(&variant, &member.values, &with_law, &base.scores, 1, slope, view, search, engine)?
+            && t.objective < start.objective
+        {
+            start = t;
         }
         start = coordinate_search(
             &variant.params,
