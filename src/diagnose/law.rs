@@ -381,9 +381,9 @@ pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<Fr
 /// ([`fit_friction_law`]) and keeps a model's stepped law valid. Part of
 /// the data (a fold's other levels) can fit a law just below zero at rest
 /// where the whole data fits one just above, friction rising from rest as
-/// under a memory; refusing it left that fold without force channels, and
-/// the level it was then solved from the response alone cost half of a
-/// diagnosis's time and judged that fold by another yardstick.
+/// under a memory. Refused, that fold would lose its force channels: its
+/// level would be solved from the response alone, at many times the cost,
+/// and the fold judged by another yardstick than its neighbours.
 pub(crate) fn fit_friction_law_at(runs: &[&Run], v_noise_m_per_s: f64, c: f64) -> Option<FrictionLaw> {
     SlipSamples::of(runs, v_noise_m_per_s)?.fit_at(c).filter(|l| [l.a, l.b, l.d, l.sigma].iter().all(|t| t.is_finite()))
 }
