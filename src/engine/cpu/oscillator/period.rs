@@ -111,6 +111,9 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
     let mut t = 0.0;
     let mut trigs = [Trig { cos: 1.0, sin: 0.0 }; LANES];
     let trigs = &mut trigs[..lanes.len()];
+    // The last span's bits, its steps, their length (s) and half turn:
+    // most noise intervals' spans repeat the one before bit for bit.
+    let mut last_span: Option<(u64, u32, f64, Trig)> = None;
     while t < o.period_s {
         let next_boundary = lanes[0].next_boundary;
         let noise_t = if next_boundary >> 32 == lanes[0].period {
@@ -126,9 +129,16 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
         let target = o.period_s.min(noise_t).min(sample_t).max(t);
         let span = target - t;
         if span > 0.0 {
-            let steps = span_steps(span, max_step_s);
-            let h = span / f64::from(steps);
-            let turn = Trig::turn(0.5 * w * h);
+            let (steps, h, turn) = match last_span {
+                Some((bits, steps, h, turn)) if bits == span.to_bits() => (steps, h, turn),
+                _ => {
+                    let steps = span_steps(span, max_step_s);
+                    let h = span / f64::from(steps);
+                    let turn = Trig::turn(0.5 * w * h);
+                    last_span = Some((span.to_bits(), steps, h, turn));
+                    (steps, h, turn)
+                }
+            };
             let mut step_start = t;
             for k in 1..=steps {
                 let step_end = if k == steps { target } else { t + f64::from(k) * h };
@@ -169,6 +179,11 @@ pub(crate) fn run_period(lanes: &mut [Path<'_>], measuring: bool, mut samplers: 
 /// The fewest equal steps no longer than `max_step_s` that cover `span_s`
 /// (a span of exactly k steps takes k, up to rounding).
 pub(crate) fn span_steps(span_s: f64, max_step_s: f64) -> u32 {
+    // The usual case, without the division and `ceil` (a library call on
+    // the baseline target): the quotient is at most 1, so its ceiling is 1.
+    if span_s <= max_step_s {
+        return 1;
+    }
     ((span_s / max_step_s) * (1.0 - 1e-12)).ceil().max(1.0) as u32
 }
 

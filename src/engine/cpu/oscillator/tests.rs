@@ -259,3 +259,19 @@ fn paths_reading_the_noise_table_are_those_drawing_it() {
         }
     }
 }
+
+/// A span no longer than one step takes one without the division and
+/// `ceil`: the same count as the rule's formula, at the bound, a last bit
+/// either side of it, far below it and past it.
+#[test]
+fn a_span_within_one_step_takes_one_as_the_formula_does() {
+    let formula = |span: f64, max: f64| ((span / max) * (1.0 - 1e-12)).ceil().max(1.0) as u32;
+    for max in [1e-3f64, 1.0 / 600.0, 1.0 / 7.0 / 16.0] {
+        let below = f64::from_bits(max.to_bits() - 1);
+        let above = f64::from_bits(max.to_bits() + 1);
+        for span in [max, below, above, 0.5 * max, 1e-300, max * (1.0 + 1e-12), 2.0 * max, 2.0 * above, 7.3 * max] {
+            assert_eq!(period::span_steps(span, max), formula(span, max), "span {span:e} of steps {max:e}");
+        }
+        assert_eq!(period::span_steps(below, max), 1);
+    }
+}
