@@ -33,9 +33,12 @@ pub const PATHS_PER_CHUNK: usize = 1 << 14;
 /// size does not change a bit of the result.
 const PROGRESS_REPORTS: usize = 32;
 
-/// Fewest realisations per chunk: each chunk ends at a barrier, so smaller
-/// ones would leave cores idle.
-const MIN_PATHS_PER_CHUNK: usize = 256;
+/// Fewest realisations per chunk: each chunk ends at a barrier, where a
+/// core that has finished its groups waits for the other's last (about
+/// half a group's time), so a chunk holds some 32 groups of [`LANES`] for
+/// each of two cores: the noisy workload's 256-realisation chunks kept its
+/// cores 97% busy.
+const MIN_PATHS_PER_CHUNK: usize = 1024;
 
 /// Realisations per chunk for a run of `total_paths`.
 fn paths_per_chunk(total_paths: usize) -> usize {
