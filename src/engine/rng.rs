@@ -259,25 +259,30 @@ fn pairs_of_counters(
 ) -> [(f64, f64); SIDE_BY_SIDE] {
     // Each word in a 64-bit lane of its own (its top half zero), so that a
     // round's 32×32→64 multiplies, shifts and exclusive-ors are one vector
-    // instruction each, with no packing between 32- and 64-bit lanes.
-    const LOW: u64 = 0xFFFF_FFFF;
-    let (mut c0, mut c1, mut c2, mut c3) =
-        (lo.map(u64::from), hi.map(u64::from), realisations.map(u64::from), [u64::from(STREAM_MAIN); SIDE_BY_SIDE]);
-    let mut k = key;
-    for round in 0..10 {
-        if round > 0 {
-            k[0] = k[0].wrapping_add(PHILOX_W0);
-            k[1] = k[1].wrapping_add(PHILOX_W1);
-        }
-        // `philox_round`, lane by lane.
-        let p0: [u64; SIDE_BY_SIDE] = std::array::from_fn(|l| u64::from(PHILOX_M0) * (c0[l] & LOW));
-        let p1: [u64; SIDE_BY_SIDE] = std::array::from_fn(|l| u64::from(PHILOX_M1) * (c2[l] & LOW));
-        c0 = std::array::from_fn(|l| (p1[l] >> 32) ^ c1[l] ^ u64::from(k[0]));
-        c1 = std::array::from_fn(|l| p1[l] & LOW);
-        c2 = std::array::from_fn(|l| (p0[l] >> 32) ^ c3[l] ^ u64::from(k[1]));
-        c3 = std::array::from_fn(|l| p0[l] & LOW);
-    }
-    let (c0, c1) = (c0.map(|w| w as u32), c1.map(|w| w as u32));
+    // instruction each, with no packing between 32- and 64-bit lanes. The
+    // rounds are written out, not looped: the instruction selector sees one
+    // block at a time, and across a loop's back edge it could not tell that
+    // a word's top half is zero, so it built two of the four multiplies
+    // from three 32-bit ones each.
+    let c = [lo, hi, realisations, [STREAM_MAIN; SIDE_BY_SIDE]].map(|w| w.map(u64::from));
+    let k = |round: u32| {
+        [
+            u64::from(key[0].wrapping_add(PHILOX_W0.wrapping_mul(round))),
+            u64::from(key[1].wrapping_add(PHILOX_W1.wrapping_mul(round))),
+        ]
+    };
+    let c = philox_round_lanes(c, k(0));
+    let c = philox_round_lanes(c, k(1));
+    let c = philox_round_lanes(c, k(2));
+    let c = philox_round_lanes(c, k(3));
+    let c = philox_round_lanes(c, k(4));
+    let c = philox_round_lanes(c, k(5));
+    let c = philox_round_lanes(c, k(6));
+    let c = philox_round_lanes(c, k(7));
+    let c = philox_round_lanes(c, k(8));
+    let [c0, c1, _, _] = philox_round_lanes(c, k(9));
+    let (c0, c1): ([u32; SIDE_BY_SIDE], [u32; SIDE_BY_SIDE]) =
+        (std::array::from_fn(|l| c0[l] as u32), std::array::from_fn(|l| c1[l] as u32));
     let count = count.min(SIDE_BY_SIDE);
     let radii: [f64; SIDE_BY_SIDE] = std::array::from_fn(|l| radius(uniform_open(c0[l])));
     let mut pairs = [(0.0, 0.0); SIDE_BY_SIDE];
@@ -286,6 +291,22 @@ fn pairs_of_counters(
         pairs[l] = (radii[l] * cos, radii[l] * sin);
     }
     pairs
+}
+
+/// [`philox_round`] of every lane: words `c` (each in a 64-bit lane, its
+/// top half zero) under the round key `k` (the same).
+#[inline(always)]
+fn philox_round_lanes(c: [[u64; SIDE_BY_SIDE]; 4], k: [u64; 2]) -> [[u64; SIDE_BY_SIDE]; 4] {
+    const LOW: u64 = 0xFFFF_FFFF;
+    let [c0, c1, c2, c3] = c;
+    let p0: [u64; SIDE_BY_SIDE] = std::array::from_fn(|l| u64::from(PHILOX_M0) * (c0[l] & LOW));
+    let p1: [u64; SIDE_BY_SIDE] = std::array::from_fn(|l| u64::from(PHILOX_M1) * (c2[l] & LOW));
+    [
+        std::array::from_fn(|l| (p1[l] >> 32) ^ c1[l] ^ k[0]),
+        std::array::from_fn(|l| p1[l] & LOW),
+        std::array::from_fn(|l| (p0[l] >> 32) ^ c3[l] ^ k[1]),
+        std::array::from_fn(|l| p0[l] & LOW),
+    ]
 }
 
 /// Pair A of a block: the Gaussians of words 0 and 1.
