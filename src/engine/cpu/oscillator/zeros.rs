@@ -96,31 +96,21 @@ impl Path<'_> {
             s.searching[l] = true;
         }
         let searched = s.searching;
-        for _ in 0..100 {
-            // The lanes still searching, their probes packed together.
-            let mut active = [0; N];
-            let mut count = 0;
-            for l in 0..N {
-                if !s.searching[l] {
-                    continue;
-                }
-                if s.hi[l] - s.lo[l] <= s.tolerance[l] {
-                    s.searching[l] = false;
-                    continue;
-                }
-                if !(s.x[l] > s.lo[l] && s.x[l] < s.hi[l]) {
-                    s.x[l] = 0.5 * (s.lo[l] + s.hi[l]);
-                }
-                active[count] = l;
-                count += 1;
-            }
-            let active = &active[..count];
-            match count {
-                0 => break,
-                1..=4 => probe_packed::<N, 4>(state, history, law, w, active, &mut s),
-                5..=8 => probe_packed::<N, 8>(state, history, law, w, active, &mut s),
-                _ => probe_packed::<N, N>(state, history, law, w, active, &mut s),
-            }
+        // The searching lanes, packed once: each round probes them all
+        // (a lane whose search has ended probes again and is not read), so
+        // only the probes' lengths change from round to round.
+        let mut order = [0; N];
+        let mut count = 0;
+        for l in (0..N).filter(|&l| s.searching[l]) {
+            order[count] = l;
+            count += 1;
+        }
+        let order = &order[..count];
+        match count {
+            0 => {}
+            1..=4 => search_packed::<N, 4>(state, history, law, w, order, &mut s),
+            5..=8 => search_packed::<N, 8>(state, history, law, w, order, &mut s),
+            _ => search_packed::<N, N>(state, history, law, w, order, &mut s),
         }
         std::array::from_fn(|l| searched[l].then(|| (s.hi[l], s.probed_hi[l].then_some(s.hi_step[l]))))
     }
@@ -143,20 +133,21 @@ impl Path<'_> {
     }
 }
 
-/// One round of the searches of the lanes `active` (at most `M`): their
-/// probes packed into `M` lanes (the rest copies of the first, discarded),
-/// then each lane's Newton step on its own probe, as
+/// The searches of the lanes `order` (at most `M`), round by round until
+/// each has ended: their states packed into `M` lanes once (the rest copies
+/// of the first, discarded), then each round one vector probe of every
+/// packed lane and each searching lane's Newton step on its own probe, as
 /// [`Path::locate_velocity_zero`]'s loop takes it.
 #[inline(always)]
-fn probe_packed<const N: usize, const M: usize>(
+fn search_packed<const N: usize, const M: usize>(
     state: &simd::SlipLanes<N>,
     history: Option<&simd::History<'_, N>>,
     law: &simd::SlipLaw,
     omega: f64,
-    active: &[usize],
+    order: &[usize],
     s: &mut Searches<N>,
 ) {
-    let lane = |j: usize| active.get(j).copied().unwrap_or(active[0]);
+    let lane = |j: usize| order.get(j).copied().unwrap_or(order[0]);
     let packed = simd::SlipLanes::<M> {
         x_m: std::array::from_fn(|j| state.x_m[lane(j)]),
         v_m_per_s: std::array::from_fn(|j| state.v_m_per_s[lane(j)]),
@@ -178,43 +169,74 @@ fn probe_packed<const N: usize, const M: usize>(
     let pack = |terms: &[f64; LANES]| std::array::from_fn(|j| if j < M { terms[lane(j)] } else { 0.0 });
     let law =
         simd::SlipLaw { a_offset: pack(&law.a_offset), b: pack(&law.b), d_s2_per_m2: pack(&law.d_s2_per_m2), ..*law };
-    let probes = std::array::from_fn(|j| s.x[lane(j)]);
-    let probed = simd::probe_step(&packed, &law, packed_history.as_ref(), probes, omega);
-    for (j, &l) in active.iter().enumerate() {
-        let sign = packed.sign[j];
-        let x = s.x[l];
-        let g_x = sign * probed.v_m_per_s[j];
-        let slope = sign * probed.end_acceleration[j];
-        let newton = x - g_x / slope;
-        let tolerance = s.tolerance[l];
-        if g_x > 0.0 {
-            s.lo[l] = x;
-        } else {
-            s.hi[l] = x;
-            s.probed_hi[l] = true;
-            // As the scalar RK4 step returns it.
-            s.hi_step[l] = SlipStep {
-                x_m: probed.x_m[j],
-                v_m_per_s: probed.v_m_per_s[j],
-                memory: probed.memory[j],
-                stage_x_m: probed.stage_x_m.map(|x| x[j]),
-                trig: [
-                    Trig { cos: packed.cos[j], sin: packed.sin[j] },
-                    Trig { cos: probed.mid_cos[j], sin: probed.mid_sin[j] },
-                    Trig { cos: probed.end_cos[j], sin: probed.end_sin[j] },
-                ],
-            };
-            if (newton - x).abs() < 0.5 * tolerance {
+    for _ in 0..100 {
+        let mut searching = false;
+        for &l in order {
+            if !s.searching[l] {
+                continue;
+            }
+            if s.hi[l] - s.lo[l] <= s.tolerance[l] {
                 s.searching[l] = false;
                 continue;
             }
+            if !(s.x[l] > s.lo[l] && s.x[l] < s.hi[l]) {
+                s.x[l] = 0.5 * (s.lo[l] + s.hi[l]);
+            }
+            searching = true;
         }
-        s.x[l] = if (newton - x).abs() < 0.5 * tolerance {
-            x + if g_x > 0.0 { 0.5 } else { -0.5 } * tolerance
-        } else {
-            newton
-        };
+        if !searching {
+            break;
+        }
+        let probes = std::array::from_fn(|j| s.x[lane(j)]);
+        let probed = simd::probe_step(&packed, &law, packed_history.as_ref(), probes, omega);
+        for (j, &l) in order.iter().enumerate() {
+            if !s.searching[l] {
+                continue;
+            }
+            newton_round(&packed, &probed, j, l, s);
+        }
     }
+}
+
+/// Lane `l`'s Newton step on its probe, packed lane `j` of `probed`.
+#[inline(always)]
+fn newton_round<const N: usize, const M: usize>(
+    packed: &simd::SlipLanes<M>,
+    probed: &simd::ProbedLanes<M>,
+    j: usize,
+    l: usize,
+    s: &mut Searches<N>,
+) {
+    let sign = packed.sign[j];
+    let x = s.x[l];
+    let g_x = sign * probed.v_m_per_s[j];
+    let slope = sign * probed.end_acceleration[j];
+    let newton = x - g_x / slope;
+    let tolerance = s.tolerance[l];
+    if g_x > 0.0 {
+        s.lo[l] = x;
+    } else {
+        s.hi[l] = x;
+        s.probed_hi[l] = true;
+        // As the scalar RK4 step returns it.
+        s.hi_step[l] = SlipStep {
+            x_m: probed.x_m[j],
+            v_m_per_s: probed.v_m_per_s[j],
+            memory: probed.memory[j],
+            stage_x_m: probed.stage_x_m.map(|x| x[j]),
+            trig: [
+                Trig { cos: packed.cos[j], sin: packed.sin[j] },
+                Trig { cos: probed.mid_cos[j], sin: probed.mid_sin[j] },
+                Trig { cos: probed.end_cos[j], sin: probed.end_sin[j] },
+            ],
+        };
+        if (newton - x).abs() < 0.5 * tolerance {
+            s.searching[l] = false;
+            return;
+        }
+    }
+    s.x[l] =
+        if (newton - x).abs() < 0.5 * tolerance { x + if g_x > 0.0 { 0.5 } else { -0.5 } * tolerance } else { newton };
 }
 
 #[cfg(test)]
