@@ -5,10 +5,11 @@
 //! which one of sixteen lanes met a zero held 5.4 on average, and one in
 //! twelve held all sixteen. One lane's search ([`Path::locate_velocity_zero`])
 //! is a chain of RK4 probes, each waiting on the last; here the lanes' searches
-//! run in lockstep, each round one vector probe for every lane still
-//! searching ([`simd::probe_step`]), so their chains overlap. Each lane's
-//! decisions are its own search's, made on the same values, so each finds
-//! the same zero, bit for bit.
+//! run in lockstep, each round one vector probe of every lane searched
+//! ([`simd::probe_step`]; a lane whose search has ended is probed and not
+//! read), so their chains overlap. Each lane's decisions are its own
+//! search's, made on the same values, so each finds the same zero, bit for
+//! bit.
 
 use super::simd;
 use super::*;
