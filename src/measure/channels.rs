@@ -6,7 +6,8 @@
 //!
 //! A record that breaks one of them (a velocity in mm/s, a channel wired
 //! the other way round, the force on the friction element instead of the
-//! one on the block) reads without a single bad value. Read as it is, none
+//! one on the block, a dead channel that reads 0 throughout) reads without
+//! a single bad value. Read as it is, none
 //! of its samples counts as slipping, every friction feature vanishes
 //! without a word, and a diagnosis is sure of `none` on data it never
 //! looked at. So such a record is refused, by file and column, with what
@@ -77,8 +78,24 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
         .filter_map(|(i, rate)| v.get(i).filter(|v| v.is_finite()).map(|&v| (v, rate)))
         .collect();
     let (vv, rr, vr) = pairs.iter().fold((0.0, 0.0, 0.0), |(vv, rr, vr), &(v, r)| (vv + v * v, rr + r * r, vr + v * r));
-    if pairs.len() < MIN_SAMPLES || !(vv > 0.0 && rr > 0.0) {
+    if pairs.len() < MIN_SAMPLES || rr <= 0.0 {
         return Ok(());
+    }
+    // A channel that never changes while `x` moves is dead (or a constant
+    // written in its place): read as a velocity, it would make a sliding
+    // block look stuck throughout.
+    if let Some(&(first, _)) = pairs.first()
+        && pairs.iter().all(|&(v, _)| v == first)
+    {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "column `v`: it is {} m/s at every sample while `x` moves: a dead channel, not the block's \
+                 velocity dx/dt (leave the column out if the rig did not record it)",
+                fmt_value(first + 0.0)
+            ),
+        ));
     }
     let correlation = vr / (vv * rr).sqrt();
     let scale = (vv / rr).sqrt();
@@ -112,7 +129,26 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
 /// [`REVERSED_SHARE`] or more of the samples where the block moves at more
 /// than half its peak speed, where it slips.
 pub(super) fn check_friction(path: &Path, t_s: &[f64], x_m: &[f64], friction_n: &[f64]) -> Result<()> {
-    let signs: Vec<f64> = fast_motion(t_s, x_m)
+    let moving = fast_motion(t_s, x_m);
+    // The friction force on this rig never holds still while the block
+    // moves: it turns with the motion where the block slips, and balances
+    // the springs' pull, which follows the base, where it sticks.
+    let finite = || friction_n.iter().filter(|f| f.is_finite());
+    if let Some(&first) = finite().next()
+        && moving.len() >= MIN_SAMPLES
+        && finite().all(|&f| f == first)
+    {
+        return Err(bad(
+            path,
+            None,
+            format!(
+                "column `friction_force`: it is {} N at every sample while the block moves: a dead channel, not the \
+                 force on the block (leave the column out if the rig did not record it)",
+                fmt_value(first + 0.0)
+            ),
+        ));
+    }
+    let signs: Vec<f64> = moving
         .into_iter()
         .filter_map(|(i, r)| friction_n.get(i).map(|&f| f * r))
         .filter(|p| p.is_finite() && *p != 0.0)
@@ -135,83 +171,139 @@ pub(super) fn check_friction(path: &Path, t_s: &[f64], x_m: &[f64], friction_n: 
 }
 
 /// The factor by which the friction force may differ from the force the
-/// equation of motion puts on the block before its unit is called wrong:
-/// on the 250 benchmark records (seeds 7 and 36, sensor noise included)
-/// where the two are the same signal ([`BALANCE_CORRELATION`]) they agree
-/// within 3–48%; a friction force in kN is a thousand times too small.
+/// equation of motion puts on the block before its unit is called wrong: at
+/// the excitation's harmonics the two agree within 1.5% on every benchmark
+/// record of either generator (sensor noise included); a friction force in
+/// kN is a thousand times too small, a dead channel zero times.
 const BALANCE_FACTOR: f64 = 5.0;
 
-/// The correlation of the two sides of the equation of motion (each less
-/// its part at the excitation frequency) below which their ratio is not
-/// judged: a block stuck throughout leaves the friction force's residual
-/// below the noise that differencing puts into x'' (correlations of 0.02–0.1
-/// on such records), and noise in the friction force alone inflates the
-/// ratio by about the inverse square of the correlation (at most 2 here).
-const BALANCE_CORRELATION: f64 = 0.7;
+/// How many times its own noise the rig's side must stand out at the
+/// harmonics before the balance is judged: a block stuck throughout, or one
+/// sliding in a near-sinusoid, leaves its harmonics at the noise of `x`, and
+/// there the ratio says nothing.
+const BALANCE_SIGNAL_TO_NOISE: f64 = 10.0;
+
+/// The highest harmonic of the excitation the balance reads (from the 2nd),
+/// and the share of the sample rate it stays below: the odd ones up to the
+/// 5th carry most of a stick-slip force's shape, and the least-squares fit
+/// of [`least_squares`] holds the constant, the fundamental and these five.
+const BALANCE_HARMONICS: usize = 6;
+const BALANCE_NYQUIST_SHARE: f64 = 0.4;
+
+/// The stretches of a record the balance reads apart, to see how far its
+/// harmonics move from one to the next (their noise): a record covers at
+/// least ten excitation periods, so each covers at least two.
+const BALANCE_STRETCHES: usize = 5;
+
+/// The harmonics' coefficients (cos, sin of each of `harmonics` of the
+/// angular frequency `w`, rad/s) of `y` over samples `range` at times `t`
+/// (s), fitted beside a constant and the fundamental.
+fn harmonic_parts(
+    t: &[f64],
+    y: &[f64],
+    range: std::ops::Range<usize>,
+    w: f64,
+    harmonics: &[usize],
+) -> Option<Vec<f64>> {
+    let offset = range.start;
+    let fill = |i: usize, row: &mut [f64]| {
+        row[0] = 1.0;
+        for (slot, j) in std::iter::once(1).chain(harmonics.iter().copied()).enumerate() {
+            let (s, c) = (j as f64 * w * t[offset + i]).sin_cos();
+            row[1 + 2 * slot] = c;
+            row[2 + 2 * slot] = s;
+        }
+    };
+    let (coefficients, _) = least_squares(range.len(), 3 + 2 * harmonics.len(), fill, |i| y[offset + i])?;
+    Some(coefficients[3..].to_vec())
+}
 
 /// Refuses a run whose friction force is not, within [`BALANCE_FACTOR`],
 /// the force the rest of the equation of motion puts on the block:
-/// `m x'' + c x' + k x = k u(t) + F` with the rig's m, c and k and `x''`,
-/// `x'` by central differences, both sides stripped of their parts at the
-/// excitation frequency and a constant (the base's k u(t), whose phase a
-/// record with a free time origin does not fix, and any offset). The
-/// factor is the regression of the rig's side on the friction force
-/// (noise in `x''`, amplified by the differencing, does not bias it that
-/// way round), inverted, judged where the two are the same signal.
+/// `m x'' + c x' + k x = k u(t) + F`, with the rig's m, c and k. Both are
+/// read at the excitation's harmonics from the 2nd to the
+/// [`BALANCE_HARMONICS`]th, where the base's `k u(t)` (at the fundamental
+/// only, whatever the time origin) does not enter: `x` and the friction
+/// force are fitted by least squares on a constant, the fundamental and
+/// those harmonics, and the rig's side at harmonic `j` follows from `x`'s
+/// there exactly, `(k − m (jΩ)² + i c jΩ) X_j`, with no differencing. So
+/// sensor noise averages out over the record, and the factor (the friction
+/// force's regression on the rig's side) is sharp wherever the motion has
+/// harmonics that stand out of their noise ([`BALANCE_SIGNAL_TO_NOISE`],
+/// the noise read from how the harmonics move between
+/// [`BALANCE_STRETCHES`] stretches of the record): a channel in another
+/// unit, another signal, or a dead one reads far from 1.
 pub(super) fn check_force_balance(run: &Run, rig: &RigInfo) -> Result<()> {
     let Some(friction_n) = &run.friction_force else { return Ok(()) };
     let (t, x) = (&run.t_s, &run.x_m);
     let n = t.len().min(x.len()).min(friction_n.len());
+    if n < MIN_SAMPLES * BALANCE_STRETCHES {
+        return Ok(());
+    }
     let k = rig.mass_kg * (std::f64::consts::TAU * rig.natural_frequency_hz).powi(2);
     let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
     let w = std::f64::consts::TAU * run.excitation_frequency_hz;
-    // Rows (rig's force, friction force, cos Ωt, sin Ωt, 1).
-    let rows: Vec<[f64; 5]> = (1..n.saturating_sub(1))
-        .filter_map(|i| {
-            let (h0, h1) = (t[i] - t[i - 1], t[i + 1] - t[i]);
-            let rate = (x[i + 1] - x[i - 1]) / (h0 + h1);
-            let accel = 2.0 * ((x[i + 1] - x[i]) / h1 - (x[i] - x[i - 1]) / h0) / (h0 + h1);
-            let rig_n = rig.mass_kg * accel + c * rate + k * x[i];
-            let row = [rig_n, friction_n[i], (w * t[i]).cos(), (w * t[i]).sin(), 1.0];
-            row.iter().all(|v| v.is_finite()).then_some(row)
-        })
+    let sample_rate_hz = (n - 1) as f64 / (t[n - 1] - t[0]);
+    let harmonics: Vec<usize> = (2..=BALANCE_HARMONICS)
+        .filter(|&j| j as f64 * run.excitation_frequency_hz < BALANCE_NYQUIST_SHARE * sample_rate_hz)
         .collect();
-    if rows.len() < MIN_SAMPLES {
+    if harmonics.is_empty() {
         return Ok(());
     }
-    let (rig_side, friction) = (residual(&rows, 0), residual(&rows, 1));
-    let ff: f64 = friction.iter().map(|f| f * f).sum();
-    let rr: f64 = rig_side.iter().map(|r| r * r).sum();
-    let rf: f64 = rig_side.iter().zip(&friction).map(|(r, f)| r * f).sum();
-    if !(ff > 0.0 && rr > 0.0 && rf / (rr * ff).sqrt() >= BALANCE_CORRELATION) {
+    // Per stretch, the rig's side and the friction force at the harmonics.
+    let mut rig_parts = Vec::with_capacity(BALANCE_STRETCHES);
+    let mut friction_parts = Vec::with_capacity(BALANCE_STRETCHES);
+    for b in 0..BALANCE_STRETCHES {
+        let range = b * n / BALANCE_STRETCHES..(b + 1) * n / BALANCE_STRETCHES;
+        let (Some(xc), Some(fc)) =
+            (harmonic_parts(t, x, range.clone(), w, &harmonics), harmonic_parts(t, friction_n, range, w, &harmonics))
+        else {
+            return Ok(());
+        };
+        let mut rig_side = Vec::with_capacity(xc.len());
+        for (slot, &j) in harmonics.iter().enumerate() {
+            let (a, b) = (xc[2 * slot], xc[2 * slot + 1]);
+            let jw = j as f64 * w;
+            let (spring, damper) = (k - rig.mass_kg * jw * jw, c * jw);
+            // x = a cos + b sin: m x'' + c x' + k x has cos part
+            // (k − m (jω)²) a + c jω b and sin part (k − m (jω)²) b − c jω a.
+            rig_side.extend([spring * a + damper * b, spring * b - damper * a]);
+        }
+        rig_parts.push(rig_side);
+        friction_parts.push(fc);
+    }
+    let mean = |parts: &[Vec<f64>]| -> Vec<f64> {
+        (0..parts[0].len()).map(|i| parts.iter().map(|p| p[i]).sum::<f64>() / parts.len() as f64).collect()
+    };
+    let (rig_side, friction) = (mean(&rig_parts), mean(&friction_parts));
+    // The noise of the mean rig side: its stretches' scatter over B(B − 1).
+    let stretches = BALANCE_STRETCHES as f64;
+    let noise: f64 =
+        rig_parts.iter().flat_map(|p| p.iter().zip(&rig_side).map(|(v, m)| (v - m) * (v - m))).sum::<f64>()
+            / (stretches * (stretches - 1.0));
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+    let (rr, rf, ff) = (dot(&rig_side, &rig_side), dot(&rig_side, &friction), dot(&friction, &friction));
+    if !(rr > 0.0 && rr >= BALANCE_SIGNAL_TO_NOISE * BALANCE_SIGNAL_TO_NOISE * noise) {
         return Ok(());
     }
-    let factor = ff / rf;
+    let factor = rf / rr;
+    let correlation = if ff > 0.0 { rf / (rr * ff).sqrt() } else { 0.0 };
     if !(1.0 / BALANCE_FACTOR..=BALANCE_FACTOR).contains(&factor) {
+        let last = harmonics.last().copied().unwrap_or(2);
         return Err(bad(
             &run.file,
             None,
             format!(
-                "column `friction_force`: it is {} times the force the rest of the equation of motion puts on the \
-                 block (m x'' + c x' + k x from `x` and the rig, less its part at the excitation frequency): the \
-                 friction force must be in newtons, and the rig's mass and natural frequency those of this block",
-                fmt_value(float_3(factor))
+                "column `friction_force`: at the excitation's harmonics 2 to {last} it is {} times the force the rest \
+                 of the equation of motion puts on the block there (m x'' + c x' + k x from `x` and the rig; the two \
+                 correlate at {}): the friction force must be the force on this block, in newtons, and the rig's \
+                 mass and natural frequency those of this block (a factor near 0 is a dead or unrelated channel)",
+                fmt_value(float_3(factor)),
+                fmt_value(float_3(correlation))
             ),
         ));
     }
     Ok(())
-}
-
-/// Column `j` of `rows` less its least-squares fit on the last three
-/// columns (cos Ωt, sin Ωt, 1); all zeros where that fit is singular.
-fn residual(rows: &[[f64; 5]], j: usize) -> Vec<f64> {
-    let fill = |i: usize, basis: &mut [f64]| basis.copy_from_slice(&rows[i][2..]);
-    match least_squares(rows.len(), 3, fill, |i| rows[i][j]) {
-        Some((coef, _)) => {
-            rows.iter().map(|row| row[j] - coef[0] * row[2] - coef[1] * row[3] - coef[2] * row[4]).collect()
-        }
-        None => vec![0.0; rows.len()],
-    }
 }
 
 /// `x` rounded to three significant figures, for messages.
@@ -244,13 +336,78 @@ mod tests {
         let path = Path::new("run.csv");
         assert!(check_velocity(path, &t, &x, &v).is_ok());
         assert!(check_friction(path, &t, &x, &f).is_ok());
-        // A block at rest, whose velocity and friction force are noise, and
-        // a zero friction column say nothing either way.
+        // A block at rest, whose velocity and friction force are noise, says
+        // nothing either way.
         let still = vec![0.0; t.len()];
         let noise: Vec<f64> = (0..t.len()).map(|i| ((i * 7919) % 13) as f64 - 6.0).collect();
         assert!(check_friction(path, &t, &still, &noise).is_ok());
         assert!(check_velocity(path, &t, &still, &noise).is_ok());
-        assert!(check_friction(path, &t, &x, &still).is_ok());
+        // A dead channel beside a moving block is refused, by column.
+        let err = check_friction(path, &t, &x, &still).unwrap_err().to_string();
+        assert!(err.contains("column `friction_force`") && err.contains("dead channel"), "{err}");
+        let err = check_velocity(path, &t, &x, &still).unwrap_err().to_string();
+        assert!(err.contains("column `v`") && err.contains("dead channel"), "{err}");
+    }
+
+    /// A record that keeps the equation of motion exactly: `x` with a 3rd
+    /// and 5th harmonic beside the fundamental (`shaped`; a pure sinusoid
+    /// otherwise), 7 Hz on the paper's rig for 4 s at 600 Hz, and the
+    /// friction force the equation puts on the block, times `gain`; `x` is
+    /// read with a sensor's noise.
+    fn balanced_run(shaped: bool, gain: f64) -> (Run, RigInfo) {
+        let rig = RigInfo { mass_kg: 1.028, natural_frequency_hz: 10.05, damping_ratio: 0.00225 };
+        let k = rig.mass_kg * (std::f64::consts::TAU * rig.natural_frequency_hz).powi(2);
+        let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
+        let w = std::f64::consts::TAU * 7.0;
+        let parts: &[(f64, f64, f64)] =
+            if shaped { &[(1.0, 4e-3, 0.0), (3.0, 2e-4, 1.0), (5.0, 5e-5, 2.0)] } else { &[(1.0, 4e-3, 0.0)] };
+        let t: Vec<f64> = (0..2400).map(|i| i as f64 / 600.0).collect();
+        let mut x = Vec::new();
+        let mut friction = Vec::new();
+        for &t in &t {
+            let (mut xi, mut rig_side) = (0.0, 0.0);
+            for &(j, a, phase) in parts {
+                let (jw, angle) = (j * w, j * w * t + phase);
+                xi += a * angle.cos();
+                rig_side += a * ((k - rig.mass_kg * jw * jw) * angle.cos() - c * jw * angle.sin());
+            }
+            // A sensor's noise of about 2 µm.
+            let noise = ((x.len() * 7919) % 13) as f64 / 6.0 - 1.0;
+            x.push(xi + 2e-6 * noise);
+            friction.push(gain * (rig_side - k * 2.5e-3 * (w * t).cos()));
+        }
+        let run = Run {
+            file: "run.csv".into(),
+            excitation_frequency_hz: 7.0,
+            excitation_amplitude_m: 2.5e-3,
+            normal_force_n: 16.0,
+            t_s: t,
+            x_m: x,
+            v_m_per_s: None,
+            normal_force: None,
+            friction_force: Some(friction),
+            time_origin: Default::default(),
+        };
+        (run, rig)
+    }
+
+    #[test]
+    fn the_friction_force_is_weighed_against_the_equation_of_motion_at_the_harmonics() {
+        let balanced = |shaped, gain| {
+            let (run, rig) = balanced_run(shaped, gain);
+            check_force_balance(&run, &rig)
+        };
+        assert!(balanced(true, 1.0).is_ok());
+        // Within the factor a sensor's calibration may miss by, it reads.
+        assert!(balanced(true, 3.0).is_ok() && balanced(true, 0.3).is_ok());
+        for gain in [10.0, 1e-3, -1.0] {
+            let err = balanced(true, gain).unwrap_err().to_string();
+            assert!(err.contains("column `friction_force`") && err.contains("harmonics 2 to 6"), "{err}");
+        }
+        let err = balanced(true, 10.0).unwrap_err().to_string();
+        assert!(err.contains("it is 10 times"), "{err}");
+        // A motion without harmonics says nothing of the force's scale.
+        assert!(balanced(false, 10.0).is_ok());
     }
 
     #[test]

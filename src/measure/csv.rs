@@ -284,7 +284,7 @@ pub(super) fn read_run_file(
     // harmonics, drift, wear): tens of percent, not a factor of
     // [`NOMINAL_FORCE_FACTOR`], which is a unit (kN for N) or a setting that
     // is not in newtons.
-    if has_n && force_n > 0.0 && mean_force > 0.0 {
+    if has_n && !normal.is_empty() && force_n > 0.0 {
         let ratio = mean_force / force_n;
         if !(1.0 / NOMINAL_FORCE_FACTOR..=NOMINAL_FORCE_FACTOR).contains(&ratio) {
             return Err(bad(
@@ -581,8 +581,8 @@ pub(super) fn read_summary_file(path: &Path, bytes: Vec<u8>) -> Result<Vec<Summa
         let force_max = limits::FORCE_MAX_N;
         rows.push(SummaryRow {
             excitation_frequency_hz: required(0, Bound::within(f_lo, f_hi), "Hz")?,
-            excitation_amplitude_m: required(1, Bound::within(0.0, limits::AMPLITUDE_MAX_M), "m")?,
-            normal_force_mean_n: required(2, Bound::within(0.0, force_max), "N")?,
+            excitation_amplitude_m: required(1, Bound::positive(limits::AMPLITUDE_MAX_M), "m")?,
+            normal_force_mean_n: required(2, Bound::positive(force_max), "N")?,
             normal_force_var_n2: check(3, Bound::within(0.0, force_max * force_max), "N²")?,
             peak_mean_m,
             peak_var_m2: check(5, Bound::within(0.0, displacement * displacement), "m²")?,

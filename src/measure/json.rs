@@ -40,6 +40,11 @@ impl Bound {
         Bound::Range { lo, hi, lo_open: false }
     }
 
+    /// `(0, hi]`.
+    pub(super) const fn positive(hi: f64) -> Bound {
+        Bound::Range { lo: 0.0, hi, lo_open: true }
+    }
+
     /// `None` if `value` is acceptable, else what is wrong with it.
     pub(super) fn violation(self, value: f64, unit: &str) -> Option<String> {
         use crate::engine::model::{fmt_bound, fmt_value};
@@ -54,7 +59,7 @@ impl Bound {
                 Some(format!("{shown} must not be negative (≥ {}{unit})", fmt_bound(lo)))
             }
             Bound::Range { lo, lo_open, .. } if value == 0.0 && (lo > 0.0 || (lo_open && lo == 0.0)) => {
-                Some(format!("{shown} must be positive (≥ {}{unit})", fmt_bound(lo)))
+                Some(format!("{shown} must be positive ({} {}{unit})", if lo_open { ">" } else { "≥" }, fmt_bound(lo)))
             }
             Bound::Range { lo, lo_open, .. } if value < lo || (lo_open && value == lo) => {
                 Some(format!("{shown} must be {} {}{unit}", if lo_open { ">" } else { "≥" }, fmt_bound(lo)))

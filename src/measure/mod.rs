@@ -45,9 +45,11 @@
 //! - **Sampling.** A record must be sampled above twice its excitation
 //!   frequency (Nyquist), with an interval the simulator can hold noise over.
 //! - **Channel conventions.** A `v` column must be the rate of change of
-//!   `x` (not its mirror image, not in another unit), and a friction force
-//!   must oppose the block's motion where it moves fastest, not push it
-//!   along (a reversed sign): see `channels`.
+//!   `x` (not its mirror image, not in another unit, not a dead channel),
+//!   and a friction force must oppose the block's motion where it moves
+//!   fastest, not push it along (a reversed sign), and be what the equation
+//!   of motion puts on the block at the excitation's harmonics: see
+//!   `channels`.
 //! - **Summary counts.** `n_peaks` must be at least 1 (2 with a variance) and
 //!   at most the periods one simulated record may run.
 
@@ -116,9 +118,9 @@ pub struct Run {
     pub file: PathBuf,
     /// Excitation frequency, Hz (> 0).
     pub excitation_frequency_hz: f64,
-    /// Base excitation amplitude, m (≥ 0).
+    /// Base excitation amplitude, m (> 0 in a measurement set).
     pub excitation_amplitude_m: f64,
-    /// Nominal normal-force setting, N (≥ 0).
+    /// Nominal normal-force setting, N (> 0 in a measurement set).
     pub normal_force_n: f64,
     /// Sample times, s, strictly increasing and uniformly spaced.
     pub t_s: Vec<f64>,
@@ -345,9 +347,12 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
             }
         };
         let frequency = manifest.number(obj, &ctx, "excitation_frequency_hz", Bound::within(f_lo, f_hi), "Hz")?;
+        // A run is driven by the base and pressed by the friction element:
+        // with no excitation the model's block stays at rest, and with no
+        // normal force there is no friction to diagnose.
         let amplitude =
-            manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::within(0.0, limits::AMPLITUDE_MAX_M), "m")?;
-        let force = manifest.number(obj, &ctx, "normal_force_n", Bound::within(0.0, limits::FORCE_MAX_N), "N")?;
+            manifest.number(obj, &ctx, "excitation_amplitude_m", Bound::positive(limits::AMPLITUDE_MAX_M), "m")?;
+        let force = manifest.number(obj, &ctx, "normal_force_n", Bound::positive(limits::FORCE_MAX_N), "N")?;
         let free = time_origin(obj.get("time_origin"), &format!("{ctx}.time_origin"), &manifest_path)?;
         entries.push((file, frequency, amplitude, force, free || set_origin));
     }

@@ -102,7 +102,9 @@ pub(crate) fn run_csv() -> String {
     for i in 0..1200 {
         let t = i as f64 / 600.0;
         let phase = std::f64::consts::TAU * 7.0 * t;
-        text += &format!("{t},{},{},16,-1\n", 0.004 * phase.cos(), -0.004 * 7.0 * phase.sin());
+        let v = -0.004 * 7.0 * phase.sin();
+        // A friction force of 1 N opposing the motion.
+        text += &format!("{t},{},{v},16,{}\n", 0.004 * phase.cos(), -v.signum());
     }
     text
 }

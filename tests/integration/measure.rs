@@ -49,7 +49,9 @@ fn run_csv(n: usize) -> String {
     for i in 0..n {
         let t = i as f64 / 600.0;
         let phase = std::f64::consts::TAU * 7.0 * t;
-        text += &format!("{t},{},{},16,-1\n", 0.004 * phase.cos(), -0.004 * 7.0 * phase.sin());
+        let v = -0.004 * 7.0 * phase.sin();
+        // A friction force of 1 N opposing the motion.
+        text += &format!("{t},{},{v},16,{}\n", 0.004 * phase.cos(), -v.signum());
     }
     text
 }
@@ -295,6 +297,15 @@ fn negative_or_zero_mass_and_frequencies() {
         ("10.05", "0.0", "rig.natural_frequency_hz", "positive"),
         ("0.00225", "-0.00225", "rig.damping_ratio", "negative"),
         ("\"normal_force_n\": 16.0", "\"normal_force_n\": -16.0", "runs[0].normal_force_n", "negative"),
+        // An undriven block stays at rest, and without a normal force there
+        // is no friction: a run has both.
+        ("\"normal_force_n\": 16.0", "\"normal_force_n\": 0", "runs[0].normal_force_n", "positive (> 0 N)"),
+        (
+            "\"excitation_amplitude_m\": 0.0025",
+            "\"excitation_amplitude_m\": 0",
+            "runs[0].excitation_amplitude_m",
+            "positive",
+        ),
     ] {
         s.write("manifest.json", &good.replacen(from, to, 1));
         refused(&s.0, "manifest.json", None, &[key, problem]);
@@ -314,6 +325,10 @@ fn negative_or_zero_mass_and_frequencies() {
     refused(&s.0, "summary.csv", Some(3), &["column `excitation_frequency_hz`", "negative"]);
     s.write("summary.csv", &format!("{header}0.004,16,0.0025,7,-1e-8\n"));
     refused(&s.0, "summary.csv", Some(2), &["column `peak_var_m2`", "negative"]);
+    s.write("summary.csv", &format!("{header}0.004,16,0,7,1e-8\n"));
+    refused(&s.0, "summary.csv", Some(2), &["column `excitation_amplitude_m`", "positive"]);
+    s.write("summary.csv", &format!("{header}0.004,0,0.0025,7,1e-8\n"));
+    refused(&s.0, "summary.csv", Some(2), &["column `normal_force_mean_n`", "positive"]);
     // The same table with a valid row reads, columns in this order.
     s.write("summary.csv", &format!("{header}0.004,16,0.0025,7,1e-8\n"));
     let set = read_measurement_set(&s.0).expect("valid summary reads");
@@ -346,7 +361,7 @@ fn time_must_increase_and_be_uniform() {
 
 /// A slipping block's record at 600 Hz for 2 s, its velocity column scaled
 /// by `v_factor` and its friction force (2 N, opposing the motion) by
-/// `friction_sign`.
+/// `friction_sign` (either may be 0).
 fn run_csv_slipping(v_factor: f64, friction_sign: f64) -> String {
     let mut text = String::from("t,x,v,normal_force,friction_force\n");
     let w = std::f64::consts::TAU * 7.0;
@@ -378,6 +393,14 @@ fn a_channel_with_its_sign_reversed_or_in_another_unit_is_refused() {
     // The normal force in kN beside a nominal setting in N.
     s.write("run.csv", &run_csv_slipping(1.0, 1.0).replace(",16,", ",0.016,"));
     refused(&s.0, "run.csv", None, &["column `normal_force`", "0.001 times", "nominal normal_force_n, 16 N"]);
+    // A channel that holds one value while the block moves is dead: a zero
+    // normal force, velocity or friction force is refused, by column.
+    s.write("run.csv", &run_csv_slipping(1.0, 1.0).replace(",16,", ",0,"));
+    refused(&s.0, "run.csv", None, &["column `normal_force`", "0 times", "nominal normal_force_n, 16 N"]);
+    s.write("run.csv", &run_csv_slipping(0.0, 1.0));
+    refused(&s.0, "run.csv", None, &["column `v`", "dead channel"]);
+    s.write("run.csv", &run_csv_slipping(1.0, 0.0));
+    refused(&s.0, "run.csv", None, &["column `friction_force`", "dead channel"]);
 }
 
 #[test]
@@ -454,11 +477,16 @@ fn a_friction_force_the_equation_of_motion_disowns_is_refused() {
     let mut samples = common::record(&model, condition, 5, 10, 4.0, 600.0);
     write_simulated_set(&s, "force balance", &model, &samples);
     read_measurement_set(&s.0).expect("a simulated record keeps the equation of motion");
-    for sample in &mut samples {
-        sample.friction_force_n /= 1000.0;
+    let original = samples.clone();
+    // In kN, with a gain ten times too large, or dead: each is refused.
+    for (scale, said) in [(1e-3, "times the force"), (10.0, "times the force"), (0.0, "dead channel")] {
+        for (sample, first) in samples.iter_mut().zip(&original) {
+            sample.friction_force_n = first.friction_force_n * scale;
+        }
+        measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
+        let needs: &[&str] = if scale == 0.0 { &[said] } else { &["equation of motion", "newtons", said] };
+        refused(&s.0, "sim.csv", None, &[&["column `friction_force`"], needs].concat());
     }
-    measure::write_run_file(&s.0.join("sim.csv"), &samples).unwrap();
-    refused(&s.0, "sim.csv", None, &["column `friction_force`", "equation of motion", "newtons"]);
 }
 
 /// Some rigs publish only phases: a summary row needs a mean peak or a mean
