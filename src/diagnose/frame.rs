@@ -11,8 +11,10 @@
 //! the base without saying so give phases that disagree with every model by
 //! anything up to 180°, condition by condition at random: scored, they
 //! would swamp every other observable (z-scores in the tens of thousands)
-//! and make a null set look like an effect. [`check_phases`] finds that
-//! pattern and sets such phases aside, saying so in the report.
+//! and make a null set look like an effect. A `base_x` or `x` channel with
+//! its sign reversed moves every phase by half a turn instead.
+//! [`check_phases`] finds either pattern and sets such phases aside, saying
+//! so in the report.
 
 use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
@@ -205,28 +207,79 @@ pub(crate) fn looks_free(scores: &[Score], claims_frame: impl Fn(usize) -> bool)
     (large && resultant < (3.0 / n as f64).sqrt()).then_some((resultant, n))
 }
 
-/// Where the phase means of the record units that claim the model's frame
-/// look as if their time origin were free ([`looks_free`] on the calibrated
-/// baseline's `scores`), sets them aside: the phase means leave the measured
-/// observables and the records' phases count as relative ones. Returns the
-/// report's note when it did.
-pub(crate) fn check_phases(data: &mut Data<'_>, scores: &[Score]) -> Option<String> {
-    let claims = |u: usize| {
-        let unit = &data.units[u];
-        unit.summary.is_none() && unit.runs.iter().all(|&r| data.set.runs[r].time_origin == TimeOrigin::Model)
-    };
-    let (resultant, n) = looks_free(scores, claims)?;
-    let units: Vec<usize> = (0..data.units.len()).filter(|&u| claims(u)).collect();
-    for &u in &units {
+/// Whether the phase means of `scores` (measured against simulated, one per
+/// record unit that gives an absolute phase, `claims_phase`) sit half a turn
+/// from the simulated ones: each residual within [`HALF_TURN_TOLERANCE_DEG`]
+/// of ±180° and the median |z| beyond 10. A `base_x` or `x` channel with
+/// its sign reversed (or the opposite convention for the lag) moves every
+/// phase by 180° and nothing else; a model that misfits the phase (a wrong
+/// natural frequency, say) misfits it by half a turn only between the
+/// stated and the true resonance, not at every condition. Returns the
+/// residuals' circular mean (degrees) and their number where the pattern
+/// holds.
+pub(crate) fn looks_reversed(scores: &[Score], claims_phase: impl Fn(usize) -> bool) -> Option<(f64, usize)> {
+    let phases: Vec<&Score> =
+        scores.iter().filter(|s| s.observable == Observable::PhaseMeanDeg && claims_phase(s.unit)).collect();
+    let n = phases.len();
+    if n < MIN_UNITS {
+        return None;
+    }
+    let residuals: Vec<f64> = phases.iter().map(|s| wrap_angle((s.measured - s.simulated).to_radians())).collect();
+    let half_turn = residuals.iter().all(|r| r.abs().to_degrees() >= 180.0 - HALF_TURN_TOLERANCE_DEG);
+    let mut z: Vec<f64> = phases.iter().map(|s| s.z.abs()).collect();
+    z.sort_by(f64::total_cmp);
+    let (c, s) = residuals.iter().fold((0.0, 0.0), |(c, s), r| (c + r.cos(), s + r.sin()));
+    (half_turn && z[n / 2] > 10.0).then_some((s.atan2(c).to_degrees(), n))
+}
+
+/// How far from ±180° every phase residual must lie for
+/// [`looks_reversed`], degrees.
+const HALF_TURN_TOLERANCE_DEG: f64 = 45.0;
+
+/// Sets aside the phase means of record units `units`: they leave the
+/// measured observables and the records' phases count as relative ones.
+fn set_phases_aside(data: &mut Data<'_>, units: &[usize]) {
+    for &u in units {
         data.measured[u].remove(&Observable::PhaseMeanDeg);
         for f in &mut data.features[u] {
             f.absolute_phase = false;
         }
     }
-    Some(format!(
-        "the response phases of {n} record units disagree with the calibrated baseline by a median of more than 30° and in every direction (mean resultant length {resultant:.2}, below the {:.2} that uniform angles exceed 5% of the time): their time origin looks free, not the frame of u = U0 cos(2π f t) the format assumes without a base_x column. Their phase means are set aside (not scored); declare \"time_origin\": \"free\" or give a base_x column to say so",
-        (3.0 / n as f64).sqrt()
-    ))
+}
+
+/// Checks the absolute phases against the calibrated baseline's `scores`,
+/// and sets aside those that cannot mean what they claim, saying why in a
+/// note for the report (a line for progress beside each): the record units
+/// that claim the model's frame where they look as if their time origin
+/// were free ([`looks_free`]), and those that give an absolute phase where
+/// every one of them sits half a turn from the baseline's
+/// ([`looks_reversed`]).
+pub(crate) fn check_phases(data: &mut Data<'_>, scores: &[Score]) -> Vec<(String, &'static str)> {
+    let mut notes = Vec::new();
+    let runs_all = |data: &Data<'_>, u: usize, keep: &dyn Fn(TimeOrigin) -> bool| {
+        let unit = &data.units[u];
+        unit.summary.is_none() && unit.runs.iter().all(|&r| keep(data.set.runs[r].time_origin))
+    };
+    let in_frame = |data: &Data<'_>, u: usize| runs_all(data, u, &|o| o == TimeOrigin::Model);
+    if let Some((resultant, n)) = looks_free(scores, |u| in_frame(data, u)) {
+        let units: Vec<usize> = (0..data.units.len()).filter(|&u| in_frame(data, u)).collect();
+        set_phases_aside(data, &units);
+        notes.push((format!(
+            "the response phases of {n} record units disagree with the calibrated baseline by a median of more than 30° and in every direction (mean resultant length {resultant:.2}, below the {:.2} that uniform angles exceed 5% of the time): their time origin looks free, not the frame of u = U0 cos(2π f t) the format assumes without a base_x column. Their phase means are set aside (not scored); declare \"time_origin\": \"free\" or give a base_x column to say so",
+            (3.0 / n as f64).sqrt()
+        ), "the records' phases look as if their time origin were free; their phase means are set aside"));
+    }
+    let absolute = |data: &Data<'_>, u: usize| {
+        runs_all(data, u, &TimeOrigin::phase_known) && data.measured[u].contains_key(&Observable::PhaseMeanDeg)
+    };
+    if let Some((mean, n)) = looks_reversed(scores, |u| absolute(data, u)) {
+        let units: Vec<usize> = (0..data.units.len()).filter(|&u| absolute(data, u)).collect();
+        set_phases_aside(data, &units);
+        notes.push((format!(
+            "the response phases of {n} record units sit half a turn from the calibrated baseline's at every condition (mean difference {mean:.0}°, each within {HALF_TURN_TOLERANCE_DEG:.0}° of 180°): a base_x or x column with its sign reversed, or a lag measured the other way round, does that and nothing else. Their phase means are set aside (not scored); check the sign of those channels"
+        ), "the records' phases sit half a turn from the baseline's (a channel's sign reversed?); their phase means are set aside"));
+    }
+    notes
 }
 
 #[cfg(test)]
@@ -257,5 +310,26 @@ mod tests {
         assert_eq!(looks_free(&small, |_| true), None);
         // Too few units to tell.
         assert_eq!(looks_free(&scores[..3], |_| true), None);
+    }
+
+    #[test]
+    fn phases_half_a_turn_off_everywhere_look_reversed_and_a_resonance_misplaced_does_not() {
+        // A reversed base_x: every lag 180° from the model's, give or take.
+        let lags = [3.0, 5.0, 8.0, 12.0, 20.0, 35.0, 60.0, 120.0, 150.0, 165.0, 172.0, 176.0];
+        let reversed: Vec<Score> =
+            lags.iter().enumerate().map(|(u, &l)| phase(u, l + 180.0 + (u as f64 - 6.0), l)).collect();
+        let (mean, n) = looks_reversed(&reversed, |_| true).expect("a reversed channel");
+        assert_eq!(n, 12);
+        assert!((mean.abs() - 180.0).abs() < 5.0, "{mean}");
+        // A natural frequency stated wrong puts the conditions between the
+        // two resonances half a turn off, and no others.
+        let misplaced: Vec<Score> = lags
+            .iter()
+            .enumerate()
+            .map(|(u, &l)| phase(u, if (5..8).contains(&u) { l + 170.0 } else { l + 2.0 }, l))
+            .collect();
+        assert_eq!(looks_reversed(&misplaced, |_| true), None);
+        // Units that give no absolute phase are not read.
+        assert_eq!(looks_reversed(&reversed, |u| u < 3), None);
     }
 }

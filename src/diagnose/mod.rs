@@ -391,8 +391,8 @@ pub fn diagnose_set(
         Scope::All,
     )?;
     let (baseline, mut baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
-    if let Some(note) = frame::check_phases(&mut data, &baseline_scores) {
-        progress("the records' phases look as if their time origin were free; their phase means are set aside");
+    for (note, line) in frame::check_phases(&mut data, &baseline_scores) {
+        progress(line);
         notes.push(note);
         baseline_scores.retain(|s| data.measured[s.unit].contains_key(&s.observable));
     }
