@@ -18,6 +18,7 @@ use std::path::Path;
 use super::json::bad;
 use super::{RigInfo, Run};
 use crate::diagnose::features::least_squares;
+use crate::engine::analytic::linear_amplitude_ratio;
 use crate::engine::model::fmt_value;
 use crate::error::Result;
 
@@ -300,6 +301,46 @@ pub(super) fn check_force_balance(run: &Run, rig: &RigInfo) -> Result<()> {
                  mass and natural frequency those of this block (a factor near 0 is a dead or unrelated channel)",
                 fmt_value(float_3(factor)),
                 fmt_value(float_3(correlation))
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// How many times the rig's frictionless steady amplitude a record's `x`
+/// may swing before its unit is called wrong: friction only takes energy
+/// out of the block (it opposes the motion at every instant), so a block
+/// swings at most about as far as it would without it; the margin covers a
+/// natural frequency or damping stated loosely near resonance, and a
+/// column in millimetres is a thousand times too large.
+const SWING_FACTOR: f64 = 100.0;
+
+/// Refuses a run whose `x` swings (half its range) more than
+/// [`SWING_FACTOR`] times the frictionless steady amplitude of the rig at
+/// the run's excitation: a displacement in another unit, or another rig.
+pub(super) fn check_displacement_scale(run: &Run, rig: &RigInfo) -> Result<()> {
+    let (lo, hi) = run
+        .x_m
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    let swing_m = 0.5 * (hi - lo);
+    let eta = run.excitation_frequency_hz / rig.natural_frequency_hz;
+    let frictionless_m = linear_amplitude_ratio(eta, rig.damping_ratio) * run.excitation_amplitude_m;
+    if swing_m > SWING_FACTOR * frictionless_m {
+        return Err(bad(
+            &run.file,
+            None,
+            format!(
+                "column `x`: it swings {} m, {} times as far as this rig would without friction at {} Hz ({} m \
+                 for excitation_amplitude_m = {} m): friction only takes energy out, so `x` must be in metres (a \
+                 column in millimetres is 1000 times too large) and the rig's natural frequency and damping ratio \
+                 those of this block",
+                fmt_value(float_3(swing_m)),
+                fmt_value(float_3(swing_m / frictionless_m)),
+                fmt_value(run.excitation_frequency_hz),
+                fmt_value(float_3(frictionless_m)),
+                fmt_value(run.excitation_amplitude_m)
             ),
         ));
     }

@@ -389,6 +389,7 @@ pub fn read_measurement_set(dir: &Path) -> Result<MeasurementSet> {
         let path = dir.join(&file);
         let bytes = read_inside(&root, dir, &file, &manifest_path, &named_by, io::MAX_TABLE_FILE_BYTES, &mut budget)?;
         let run = csv::read_run_file(&path, bytes, frequency, amplitude, force, free)?;
+        channels::check_displacement_scale(&run, &rig)?;
         channels::check_force_balance(&run, &rig)?;
         runs.push(run);
     }

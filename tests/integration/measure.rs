@@ -401,6 +401,20 @@ fn a_channel_with_its_sign_reversed_or_in_another_unit_is_refused() {
     refused(&s.0, "run.csv", None, &["column `v`", "dead channel"]);
     s.write("run.csv", &run_csv_slipping(1.0, 0.0));
     refused(&s.0, "run.csv", None, &["column `friction_force`", "dead channel"]);
+    // A displacement in millimetres swings far beyond what the rig could
+    // without friction (4 m against about 5 mm), even with no other channel.
+    let in_mm: String = run_csv_slipping(1.0, 1.0)
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            match f[1].parse::<f64>() {
+                Ok(x) => format!("{},{}\n", f[0], x * 1000.0),
+                Err(_) => "t,x\n".to_string(),
+            }
+        })
+        .collect();
+    s.write("run.csv", &in_mm);
+    refused(&s.0, "run.csv", None, &["column `x`", "in metres", "without friction"]);
 }
 
 #[test]
