@@ -95,6 +95,8 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
             anyhow::bail!("invalid --measured: a diagnosis already compares with its measurement set");
         }
         "diagnosis"
+    } else if !args.dir.is_dir() {
+        anyhow::bail!("{}: no such directory (give a sweep's or a diagnosis's output directory)", shown(&args.dir));
     } else {
         anyhow::bail!(
             "{}: neither a sweep output directory (accumulators.json) nor a diagnosis output directory (report.json)",

@@ -297,11 +297,21 @@ impl Model {
         let is_effect = |k: &str| Effect::ALL.iter().any(|e| e.name() == k);
         if let Some(unknown) = table.keys().find(|k| !MODEL_TABLES.contains(&k.as_str()) && !is_effect(k)) {
             let effects: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
-            return Err(syntax(format!(
+            let message = format!(
                 "unknown table `{unknown}`; expected one of {} or an effect ({})",
                 MODEL_TABLES.join(", "),
                 effects.join(", ")
-            )));
+            );
+            // A table the text does not have is the `--set` that made it.
+            let made_by = (!own_tables.contains(unknown)).then(|| {
+                overrides.iter().find(|a| {
+                    a.split_once('=').is_some_and(|(key, _)| key.trim().split('.').next() == Some(unknown.as_str()))
+                })
+            });
+            return Err(match made_by.flatten() {
+                Some(assignment) => Error::ModelSyntax { source_name: format!("--set {assignment}"), message },
+                None => syntax(message),
+            });
         }
         let model: Model = match Model::deserialize(toml::Value::Table(table.clone())) {
             Ok(model) => model,

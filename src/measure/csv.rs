@@ -241,7 +241,7 @@ pub(super) fn read_run_file(
                 return Err(bad(
                     path,
                     Some(line),
-                    format!("time does not increase: t = {t} s follows t = {previous} s"),
+                    format!("time does not increase: t = {} s follows t = {} s", fmt_value(t), fmt_value(previous)),
                 ));
             }
             _ => {}
@@ -319,9 +319,11 @@ pub(super) fn read_run_file(
                 path,
                 Some(lines[i + 1]),
                 format!(
-                    "the sample interval {dt} s (from t = {} s) differs from the record's median interval \
-                     {median} s by more than {}%: records must be uniformly sampled",
-                    w[0],
+                    "the sample interval {} s (from t = {} s) differs from the record's median interval \
+                     {} s by more than {}%: records must be uniformly sampled",
+                    fmt_value(dt),
+                    fmt_value(w[0]),
+                    fmt_value(median),
                     SAMPLING_TOLERANCE * 100.0
                 ),
             ));

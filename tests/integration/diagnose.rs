@@ -304,10 +304,9 @@ fn records_with_an_undeclared_free_time_origin_do_not_make_an_effect() {
 }
 
 /// A summary whose rows say the base did not move (amplitude 0) while the
-/// block did: the model's peaks are 0 with no spread, every score
-/// overflows, and the refusal names where and what (the observable, the
-/// measured and simulated values and the spread), not only that the gap
-/// is not a number.
+/// block did: the model's block would stay at rest and every score
+/// overflow, so the set is refused as it is read, before any simulation,
+/// by file, line and column.
 #[test]
 fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
     let root = scratch("unexcited");
@@ -331,9 +330,12 @@ fn an_unexcited_set_whose_block_moves_is_refused_naming_the_score() {
         "4",
     ]);
     assert!(
-        !ok && err.contains("not a finite number") && err.contains("peak_mean_m") && err.contains("spread"),
+        !ok && err.contains("summary.csv:2")
+            && err.contains("column `excitation_amplitude_m`")
+            && err.contains("positive"),
         "{err}"
     );
+    assert!(!out.exists(), "nothing is written");
     std::fs::remove_dir_all(&root).unwrap();
 }
 

@@ -195,7 +195,9 @@ fn implausible_numbers_are_refused_by_file_line_and_column() {
     // A sample below zero with the sensor's noise, beside a positive mean, reads.
     let noisy = run_set(&s, "noisy-force", |i, l| if i == 40 { l.replace(",16,", ",-0.03,") } else { l.into() });
     read_measurement_set(&noisy).expect("a noisy sample below zero reads");
-    let fast = run_set(&s, "fast", |i, l| if i == 7 { l.replace(",16,-1", ",16,-1e9") } else { l.into() });
+    let fast = run_set(&s, "fast", |i, l| {
+        if i == 7 { format!("{},-1e9", l.rsplit_once(',').map_or(l, |(head, _)| head)) } else { l.into() }
+    });
     measurement_refused(&fast, &["r.csv:8", "column `friction_force`"]);
     // The command line refuses the same before any work, writing nothing.
     let out = s.path("out");
