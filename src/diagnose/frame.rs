@@ -189,22 +189,41 @@ const MIN_UNITS: usize = 4;
 /// misfits the phase misfits it smoothly across conditions, and its misfits
 /// cluster. Returns R̄ and n where the pattern holds.
 pub(crate) fn looks_free(scores: &[Score], claims_frame: impl Fn(usize) -> bool) -> Option<(f64, usize)> {
-    let phases: Vec<&Score> =
-        scores.iter().filter(|s| s.observable == Observable::PhaseMeanDeg && claims_frame(s.unit)).collect();
-    let n = phases.len();
-    if n < MIN_UNITS {
-        return None;
-    }
-    let residuals: Vec<f64> = phases.iter().map(|s| wrap_angle((s.measured - s.simulated).to_radians())).collect();
-    let (c, s) = residuals.iter().fold((0.0, 0.0), |(c, s), r| (c + r.cos(), s + r.sin()));
+    let misfits = PhaseMisfits::of(scores, claims_frame)?;
+    let n = misfits.residuals.len();
+    let (c, s) = misfits.sums();
     let resultant = (c * c + s * s).sqrt() / n as f64;
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let large = median(residuals.iter().map(|r| r.abs().to_degrees()).collect()) > 30.0
-        && median(phases.iter().map(|s| s.z.abs()).collect()) > 10.0;
+    let mut degrees: Vec<f64> = misfits.residuals.iter().map(|r| r.abs().to_degrees()).collect();
+    degrees.sort_by(f64::total_cmp);
+    let large = degrees[n / 2] > 30.0 && misfits.median_abs_z > 10.0;
     (large && resultant < (3.0 / n as f64).sqrt()).then_some((resultant, n))
+}
+
+/// The phase means' misfits of the record units `claims` picks: each
+/// residual (measured − simulated, rad, wrapped into (−π, π]) and the
+/// median |z|; `None` below [`MIN_UNITS`] units.
+struct PhaseMisfits {
+    residuals: Vec<f64>,
+    median_abs_z: f64,
+}
+
+impl PhaseMisfits {
+    fn of(scores: &[Score], claims: impl Fn(usize) -> bool) -> Option<PhaseMisfits> {
+        let phases: Vec<&Score> =
+            scores.iter().filter(|s| s.observable == Observable::PhaseMeanDeg && claims(s.unit)).collect();
+        if phases.len() < MIN_UNITS {
+            return None;
+        }
+        let residuals = phases.iter().map(|s| wrap_angle((s.measured - s.simulated).to_radians())).collect();
+        let mut z: Vec<f64> = phases.iter().map(|s| s.z.abs()).collect();
+        z.sort_by(f64::total_cmp);
+        Some(PhaseMisfits { residuals, median_abs_z: z[z.len() / 2] })
+    }
+
+    /// The residuals' summed cosines and sines.
+    fn sums(&self) -> (f64, f64) {
+        self.residuals.iter().fold((0.0, 0.0), |(c, s), r| (c + r.cos(), s + r.sin()))
+    }
 }
 
 /// Whether the phase means of `scores` (measured against simulated, one per
@@ -218,18 +237,10 @@ pub(crate) fn looks_free(scores: &[Score], claims_frame: impl Fn(usize) -> bool)
 /// residuals' circular mean (degrees) and their number where the pattern
 /// holds.
 pub(crate) fn looks_reversed(scores: &[Score], claims_phase: impl Fn(usize) -> bool) -> Option<(f64, usize)> {
-    let phases: Vec<&Score> =
-        scores.iter().filter(|s| s.observable == Observable::PhaseMeanDeg && claims_phase(s.unit)).collect();
-    let n = phases.len();
-    if n < MIN_UNITS {
-        return None;
-    }
-    let residuals: Vec<f64> = phases.iter().map(|s| wrap_angle((s.measured - s.simulated).to_radians())).collect();
-    let half_turn = residuals.iter().all(|r| r.abs().to_degrees() >= 180.0 - HALF_TURN_TOLERANCE_DEG);
-    let mut z: Vec<f64> = phases.iter().map(|s| s.z.abs()).collect();
-    z.sort_by(f64::total_cmp);
-    let (c, s) = residuals.iter().fold((0.0, 0.0), |(c, s), r| (c + r.cos(), s + r.sin()));
-    (half_turn && z[n / 2] > 10.0).then_some((s.atan2(c).to_degrees(), n))
+    let misfits = PhaseMisfits::of(scores, claims_phase)?;
+    let half_turn = misfits.residuals.iter().all(|r| r.abs().to_degrees() >= 180.0 - HALF_TURN_TOLERANCE_DEG);
+    let (c, s) = misfits.sums();
+    (half_turn && misfits.median_abs_z > 10.0).then_some((s.atan2(c).to_degrees(), misfits.residuals.len()))
 }
 
 /// How far from ±180° every phase residual must lie for
