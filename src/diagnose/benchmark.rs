@@ -197,8 +197,10 @@ pub struct BenchmarkRow {
     /// of the noise floor.
     pub baseline_within_noise: bool,
     /// For a two-effect set, how much the data weigh each hidden effect
-    /// (in `truth`'s order): [`error_against_truth`] of the truth without
-    /// that effect, over every condition. Empty otherwise.
+    /// (in `truth`'s order): the error of the truth without that effect
+    /// against the truth, over every condition ([`error_against_truth`]
+    /// for stickslip's own generator; for the independent one, its own twin
+    /// without the effect on the same noise paths). Empty otherwise.
     pub data_weights: Vec<f64>,
     /// Where the verdict is `none`: the families the diagnosis said these
     /// records could not show ([`crate::diagnose::search::power`]).
@@ -465,10 +467,12 @@ pub fn run_benchmark(
         // Each fold's fitted model (fitted without it) against the truth at
         // the fold's conditions, relative to that fold's baseline: pooled
         // over the folds, and the worst fold.
+        // The truth's own paths' statistics at every condition, where it
+        // hides an effect.
+        let all = if planned.hidden.is_empty() { Vec::new() } else { truth.stats(&conditions, shape, engine)? };
         let (truth_shrink, worst_fold, moves_statistics) = if d.folds.folds.is_empty() || planned.hidden.is_empty() {
             (None, None, false)
         } else {
-            let all = truth.stats(&conditions, shape, engine)?;
             let moved = truth.effect_weight(&all, &conditions, shape, engine)?;
             let at = |fold: &crate::diagnose::data::Fold| -> Vec<Vec<TruthStat>> {
                 fold.conditions
@@ -505,6 +509,18 @@ pub fn run_benchmark(
                     let mut without = truth.clone();
                     without.effects.remove(h.effect);
                     error_against_truth(&without, truth, &conditions, shape, engine)
+                })
+                .collect::<Result<Vec<f64>>>()?,
+            // An independent truth's twin without each effect, by its own
+            // generator on the same noise paths, against the truth's paths.
+            Truth::Independent(t, seed) if planned.hidden.len() >= 2 => planned
+                .hidden
+                .iter()
+                .map(|h| {
+                    let mut without = (**t).clone();
+                    without.effects.retain(|e| e.family() != h.effect);
+                    let twin = Truth::Independent(Box::new(without), *seed).stats(&conditions, shape, engine)?;
+                    Ok(stats_error(&all, &twin, shape.runs_per_condition))
                 })
                 .collect::<Result<Vec<f64>>>()?,
             _ => Vec::new(),
