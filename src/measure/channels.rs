@@ -19,7 +19,7 @@ use super::{RigInfo, Run};
 use crate::diagnose::features::least_squares;
 use crate::engine::analytic::linear_amplitude_ratio;
 use crate::engine::model::fmt_value;
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Fewest samples either check reads before it judges: fewer say nothing
 /// either way (a block that barely moves).
@@ -87,15 +87,7 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
     if let Some(&(first, _)) = pairs.first()
         && pairs.iter().all(|&(v, _)| v == first)
     {
-        return Err(bad(
-            path,
-            None,
-            format!(
-                "column `v`: it is {} m/s at every sample while `x` moves: a dead channel, not the block's \
-                 velocity dx/dt (leave the column out if the rig did not record it)",
-                fmt_value(first + 0.0)
-            ),
-        ));
+        return Err(dead_channel(path, "v", first, "m/s", "the block's velocity dx/dt"));
     }
     let correlation = vr / (vv * rr).sqrt();
     let scale = (vv / rr).sqrt();
@@ -124,6 +116,21 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
     Ok(())
 }
 
+/// The refusal of a `column` of run file `path` that reads `value` (in
+/// `unit`) at every sample while the block moves: a dead channel (or a
+/// constant written in its place), not `what` it claims to be.
+fn dead_channel(path: &Path, column: &str, value: f64, unit: &str, what: &str) -> Error {
+    bad(
+        path,
+        None,
+        format!(
+            "column `{column}`: it is {} {unit} at every sample while the block moves: a dead channel, not {what} \
+             (leave the column out if the rig did not record it)",
+            fmt_value(value + 0.0)
+        ),
+    )
+}
+
 /// Refuses a friction-force column (N) that pushes the block along its
 /// motion, the motion read from `x_m` (m) at times `t_s` (s): at
 /// [`REVERSED_SHARE`] or more of the samples where the block moves at more
@@ -138,15 +145,7 @@ pub(super) fn check_friction(path: &Path, t_s: &[f64], x_m: &[f64], friction_n: 
         && moving.len() >= MIN_SAMPLES
         && finite().all(|&f| f == first)
     {
-        return Err(bad(
-            path,
-            None,
-            format!(
-                "column `friction_force`: it is {} N at every sample while the block moves: a dead channel, not the \
-                 force on the block (leave the column out if the rig did not record it)",
-                fmt_value(first + 0.0)
-            ),
-        ));
+        return Err(dead_channel(path, "friction_force", first, "N", "the force on the block"));
     }
     let signs: Vec<f64> = moving
         .into_iter()
