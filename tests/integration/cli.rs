@@ -628,5 +628,9 @@ fn plot_redraws_a_sweep_with_the_measured_overlay() {
     let (ok, _, err) = stickslip_out(&["plot", figure8.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]);
     assert!(!ok && err.contains("neither a sweep"), "{err}");
     assert!(!dir.join("x").exists());
+    // A directory that does not exist is said to be missing.
+    let missing = dir.join("no-such-sweep");
+    let (ok, _, err) = stickslip_out(&["plot", missing.to_str().unwrap()]);
+    assert!(!ok && err.contains("no-such-sweep") && err.contains("no such directory"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -307,6 +307,9 @@ fn physics_that_stays_finite() {
         let err = Model::paper_rig(&[table.into(), format!("{key}=-1e308")]).expect_err(key).to_string();
         assert!(err.contains(key) && err.len() < 300, "{err}");
     }
+    // A table no model has, made by a `--set`, blames that flag.
+    let err = Model::paper_rig(&["foo.bar=1".into()]).expect_err("unknown table").to_string();
+    assert!(err.contains("--set foo.bar=1") && err.contains("unknown table `foo`"), "{err}");
     // A rule over two keys names both: a friction level below −b.
     let err = Model::paper_rig(&["friction.a=-0.5".into()]).expect_err("a + b < 0").to_string();
     assert!(err.contains("friction.a") && err.contains("friction.b") && err.contains("-0.4"), "{err}");
