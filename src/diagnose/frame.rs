@@ -258,6 +258,13 @@ fn set_phases_aside(data: &mut Data<'_>, units: &[usize]) {
     }
 }
 
+/// Whether record unit `u` is records only (no summary row), each with a
+/// time origin that `keep` accepts.
+fn runs_all(data: &Data<'_>, u: usize, keep: impl Fn(TimeOrigin) -> bool) -> bool {
+    let unit = &data.units[u];
+    unit.summary.is_none() && unit.runs.iter().all(|&r| keep(data.set.runs[r].time_origin))
+}
+
 /// Checks the absolute phases against the calibrated baseline's `scores`,
 /// and sets aside those that cannot mean what they claim, saying why in a
 /// note for the report (a line for progress beside each): the record units
@@ -267,11 +274,7 @@ fn set_phases_aside(data: &mut Data<'_>, units: &[usize]) {
 /// ([`looks_reversed`]).
 pub(crate) fn check_phases(data: &mut Data<'_>, scores: &[Score]) -> Vec<(String, &'static str)> {
     let mut notes = Vec::new();
-    let runs_all = |data: &Data<'_>, u: usize, keep: &dyn Fn(TimeOrigin) -> bool| {
-        let unit = &data.units[u];
-        unit.summary.is_none() && unit.runs.iter().all(|&r| keep(data.set.runs[r].time_origin))
-    };
-    let in_frame = |data: &Data<'_>, u: usize| runs_all(data, u, &|o| o == TimeOrigin::Model);
+    let in_frame = |data: &Data<'_>, u: usize| runs_all(data, u, |o| o == TimeOrigin::Model);
     if let Some((resultant, n)) = looks_free(scores, |u| in_frame(data, u)) {
         let units: Vec<usize> = (0..data.units.len()).filter(|&u| in_frame(data, u)).collect();
         set_phases_aside(data, &units);
@@ -281,7 +284,7 @@ pub(crate) fn check_phases(data: &mut Data<'_>, scores: &[Score]) -> Vec<(String
         ), "the records' phases look as if their time origin were free; their phase means are set aside"));
     }
     let absolute = |data: &Data<'_>, u: usize| {
-        runs_all(data, u, &TimeOrigin::phase_known) && data.measured[u].contains_key(&Observable::PhaseMeanDeg)
+        runs_all(data, u, TimeOrigin::phase_known) && data.measured[u].contains_key(&Observable::PhaseMeanDeg)
     };
     if let Some((mean, n)) = looks_reversed(scores, |u| absolute(data, u)) {
         let units: Vec<usize> = (0..data.units.len()).filter(|&u| absolute(data, u)).collect();

@@ -246,7 +246,7 @@ pub(super) fn check_force_balance(run: &Run, rig: &RigInfo) -> Result<()> {
     let k = rig.mass_kg * (std::f64::consts::TAU * rig.natural_frequency_hz).powi(2);
     let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
     let w = std::f64::consts::TAU * run.excitation_frequency_hz;
-    let sample_rate_hz = (n - 1) as f64 / (t[n - 1] - t[0]);
+    let sample_rate_hz = super::sample_rate_hz(run);
     let harmonics: Vec<usize> = (2..=BALANCE_HARMONICS)
         .filter(|&j| j as f64 * run.excitation_frequency_hz < BALANCE_NYQUIST_SHARE * sample_rate_hz)
         .collect();
