@@ -456,9 +456,20 @@ pub(crate) fn calibrate_and_score(
 ) -> Result<(Model, Vec<Score>, f64)> {
     if let Some(measured) = data.measured_law {
         let mut m = model.clone();
+        // The simulated residual variance's response to σ_μ²: one for one
+        // with a recorded friction force; through a derived one's filter
+        // ([`crate::diagnose::derived`]) a fraction, read between successive
+        // steps (one for one until two are taken).
+        let (mut response, mut last): (f64, Option<(f64, f64)>) = (1.0, None);
         for _ in 0..if law_steps == 0 { LAW_STEPS } else { law_steps } {
             let Some(simulated) = simulated_law(engine, &m, data, settings)? else { break };
-            step_law(&mut m, &measured, &simulated);
+            let now = (m.friction.sigma.powi(2), simulated.sigma.powi(2));
+            let measured_response = last.filter(|(s0, _)| data.derived.friction && (now.0 - s0).abs() > 1e-12);
+            if let Some((s0, r0)) = measured_response {
+                response = ((now.1 - r0) / (now.0 - s0)).clamp(MIN_SIGMA_RESPONSE, 1.5);
+            }
+            last = Some(now);
+            step_law(&mut m, &measured, &simulated, response);
         }
         let scores = score(engine, &m, data, settings, scope)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
@@ -571,7 +582,7 @@ pub(crate) fn law_step(
     let mut m = model.clone();
     if let Some(measured) = data.measured_law {
         if let Some(simulated) = simulated_law(engine, model, data, settings)? {
-            step_law(&mut m, &measured, &simulated);
+            step_law(&mut m, &measured, &simulated, 1.0);
         }
         return Ok(m);
     }
@@ -598,7 +609,10 @@ pub(crate) fn law_step(
 /// rate c (linear least squares, so the step is continuous and cannot
 /// wander off along the directions in which a, b, c and d trade off; c
 /// itself comes from the measured records' fit).
-fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) {
+/// `response`: how far the simulated residual variance moves per unit of
+/// σ_μ² (1 with recorded channels; a derived friction force, read through
+/// a smoothing filter, passes a fraction of the noise, [`crate::diagnose::derived`]).
+fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw, response: f64) {
     if let Some(law) = FrictionLaw::of(model).moved(measured, simulated) {
         let f = &mut model.friction;
         f.a = law.a.max(0.0);
@@ -606,7 +620,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
         f.d = law.d;
     }
     let f = &mut model.friction;
-    let variance = f.sigma.powi(2) + measured.sigma.powi(2) - simulated.sigma.powi(2);
+    let variance = f.sigma.powi(2) + measured.sigma.powi(2) / response - simulated.sigma.powi(2) / response;
     f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt().max(SIGMA_STEP_MIN_SHARE * f.sigma);
 }
 
@@ -619,6 +633,10 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw) 
 /// trial had tried. Repeated steps still reach a σ_μ the data imply; a
 /// single step cannot collapse it.
 const SIGMA_STEP_MIN_SHARE: f64 = 0.5;
+
+/// The least response of the simulated residual variance to σ_μ² a σ step
+/// assumes: a step is then at most ten times the variance gap.
+const MIN_SIGMA_RESPONSE: f64 = 0.1;
 
 pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     let set = data.set;
@@ -781,13 +799,13 @@ mod tests {
         // effect adds a residual of its own): the full step would end at
         // the floor, 0.1 × 0.02; it ends at half of 0.03.
         let mut m = model.clone();
-        step_law(&mut m, &law(0.02), &law(0.1));
+        step_law(&mut m, &law(0.02), &law(0.1), 1.0);
         assert!((m.friction.sigma - 0.015).abs() < 1e-12, "sigma {}", m.friction.sigma);
         // A moderate step down and a step up are the Newton step itself:
         // σ² + measured² − simulated².
         for simulated in [0.025, 0.01] {
             let mut m = model.clone();
-            step_law(&mut m, &law(0.02), &law(simulated));
+            step_law(&mut m, &law(0.02), &law(simulated), 1.0);
             let expected = (0.03f64.powi(2) + 0.02f64.powi(2) - simulated * simulated).sqrt();
             assert!((m.friction.sigma - expected).abs() < 1e-12, "simulated {simulated}: sigma {}", m.friction.sigma);
         }

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::diagnose::cache::Caches;
+use crate::diagnose::derived::DerivedChannels;
 use crate::diagnose::features::{RunFeatures, run_features};
 use crate::diagnose::law::{self, FrictionLaw};
 use crate::diagnose::observable::Observable;
@@ -60,6 +61,9 @@ pub(crate) struct Data<'a> {
     pub(crate) law_c: Option<f64>,
     /// The measurement noise on the records' channels.
     pub(crate) sensor: SensorNoise,
+    /// The channels derived from the displacement (none of the runs
+    /// records them): the replicate records' are derived alike.
+    pub(crate) derived: DerivedChannels,
     /// The folds of the set.
     pub(crate) folds: Folds,
     /// The fold this view holds out (`None`: every unit is fitted).
@@ -404,7 +408,11 @@ fn one_sample_interval(runs: &[Run]) -> Result<f64> {
 }
 
 impl<'a> Data<'a> {
-    pub(crate) fn new(set: &'a MeasurementSet) -> Result<Data<'a>> {
+    /// The data of `set`, whose channels `derived` names were derived from
+    /// the displacement ([`crate::diagnose::derived`]): the model's
+    /// replicate records are then derived the same way, and a derived
+    /// velocity's noise is the displacement's through the filter.
+    pub(crate) fn new(set: &'a MeasurementSet, derived: DerivedChannels) -> Result<Data<'a>> {
         let mut by_condition: BTreeMap<(i64, i64), (Condition, Vec<usize>)> = BTreeMap::new();
         for (i, run) in set.runs.iter().enumerate() {
             let c =
@@ -503,7 +511,13 @@ impl<'a> Data<'a> {
         let measured_load = forces.into_iter().map(|(k, v)| (k, MeasuredLoad::mean(&v))).collect();
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
-        let sensor = SensorNoise::estimate(&set.runs);
+        let mut sensor = SensorNoise::estimate(&set.runs);
+        if derived.v {
+            let mut noise: Vec<f64> =
+                set.runs.iter().map(|r| crate::diagnose::derived::velocity_noise(r, sensor.x_m)).collect();
+            noise.sort_by(f64::total_cmp);
+            sensor.v_m_per_s = noise.get(noise.len() / 2).copied().unwrap_or(0.0);
+        }
         let measured_law = law::fit_friction_law(&all_runs, sensor.v_m_per_s);
         Ok(Data {
             set,
@@ -517,6 +531,7 @@ impl<'a> Data<'a> {
             measured_law,
             law_c: measured_law.map(|l| l.c),
             sensor,
+            derived,
             folds,
             fold: None,
             caches: Arc::new(Caches::default()),

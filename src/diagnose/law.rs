@@ -130,13 +130,15 @@ const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
 /// white noise `v_noise_m_per_s` (m/s; the data's estimate, which the
 /// simulated records carry too, so both sides pick alike), the friction
 /// opposes the motion and N is at least a tenth of its median
-/// ([`crate::diagnose::features::normal_force_floor`]). Empty without force
-/// channels.
+/// ([`crate::diagnose::features::normal_force_floor`]; the nominal load
+/// without a normal-force channel, [`crate::diagnose::features::load_of`]).
+/// Empty without velocity and friction channels.
 fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut speed, mut mu) = (Vec::new(), Vec::new());
-    let (Some(v), Some(f), Some(n)) = (&run.v_m_per_s, &run.friction_force, &run.normal_force) else {
+    let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
         return (speed, mu);
     };
+    let n = &crate::diagnose::features::load_of(run);
     let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
     let floor = crate::diagnose::features::normal_force_floor(n);

@@ -28,6 +28,7 @@ pub mod calibrate;
 pub mod candidates;
 mod chart;
 pub mod data;
+pub mod derived;
 pub mod features;
 mod frame;
 pub mod law;
@@ -369,8 +370,11 @@ pub fn diagnose_set(
 ) -> Result<Diagnosis> {
     let thinned = settings.sample_rate_hz.map(|rate_hz| crate::measure::thinned(set, rate_hz)).transpose()?;
     let set = thinned.as_ref().map_or(set, |(set, _)| set);
-    let mut data = Data::new(set)?;
+    let (with_derived, derived) = derived::with_derived_channels(set);
+    let set = with_derived.as_ref().unwrap_or(set);
+    let mut data = Data::new(set, derived)?;
     let mut notes = frame::frame_notes(&data);
+    notes.extend(derived.note());
     if let (Some((_, n @ 1..)), Some(rate_hz)) = (&thinned, settings.sample_rate_hz) {
         notes.push(format!(
             "{n} of {} runs were thinned to {rate_hz} Hz (every k-th sample kept) before the diagnosis: the \

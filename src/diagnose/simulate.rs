@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
+use crate::diagnose::derived;
 use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
 use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
 use crate::diagnose::observable::Observable;
@@ -80,12 +81,14 @@ pub(crate) fn replicates(
         .map(|(i, mut samples)| {
             let (p, r) = (i / per_unit, (i % per_unit) as u32);
             add_sensor_noise(&mut samples, data, settings.seed, job.realisation(p, r));
-            Run::from_samples(
+            let mut run = Run::from_samples(
                 &samples,
                 conditions[p].excitation_frequency_hz,
                 model.excitation.amplitude_m,
                 conditions[p].normal_force_n,
-            )
+            );
+            derived::derive(&mut run, data.derived, &data.set.rig);
+            run
         })
         .collect();
     let mut runs = runs.into_iter();
@@ -380,10 +383,12 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         let engine = Engine::cpu("test");
         let settings = |replicates| DiagnoseSettings { replicates, warmup_cycles: 5, ..DiagnoseSettings::default() };
-        let stepwise = Data::new(&set).expect("data");
+        let stepwise = Data::new(&set, Default::default()).expect("data");
         fitting_records(&engine, &truth, &stepwise, &settings(2)).expect("two");
         let added = fitting_records(&engine, &truth, &stepwise, &settings(4)).expect("four");
-        let at_once = fitting_records(&engine, &truth, &Data::new(&set).expect("data"), &settings(4)).expect("four");
+        let at_once =
+            fitting_records(&engine, &truth, &Data::new(&set, Default::default()).expect("data"), &settings(4))
+                .expect("four");
         assert!(!added.units.is_empty() && added.features.iter().all(|f| f.len() == 4));
         assert_eq!(added.features, at_once.features);
         let (law, law_at_once) = (added.law.expect("a law"), at_once.law.expect("a law"));
@@ -391,5 +396,62 @@ mod tests {
         // Fewer replicates read the first ones' records.
         let two = fitting_records(&engine, &truth, &stepwise, &settings(2)).expect("two");
         assert!(two.features.iter().zip(&at_once.features).all(|(a, b)| a[..] == b[..2]));
+    }
+}
+
+#[cfg(test)]
+mod derived_tests {
+    use super::*;
+    use crate::diagnose::derived::{DerivedChannels, with_derived_channels};
+
+    /// Records of the displacement alone (and the base's frame): the law
+    /// read from their derived friction force is the law the model's
+    /// replicates, derived alike, give (the indirect inference's premise),
+    /// and it tells a friction level 0.03 away apart; with a free time
+    /// origin too (the base's phase read from each record).
+    #[test]
+    fn a_law_read_from_derived_channels_is_the_replicates_law() {
+        let dir = std::env::temp_dir().join(format!("stickslip-derived-law-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let truth = Model::paper_rig(&[]).expect("the paper rig");
+        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
+        let shape =
+            crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 10.0, sample_rate_hz: 600.0 };
+        crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 3).expect("set");
+        let mut set = crate::measure::read_measurement_set(&dir).expect("read");
+        let _ = std::fs::remove_dir_all(&dir);
+        for run in &mut set.runs {
+            (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
+            // The base's phase read from a record in the model's frame is
+            // about 0.
+            let phase = crate::diagnose::derived::base_phase_of(run, &set.rig);
+            assert!(phase.abs() < 0.1, "{phase}");
+        }
+        let mut free = set.clone();
+        for run in &mut free.runs {
+            run.time_origin = crate::measure::TimeOrigin::Free;
+        }
+        for (set, base_from_record) in [(set, false), (free, true)] {
+            same_law_as_the_replicates(&set, base_from_record, &truth);
+        }
+    }
+
+    fn same_law_as_the_replicates(set: &crate::measure::MeasurementSet, base_from_record: bool, truth: &Model) {
+        let (derived_set, derived) = with_derived_channels(set);
+        assert_eq!(derived, DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record });
+        let set = derived_set.expect("derived");
+        let data = Data::new(&set, derived).expect("data");
+        let measured = data.measured_law.expect("a law from the derived channels");
+        let engine = Engine::cpu("test");
+        let settings = DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let law_of = |m: &Model| fitting_records(&engine, m, &data, &settings).expect("records").law.expect("a law");
+        let same = law_of(truth);
+        let mut shifted = truth.clone();
+        shifted.friction.a += 0.03;
+        let other = law_of(&shifted);
+        let (near, far) = ((measured.mu(0.1) - same.mu(0.1)).abs(), (measured.mu(0.1) - other.mu(0.1)).abs());
+        assert!(near < 0.25 * far, "measured {measured:?}, same model {same:?}, shifted {other:?}");
+        // The residual's spread, which the filter shapes, alike too.
+        assert!((measured.sigma - same.sigma).abs() < 0.1 * same.sigma, "measured {measured:?}, same model {same:?}");
     }
 }

@@ -26,6 +26,8 @@ mod stats;
 pub(crate) use friction::GAUSSIAN_TAIL_RATIO;
 pub(crate) use stats::{least_squares, solve_normal};
 
+use std::borrow::Cow;
+
 use crate::diagnose::observable::Observable;
 use crate::measure::Run;
 
@@ -254,6 +256,17 @@ impl SampleGrid {
     }
 }
 
+/// The normal force μ is read against in `run`, N: its `normal_force`
+/// channel, else its nominal load at every sample (a set that records no
+/// normal force is read so on both sides: the model's replicate records
+/// then drop theirs, [`crate::diagnose::derived`]).
+pub fn load_of(run: &Run) -> Cow<'_, [f64]> {
+    match &run.normal_force {
+        Some(n) => Cow::Borrowed(n),
+        None => Cow::Owned(vec![run.normal_force_n; run.len()]),
+    }
+}
+
 /// Computes every feature of `run`.
 pub fn run_features(run: &Run) -> RunFeatures {
     features_on_grid(run, &SampleGrid::of(run))
@@ -273,8 +286,8 @@ fn features_on_grid(run: &Run, grid: &SampleGrid) -> RunFeatures {
             .normal_force
             .as_deref()
             .and_then(|n| record::normal_force_features(run, n, base, grid.normal_force.as_ref())),
-        friction: match (&run.v_m_per_s, &run.friction_force, &run.normal_force) {
-            (Some(v), Some(f), Some(n)) => friction::friction_features(v, f, n),
+        friction: match (&run.v_m_per_s, &run.friction_force) {
+            (Some(v), Some(f)) => friction::friction_features(v, f, &load_of(run)),
             _ => None,
         },
         stick_fraction: record::stick_fraction(run),

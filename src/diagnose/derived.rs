@@ -1,0 +1,344 @@
+//! The velocity and the friction force derived from the displacement, for
+//! records that carry neither.
+//!
+//! Many rigs record the block's displacement (and the base's) but not its
+//! velocity or the friction force. Both follow from the displacement: `v`
+//! is its time derivative, and the friction force is what the equation of
+//! motion leaves of it, F = m x'' + c x' + k x − k u(t) (`model.md`). A
+//! derivative of a noisy record amplifies its noise (a second difference of
+//! 2 µm at 600 Hz is newtons), so both come from a least-squares quadratic
+//! over a short window about each sample (a Savitzky–Golay filter). The
+//! filter blurs a stick's onset over its window and leaves some noise; the
+//! simulated replicates are derived the same way from their own noisy
+//! displacement, so every feature read from a derived channel compares like
+//! with like: the derived channels are statistics of the displacement,
+//! computed alike on the data and on the model's records.
+//!
+//! The friction force needs the base's motion u(t) = U0 cos(Ω t + φ) in
+//! the record's time: a run in the model's frame or with a `base_x` column
+//! has it (φ = 0); where a run's time origin is free, every record's φ is
+//! read from the record itself ([`DerivedChannels::base_from_record`]).
+//!
+//! Where no run records the normal force, μ is read as the friction force
+//! over the nominal load ([`crate::diagnose::features::load_of`]), and the
+//! replicate records drop their normal-force channel so that theirs is read
+//! the same way.
+
+use serde::Serialize;
+
+use crate::measure::{MeasurementSet, RigInfo, Run, TimeOrigin};
+
+/// Which channels of a set's runs were derived from the displacement
+/// (none of its runs recorded them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DerivedChannels {
+    /// The velocity, from the displacement's local slope.
+    pub v: bool,
+    /// The friction force, from the equation of motion.
+    pub friction: bool,
+    /// No run records the normal force: μ is read against the nominal load,
+    /// on the replicates too.
+    pub nominal_load: bool,
+    /// A run's time origin is free: the base's phase in every record's
+    /// time, which the friction force needs, is read from the record
+    /// itself (a sinusoid at the excitation frequency fitted beside a
+    /// friction that opposes the motion), on the replicates too.
+    pub base_from_record: bool,
+}
+
+impl DerivedChannels {
+    /// Whether any channel was derived, or the load is the nominal one.
+    pub fn any(self) -> bool {
+        self.v || self.friction || self.nominal_load
+    }
+
+    /// What a set with these runs gets: a velocity where no run records
+    /// one, and a friction force where no run records one and every run's
+    /// base motion is known in its time (the model's frame or a `base_x`
+    /// column). Nothing for a set without runs.
+    pub fn for_runs(runs: &[Run]) -> DerivedChannels {
+        if runs.is_empty() {
+            return DerivedChannels::default();
+        }
+        let v = runs.iter().all(|r| r.v_m_per_s.is_none());
+        let friction = runs.iter().all(|r| r.friction_force.is_none());
+        let base_from_record = friction && runs.iter().any(|r| r.time_origin == TimeOrigin::Free);
+        let nominal_load = runs.iter().all(|r| r.normal_force.is_none());
+        DerivedChannels { v, friction, nominal_load, base_from_record }
+    }
+
+    /// The note a report carries about them (`None` where none was derived).
+    pub fn note(self) -> Option<String> {
+        let load = if self.nominal_load && self.friction {
+            "; no run records the normal force either, so μ is read as the friction force over the nominal load, \
+             on the replicates too"
+        } else {
+            ""
+        };
+        let what = match (self.v, self.friction) {
+            (true, true) => "the velocity and the friction force were",
+            (true, false) => "the velocity was",
+            (false, true) => "the friction force was",
+            (false, false) => return None,
+        };
+        Some(format!(
+            "no run records them, so {what} derived from the displacement (a least-squares quadratic over a \
+             window of about a twenty-fourth of a period about each sample; the friction force as what the \
+             equation of motion leaves, m x'' + c x' + k x − k u), and the model's replicate records are derived \
+             the same way from their own noisy displacement{}{load}",
+            if self.base_from_record {
+                "; a run's time origin is free, so the base's phase in each record is read from the record itself \
+                 (a sinusoid at the excitation frequency fitted beside a friction that opposes the motion)"
+            } else {
+                ""
+            }
+        ))
+    }
+}
+
+/// `set` with the channels `DerivedChannels::for_runs` says derived in
+/// every run, and which those are (the set unchanged where none is).
+pub fn with_derived_channels(set: &MeasurementSet) -> (Option<MeasurementSet>, DerivedChannels) {
+    let derived = DerivedChannels::for_runs(&set.runs);
+    if !derived.any() {
+        return (None, derived);
+    }
+    let mut out = set.clone();
+    for run in &mut out.runs {
+        derive(run, derived, &set.rig);
+    }
+    (Some(out), derived)
+}
+
+/// Replaces `run`'s channels that `derived` names with those derived from
+/// its displacement (`rig`: the rig's mass, natural frequency and damping),
+/// and drops its normal force where the load is the nominal one.
+pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
+    if derived.nominal_load {
+        run.normal_force = None;
+    }
+    if !(derived.v || derived.friction) || run.len() < 3 {
+        return;
+    }
+    let half = window_half_width(run);
+    let (v, a) = slope_and_curvature(&run.x_m, run.sample_interval_s(), half);
+    if derived.friction {
+        let (k, c) = stiffness_and_damping(rig);
+        let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
+        let u0 = run.excitation_amplitude_m;
+        // What the rig's side of the equation of motion gives: k u + F.
+        let rig_side: Vec<f64> = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
+        let phase = if derived.base_from_record { base_phase(run, &rig_side, &v) } else { 0.0 };
+        let force: Vec<f64> =
+            (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect();
+        run.friction_force = Some(force);
+    }
+    if derived.v {
+        run.v_m_per_s = Some(v);
+    }
+}
+
+/// The base's phase φ in `run`'s time (u = U0 cos(Ω t + φ)), rad, read
+/// from the record itself: over the slipping samples (|v| above a twentieth
+/// of its largest), the rig's side of the equation of motion (`rig_side`,
+/// k u + F) is fitted by least squares as a sinusoid at the excitation
+/// frequency (k u) plus a friction that opposes the motion (a constant
+/// times sgn v) and a constant. A friction whose level varies with the
+/// speed leaves some of itself in the sinusoid, so φ is a statistic of
+/// the record rather than the base's exact phase; the replicate records
+/// read theirs the same way. 0 where the fit is singular.
+fn base_phase(run: &Run, rig_side: &[f64], v: &[f64]) -> f64 {
+    let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
+    let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let slipping: Vec<usize> = (0..v.len()).filter(|&i| v[i].abs() > 0.05 * vmax).collect();
+    let fit = crate::diagnose::features::least_squares(
+        slipping.len(),
+        4,
+        |j, row| {
+            let i = slipping[j];
+            let (s, c) = (drive * run.t_s[i]).sin_cos();
+            row.copy_from_slice(&[c, s, v[i].signum(), 1.0]);
+        },
+        |j| rig_side[slipping[j]],
+    );
+    match fit {
+        Some((p, _)) => (-p[1]).atan2(p[0]),
+        None => 0.0,
+    }
+}
+
+/// The base's phase in `run`'s time as [`base_phase`] reads it from the
+/// displacement alone, rad (for the tests, which check it on records of
+/// a known frame).
+#[cfg(test)]
+pub(crate) fn base_phase_of(run: &Run, rig: &RigInfo) -> f64 {
+    let (v, a) = slope_and_curvature(&run.x_m, run.sample_interval_s(), window_half_width(run));
+    let (k, c) = stiffness_and_damping(rig);
+    let rig_side: Vec<f64> = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
+    base_phase(run, &rig_side, &v)
+}
+
+/// The rig's stiffness k (N/m) and damping c (N s/m).
+fn stiffness_and_damping(rig: &RigInfo) -> (f64, f64) {
+    let omega = 2.0 * std::f64::consts::PI * rig.natural_frequency_hz;
+    let k = rig.mass_kg * omega * omega;
+    (k, 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt())
+}
+
+/// The noise a derived velocity carries from displacement noise of
+/// `x_noise_m` (m) in `run`: the white noise through the slope's filter,
+/// m/s.
+pub fn velocity_noise(run: &Run, x_noise_m: f64) -> f64 {
+    let half = window_half_width(run) as f64;
+    let sum_k2 = half * (half + 1.0) * (2.0 * half + 1.0) / 3.0;
+    x_noise_m / sum_k2.sqrt() / run.sample_interval_s()
+}
+
+/// The filter's half-width in samples: about a forty-eighth of an
+/// excitation period (a window of a twenty-fourth), at least two.
+fn window_half_width(run: &Run) -> usize {
+    let per_period = 1.0 / (run.excitation_frequency_hz * run.sample_interval_s()).max(1e-12);
+    ((per_period / 48.0).round() as usize).max(2)
+}
+
+/// The first and second time derivatives of `x` (sampled every `dt` s)
+/// from the least-squares quadratic through the `2 half + 1` samples about
+/// each one (at the ends, the nearest full window's quadratic, evaluated
+/// at the sample): m/s and m/s² for `x` in m. A record shorter than a
+/// window is fitted by one quadratic through all of it.
+fn slope_and_curvature(x: &[f64], dt: f64, half: usize) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    let half = half.min((n.saturating_sub(1)) / 2).max(1);
+    let h = half as f64;
+    let width = 2.0 * h + 1.0;
+    let sum_k2 = h * (h + 1.0) * (2.0 * h + 1.0) / 3.0;
+    // The quadratic's orthogonal part: P(k) = k² − Σk²/n, and ΣP².
+    let p = |k: f64| k * k - sum_k2 / width;
+    let sum_p2: f64 = (-(half as i64)..=half as i64).map(|k| p(k as f64).powi(2)).sum();
+    let fit_at = |centre: usize| -> (f64, f64) {
+        let (mut s1, mut s2) = (0.0, 0.0);
+        for j in 0..=2 * half {
+            let k = j as f64 - h;
+            let xi = x[centre + j - half];
+            s1 += k * xi;
+            s2 += p(k) * xi;
+        }
+        (s1 / sum_k2, s2 / sum_p2)
+    };
+    let mut slope = Vec::with_capacity(n);
+    let mut curvature = Vec::with_capacity(n);
+    for i in 0..n {
+        let centre = i.clamp(half, n - 1 - half);
+        let (b1, b2) = fit_at(centre);
+        let offset = i as f64 - centre as f64;
+        slope.push((b1 + 2.0 * b2 * offset) / dt);
+        curvature.push(2.0 * b2 / (dt * dt));
+    }
+    (slope, curvature)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run_of(t: Vec<f64>, x: Vec<f64>, f_hz: f64, u0_m: f64) -> Run {
+        Run {
+            file: Default::default(),
+            excitation_frequency_hz: f_hz,
+            excitation_amplitude_m: u0_m,
+            normal_force_n: 10.0,
+            t_s: t,
+            x_m: x,
+            v_m_per_s: None,
+            normal_force: None,
+            friction_force: None,
+            time_origin: TimeOrigin::Model,
+        }
+    }
+
+    /// A quadratic's derivatives are exact, at the ends too.
+    #[test]
+    fn a_quadratic_is_differentiated_exactly() {
+        let dt = 1e-3;
+        let t: Vec<f64> = (0..50).map(|i| i as f64 * dt).collect();
+        let x: Vec<f64> = t.iter().map(|t| 1e-3 + 0.2 * t - 3.0 * t * t).collect();
+        for half in [1, 2, 5] {
+            let (v, a) = slope_and_curvature(&x, dt, half);
+            for (i, t) in t.iter().enumerate() {
+                assert!((v[i] - (0.2 - 6.0 * t)).abs() < 1e-9, "half {half} at {i}: {}", v[i]);
+                assert!((a[i] + 6.0).abs() < 1e-6, "half {half} at {i}: {}", a[i]);
+            }
+        }
+    }
+
+    /// The friction force of a record that obeys the equation of motion
+    /// with a known force is that force (up to the filter's error on a
+    /// smooth motion), and its derived velocity's noise is as stated.
+    #[test]
+    fn the_equation_of_motion_gives_back_the_force() {
+        use std::f64::consts::PI;
+        let rig = RigInfo { mass_kg: 1.2, natural_frequency_hz: 11.0, damping_ratio: 0.01 };
+        let (f_hz, u0) = (8.0, 2e-3);
+        let dt = 1.0 / 600.0;
+        let w = 2.0 * PI * f_hz;
+        let k = rig.mass_kg * (2.0 * PI * rig.natural_frequency_hz).powi(2);
+        let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
+        // x = X sin(wt + φ): the force is whatever balances it.
+        let (amp, phi) = (3e-3, 0.4);
+        let t: Vec<f64> = (0..3000).map(|i| i as f64 * dt).collect();
+        let x: Vec<f64> = t.iter().map(|t| amp * (w * t + phi).sin()).collect();
+        let truth: Vec<f64> = t
+            .iter()
+            .map(|t| {
+                let (s, co) = ((w * t + phi).sin(), (w * t + phi).cos());
+                -rig.mass_kg * w * w * amp * s + c * w * amp * co + k * amp * s - k * u0 * (w * t).cos()
+            })
+            .collect();
+        let mut run = run_of(t, x, f_hz, u0);
+        derive(
+            &mut run,
+            DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false },
+            &rig,
+        );
+        let force = run.friction_force.as_ref().unwrap();
+        let v = run.v_m_per_s.as_ref().unwrap();
+        let scale = k * amp;
+        let half = window_half_width(&run);
+        for i in 0..run.len() {
+            // The quadratic's error on a sinusoid over a 24th of a period;
+            // at the ends, where it is evaluated off its window's centre,
+            // larger.
+            let edge = i < half || i + half >= run.len();
+            let tolerance = if edge { 0.1 } else { 0.02 } * scale;
+            assert!((force[i] - truth[i]).abs() < tolerance, "at {i}: {} vs {}", force[i], truth[i]);
+            let exact = amp * w * (w * run.t_s[i] + phi).cos();
+            assert!((v[i] - exact).abs() < 0.01 * amp * w, "at {i}");
+        }
+        // Noise through the slope filter: by its coefficients.
+        let half = half as f64;
+        let expected = 1e-6 / (half * (half + 1.0) * (2.0 * half + 1.0) / 3.0).sqrt() / dt;
+        assert!((velocity_noise(&run, 1e-6) - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn only_channels_no_run_records_are_derived_and_a_free_origin_reads_the_base_from_the_record() {
+        let t: Vec<f64> = (0..100).map(|i| i as f64 / 600.0).collect();
+        let x = vec![0.0; 100];
+        let mut a = run_of(t.clone(), x.clone(), 8.0, 1e-3);
+        let b = run_of(t, x, 8.0, 1e-3);
+        let all = DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false };
+        assert_eq!(DerivedChannels::for_runs(&[a.clone(), b.clone()]), all);
+        a.time_origin = TimeOrigin::Free;
+        assert_eq!(
+            DerivedChannels::for_runs(&[a.clone(), b.clone()]),
+            DerivedChannels { base_from_record: true, ..all }
+        );
+        // A channel one run records is derived in none.
+        a.v_m_per_s = Some(vec![0.0; 100]);
+        a.normal_force = Some(vec![10.0; 100]);
+        a.friction_force = Some(vec![0.0; 100]);
+        assert!(!DerivedChannels::for_runs(&[a, b]).any());
+        assert!(!DerivedChannels::for_runs(&[]).any());
+        assert!(DerivedChannels::default().note().is_none());
+    }
+}
