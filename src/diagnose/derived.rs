@@ -53,9 +53,10 @@ impl DerivedChannels {
     }
 
     /// What a set with these runs gets: a velocity where no run records
-    /// one, and a friction force where no run records one and every run's
-    /// base motion is known in its time (the model's frame or a `base_x`
-    /// column). Nothing for a set without runs.
+    /// one, a friction force where no run records one (each record's base
+    /// phase read from it where some run's time origin is free), and μ
+    /// against the nominal load where no run records the normal force.
+    /// Nothing for a set without runs.
     pub fn for_runs(runs: &[Run]) -> DerivedChannels {
         if runs.is_empty() {
             return DerivedChannels::default();
@@ -69,9 +70,15 @@ impl DerivedChannels {
 
     /// The note a report carries about them (`None` where none was derived).
     pub fn note(self) -> Option<String> {
-        let load = if self.nominal_load && self.friction {
-            "; no run records the normal force either, so μ is read as the friction force over the nominal load, \
-             on the replicates too"
+        let rate = if self.friction {
+            "; the filter blurs how fast friction drops from rest, so the law's Stribeck rate c is not read from \
+             a derived force: the model keeps the paper's, and the law's other terms are inferred at it"
+        } else {
+            ""
+        };
+        let load = if self.nominal_load {
+            "; no run records the normal force, so μ is read as the friction force over the nominal load, on the \
+             replicates too"
         } else {
             ""
         };
@@ -79,13 +86,14 @@ impl DerivedChannels {
             (true, true) => "the velocity and the friction force were",
             (true, false) => "the velocity was",
             (false, true) => "the friction force was",
-            (false, false) => return None,
+            (false, false) => return self.nominal_load.then(|| load.trim_start_matches("; ").to_string()),
         };
         Some(format!(
             "no run records them, so {what} derived from the displacement (a least-squares quadratic over a \
              window of about a twenty-fourth of a period about each sample; the friction force as what the \
-             equation of motion leaves, m x'' + c x' + k x − k u), and the model's replicate records are derived \
-             the same way from their own noisy displacement{}{load}",
+             equation of motion leaves, m x'' + c x' + k x − k u, about its record's mean), and the model's \
+             replicate records are derived \
+             the same way from their own noisy displacement{}{load}{rate}",
             if self.base_from_record {
                 "; a run's time origin is free, so the base's phase in each record is read from the record itself \
                  (a sinusoid at the excitation frequency fitted beside a friction that opposes the motion)"
@@ -129,8 +137,15 @@ pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
         // What the rig's side of the equation of motion gives: k u + F.
         let rig_side: Vec<f64> = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
         let phase = if derived.base_from_record { base_phase(run, &rig_side, &v) } else { 0.0 };
-        let force: Vec<f64> =
+        let mut force: Vec<f64> =
             (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect();
+        // About its record's mean: a displacement sensor's zero off by δ
+        // would put k δ into every sample (0.8 N for 0.1 mm on the
+        // benchmark's rigs), pushing one direction's friction up and the
+        // other's down; a friction that opposes a symmetric motion has a
+        // mean of about zero, and the replicates' is taken about theirs.
+        let mean = force.iter().sum::<f64>() / force.len() as f64;
+        force.iter_mut().for_each(|f| *f -= mean);
         run.friction_force = Some(force);
     }
     if derived.v {
@@ -295,11 +310,14 @@ mod tests {
             })
             .collect();
         let mut run = run_of(t, x, f_hz, u0);
-        derive(
-            &mut run,
-            DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false },
-            &rig,
-        );
+        let all = DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false };
+        // A displacement sensor whose zero is 0.1 mm off gives the same force.
+        let mut offset = run.clone();
+        offset.x_m.iter_mut().for_each(|x| *x += 1e-4);
+        derive(&mut offset, all, &rig);
+        derive(&mut run, all, &rig);
+        let off = offset.friction_force.as_ref().unwrap();
+        assert!(off.iter().zip(run.friction_force.as_ref().unwrap()).all(|(a, b)| (a - b).abs() < 1e-9));
         let force = run.friction_force.as_ref().unwrap();
         let v = run.v_m_per_s.as_ref().unwrap();
         let scale = k * amp;
@@ -340,5 +358,7 @@ mod tests {
         assert!(!DerivedChannels::for_runs(&[a, b]).any());
         assert!(!DerivedChannels::for_runs(&[]).any());
         assert!(DerivedChannels::default().note().is_none());
+        let load_only = DerivedChannels { nominal_load: true, ..DerivedChannels::default() };
+        assert!(load_only.note().is_some_and(|n| n.starts_with("no run records the normal force")));
     }
 }

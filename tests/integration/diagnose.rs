@@ -583,3 +583,48 @@ fn three_effects_name_at_most_two_and_note_what_is_left() {
     assert!(noted && misfit > 0, "notes {:?}, misfit hints {misfit}", d.notes);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A set of `t` and `x` alone is diagnosed on the velocity and friction
+/// force derived from `x`: the report says so, the friction observables are
+/// scored, and the law calibrated from them lands where the full channels'
+/// does (the paper's rig: a = 0.427).
+#[test]
+fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
+    let root = scratch("x-alone");
+    let full = root.join("full");
+    let (ok, _, err) =
+        stickslip(&["-q", "simulate", "--realisations", "1", "--duration", "20", "--out", full.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let alone = root.join("alone");
+    std::fs::create_dir_all(&alone).unwrap();
+    std::fs::copy(full.join("manifest.json"), alone.join("manifest.json")).unwrap();
+    let name = "run-7.000hz-16.390n-r000.csv";
+    let text = std::fs::read_to_string(full.join(name)).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let (t, x) = (header.iter().position(|c| *c == "t").unwrap(), header.iter().position(|c| *c == "x").unwrap());
+    let mut cut = String::from("t,x\n");
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        cut += &format!("{},{}\n", cells[t], cells[x]);
+    }
+    std::fs::write(alone.join(name), cut).unwrap();
+    let law_a = |dir: &Path| -> f64 {
+        let model = std::fs::read_to_string(dir.join("baseline-model.toml")).unwrap();
+        let table: toml::Table = model.parse().unwrap();
+        table["friction"]["a"].as_float().unwrap()
+    };
+    let mut a = Vec::new();
+    for (set, out) in [(&full, root.join("out-full")), (&alone, root.join("out-alone"))] {
+        let (ok, _, err) =
+            stickslip(&["-q", "diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+        assert!(ok, "{err}");
+        a.push(law_a(&out));
+    }
+    let (_, notes) = report_in(&root.join("out-alone"));
+    assert!(notes.iter().any(|n| n.contains("derived from the displacement")), "{notes:?}");
+    let scores = std::fs::read_to_string(root.join("out-alone/scores.csv")).unwrap();
+    assert!(scores.contains("friction_mu_mean") && scores.contains("stick_fraction"), "{scores}");
+    assert!((a[1] - a[0]).abs() < 0.02 && (a[1] - 0.427).abs() < 0.02, "a: full {} alone {}", a[0], a[1]);
+    std::fs::remove_dir_all(&root).unwrap();
+}
