@@ -107,6 +107,10 @@ pub(crate) struct BenchmarkArgs {
     /// (declared in the manifest), a free one with a base_x column, or the three in turn.
     #[arg(long, value_enum, default_value = "mixed")]
     pub(crate) time_origin: OriginArg,
+    /// The independent generator's records carry `t` and `x` (and `base_x` where the time origin gives one)
+    /// alone, as a rig without velocity or force sensors: the diagnosis derives the rest from `x`.
+    #[arg(long)]
+    pub(crate) displacement_only: bool,
 }
 
 /// `--generator`.
@@ -242,6 +246,12 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
              threshold)"
         );
     }
+    if !independent && args.displacement_only {
+        anyhow::bail!(
+            "invalid --displacement-only with --generator engine: only the independent generator writes records \
+             of x alone"
+        );
+    }
     let load_shares = args.load_shares.unwrap_or_else(|| crate::diagnose::synthetic::LOAD_SHARES.to_vec());
     let loads = args.loads.unwrap_or_else(|| crate::diagnose::benchmark::independent::DEFAULT_LOADS_N.to_vec());
     if load_shares.is_empty() || load_shares.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
@@ -320,6 +330,7 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
                     OriginArg::BaseX => Origins::BaseX,
                     OriginArg::Mixed => Origins::Mixed,
                 },
+                displacement_only: args.displacement_only,
             },
         },
     })

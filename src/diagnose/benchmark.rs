@@ -64,8 +64,9 @@ pub enum Generator {
     Engine,
     /// The independent generator ([`independent`]): its own integrator and
     /// effect forms from the literature, at fixed loads in newtons, with the
-    /// records' time frames as `origins` says.
-    Independent { loads_n: Vec<f64>, origins: Origins },
+    /// records' time frames as `origins` says, and their channels `t` and
+    /// `x` (and `base_x`) alone where `displacement_only`.
+    Independent { loads_n: Vec<f64>, origins: Origins, displacement_only: bool },
 }
 
 /// The time frames of an independent benchmark's records.
@@ -82,8 +83,15 @@ pub enum Origins {
 }
 
 impl Origins {
-    /// The record shape of set `index`.
-    fn shape(self, index: usize, runs_per_condition: u32, duration_s: f64) -> independent::RecordShape {
+    /// The record shape of set `index` (its channels `t` and `x`, and
+    /// `base_x` where it has one, alone where `displacement_only`).
+    fn shape(
+        self,
+        index: usize,
+        runs_per_condition: u32,
+        duration_s: f64,
+        displacement_only: bool,
+    ) -> independent::RecordShape {
         let pick = match self {
             Origins::Mixed => [Origins::Model, Origins::Free, Origins::BaseX][index % 3],
             other => other,
@@ -93,7 +101,7 @@ impl Origins {
             Origins::BaseX => independent::RecordShape::free_origin_with_base(),
             _ => independent::RecordShape::default(),
         };
-        independent::RecordShape { runs_per_condition, duration_s, ..shape }
+        independent::RecordShape { runs_per_condition, duration_s, displacement_only, ..shape }
     }
 }
 
@@ -136,10 +144,10 @@ impl BenchmarkSettings {
                         sample_rate_hz: shape.sample_rate_hz,
                         summary_only: planned.phase_only,
                     },
-                    Generator::Independent { loads_n, origins } => {
+                    Generator::Independent { loads_n, origins, displacement_only } => {
                         let hidden: Vec<independent::HiddenForm> =
                             planned.hidden.iter().map(|h| (h.effect, h.form.saturating_sub(1), h.level == 1)).collect();
-                        let record = origins.shape(i, shape.runs_per_condition, shape.duration_s);
+                        let record = origins.shape(i, shape.runs_per_condition, shape.duration_s, *displacement_only);
                         SetOutline {
                             conditions: independent::random_truth(seed, &hidden, loads_n, &self.frequency_ratios)?.1,
                             runs_per_condition: record.runs_per_condition,
@@ -450,12 +458,12 @@ pub fn run_benchmark(
                 };
                 (Truth::Engine(Box::new(truth)), conditions, set)
             }
-            Generator::Independent { loads_n, origins } => {
+            Generator::Independent { loads_n, origins, displacement_only } => {
                 let hidden: Vec<independent::HiddenForm> =
                     planned.hidden.iter().map(|h| (h.effect, h.form.saturating_sub(1), h.level == 1)).collect();
                 let (truth, conditions) =
                     independent::random_truth(seed, &hidden, loads_n, &settings.frequency_ratios)?;
-                let record = origins.shape(i, shape.runs_per_condition, shape.duration_s);
+                let record = origins.shape(i, shape.runs_per_condition, shape.duration_s, *displacement_only);
                 independent::write_set(&dir.join("data"), &truth, &conditions, &record, seed)?;
                 (Truth::Independent(Box::new(truth), seed), conditions, read_measurement_set(&dir.join("data"))?)
             }
@@ -622,8 +630,9 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         settings.frequency_ratios.len(),
         match &settings.generator {
             Generator::Engine => format!("loads at {:?} of the no-stop threshold, stickslip's own generator", settings.load_shares),
-            Generator::Independent { loads_n, origins } => format!(
-                "loads {loads_n:?} N, the independent generator (its own integrator and literature forms), time origins {origins:?}"
+            Generator::Independent { loads_n, origins, displacement_only } => format!(
+                "loads {loads_n:?} N, the independent generator (its own integrator and literature forms), time origins {origins:?}{}",
+                if *displacement_only { ", records of t and x (and base_x) alone" } else { "" }
             ),
         },
         engine.description()

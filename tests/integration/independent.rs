@@ -190,3 +190,32 @@ fn a_free_origin_set_reads_back_with_its_origin_and_base() {
     }
     assert!(shifts.windows(2).any(|w| (w[0] - w[1]).abs() > 1e-4), "every run at the same phase: {shifts:?}");
 }
+
+/// A displacement-only set writes `t`, `x` and its `base_x` alone; read
+/// back, its runs carry no velocity, force or normal force, and the
+/// diagnosis derives the velocity and the friction force for it (and its
+/// replicates alike).
+#[test]
+fn a_displacement_only_set_carries_x_and_its_base_alone() {
+    let scratch = Scratch::new("x-only");
+    let (truth, conditions) = small_truth(&[(Effect::LoadDependentFriction, 1, true)]);
+    let data = scratch.0.join("set/data");
+    let shape = RecordShape {
+        duration_s: 6.0,
+        runs_per_condition: 1,
+        displacement_only: true,
+        ..RecordShape::free_origin_with_base()
+    };
+    write_set(&data, &truth, &conditions, &shape, 5).expect("written");
+    let first = std::fs::read_dir(&data)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "csv"))
+        .expect("a run file");
+    let header = std::fs::read_to_string(&first).unwrap().lines().next().unwrap().to_string();
+    assert_eq!(header, "t,x,base_x");
+    let set = read_measurement_set(&data).expect("the reader takes the set");
+    assert!(set.runs.iter().all(|r| r.v_m_per_s.is_none() && r.friction_force.is_none() && r.normal_force.is_none()));
+    let derived = stickslip::diagnose::derived::DerivedChannels::for_runs(&set.runs);
+    assert!(derived.v && derived.friction && derived.nominal_load && !derived.base_from_record, "{derived:?}");
+}

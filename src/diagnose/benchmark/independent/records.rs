@@ -40,6 +40,9 @@ pub struct RecordShape {
     pub time_origin: TimeOrigin,
     /// Write the base displacement `u(t)` as a `base_x` column.
     pub base_x: bool,
+    /// Write `t`, `x` (and `base_x`) alone, as a rig without velocity or
+    /// force sensors would.
+    pub displacement_only: bool,
     pub sensor: SensorNoise,
 }
 
@@ -53,6 +56,7 @@ impl Default for RecordShape {
             sample_rate_hz: 600.0,
             time_origin: TimeOrigin::Model,
             base_x: false,
+            displacement_only: false,
             sensor: SensorNoise::default(),
         }
     }
@@ -224,7 +228,7 @@ pub fn write_set(
     let mut runs = Vec::new();
     for (&(i, r), record) in jobs.iter().zip(&records) {
         let file = run_file(i, r);
-        write_run(&dir.join(&file), record, shape.base_x)?;
+        write_run(&dir.join(&file), record, shape)?;
         runs.push(serde_json::json!({
             "file": file,
             "excitation_frequency_hz": conditions[i].excitation_frequency_hz,
@@ -269,12 +273,16 @@ pub(super) fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
     })
 }
 
-pub(super) fn write_run(path: &Path, r: &RecordColumns, base_x: bool) -> Result<()> {
+pub(super) fn write_run(path: &Path, r: &RecordColumns, shape: &RecordShape) -> Result<()> {
+    let (all, base_x) = (!shape.displacement_only, shape.base_x);
     write_atomically(path, |w| {
-        write!(w, "t,x,v,normal_force,friction_force")?;
+        write!(w, "t,x{}", if all { ",v,normal_force,friction_force" } else { "" })?;
         writeln!(w, "{}", if base_x { ",base_x" } else { "" })?;
         for i in 0..r.t.len() {
-            write!(w, "{},{},{},{},{}", r.t[i], r.x[i], r.v[i], r.normal_force[i], r.friction_force[i])?;
+            write!(w, "{},{}", r.t[i], r.x[i])?;
+            if all {
+                write!(w, ",{},{},{}", r.v[i], r.normal_force[i], r.friction_force[i])?;
+            }
             if base_x {
                 write!(w, ",{}", r.base_x[i])?;
             }
