@@ -90,10 +90,10 @@ impl DerivedChannels {
         };
         Some(format!(
             "no run records them, so {what} derived from the displacement (a least-squares quadratic over a \
-             window of about a twenty-fourth of a period about each sample; the friction force as what the \
-             equation of motion leaves, m x'' + c x' + k x − k u, about its record's mean), and the model's \
-             replicate records are derived \
-             the same way from their own noisy displacement{}{load}{rate}",
+             window of about a twenty-fourth of a period, five samples at least, about each sample; the friction \
+             force as what the equation of motion leaves, m x'' + c x' + k x − k u, about its record's mean), \
+             and the model's replicate records are derived the same way from their own noisy \
+             displacement{}{load}{rate}",
             if self.base_from_record {
                 "; a run's time origin is free, so the base's phase in each record is read from the record itself \
                  (a sinusoid at the excitation frequency fitted beside a friction that opposes the motion)"
