@@ -608,7 +608,8 @@ pub(crate) fn law_step(
 /// and a, b, d are refitted to the moved curve at the model's own Stribeck
 /// rate c (linear least squares, so the step is continuous and cannot
 /// wander off along the directions in which a, b, c and d trade off; c
-/// itself comes from the measured records' fit).
+/// itself is the model's: the measured records' fit, or for a force
+/// derived from `x` the paper's, [`initial_baseline`]).
 /// `response`: how far the simulated residual variance moves per unit of
 /// σ_μ² (1 with recorded channels; a derived friction force, read through
 /// a smoothing filter, passes a fraction of the noise, [`crate::diagnose::derived`]).

@@ -24,13 +24,14 @@
 //! replicate records drop their normal-force channel so that theirs is read
 //! the same way.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::measure::{MeasurementSet, RigInfo, Run, TimeOrigin};
 
 /// Which channels of a set's runs were derived from the displacement
 /// (none of its runs recorded them).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct DerivedChannels {
     /// The velocity, from the displacement's local slope.
     pub v: bool,

@@ -309,6 +309,8 @@ pub struct Diagnosis {
     /// What the reader of the report should know about how the data were
     /// read (time frames, observables set aside).
     pub notes: Vec<String>,
+    /// The channels derived from the displacement ([`derived`]).
+    pub derived_channels: derived::DerivedChannels,
 }
 
 impl Diagnosis {
@@ -564,5 +566,6 @@ pub fn diagnose_set(
         conditions,
         fold_models,
         notes,
+        derived_channels: data.derived,
     })
 }

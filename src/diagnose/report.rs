@@ -41,6 +41,10 @@ pub struct Report {
     /// How the data were read (time frames, observables set aside).
     #[serde(default)]
     pub notes: Vec<String>,
+    /// The channels derived from the displacement because no run records
+    /// them (all false for a set that records them, or for summary rows).
+    #[serde(default)]
+    pub derived_channels: crate::diagnose::derived::DerivedChannels,
 }
 
 /// How the confidence is defined, as `report.json` states it.
@@ -431,6 +435,7 @@ impl Diagnosis {
             source: source.display().to_string(),
             elapsed_s,
             notes: self.notes.clone(),
+            derived_channels: self.derived_channels,
         }
     }
 }

@@ -621,8 +621,12 @@ fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
         assert!(ok, "{err}");
         a.push(law_a(&out));
     }
-    let (_, notes) = report_in(&root.join("out-alone"));
+    let (report, notes) = report_in(&root.join("out-alone"));
     assert!(notes.iter().any(|n| n.contains("derived from the displacement")), "{notes:?}");
+    let derived = &report["derived_channels"];
+    assert_eq!((derived["v"].as_bool(), derived["friction"].as_bool()), (Some(true), Some(true)), "{derived}");
+    let (full_report, _) = report_in(&root.join("out-full"));
+    assert_eq!(full_report["derived_channels"]["friction"].as_bool(), Some(false));
     let scores = std::fs::read_to_string(root.join("out-alone/scores.csv")).unwrap();
     assert!(scores.contains("friction_mu_mean") && scores.contains("stick_fraction"), "{scores}");
     assert!((a[1] - a[0]).abs() < 0.02 && (a[1] - 0.427).abs() < 0.02, "a: full {} alone {}", a[0], a[1]);
