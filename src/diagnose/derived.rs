@@ -129,14 +129,12 @@ pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
     if !(derived.v || derived.friction) || run.len() < 3 {
         return;
     }
-    let half = window_half_width(run);
-    let (v, a) = slope_and_curvature(&run.x_m, run.sample_interval_s(), half);
+    let (v, rig_side) = slope_and_rig_side(run, rig);
     if derived.friction {
-        let (k, c) = stiffness_and_damping(rig);
+        let k = rig.stiffness_n_per_m();
         let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
         let u0 = run.excitation_amplitude_m;
         // What the rig's side of the equation of motion gives: k u + F.
-        let rig_side: Vec<f64> = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
         let phase = if derived.base_from_record { base_phase(run, &rig_side, &v) } else { 0.0 };
         let mut force: Vec<f64> =
             (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect();
@@ -188,17 +186,17 @@ fn base_phase(run: &Run, rig_side: &[f64], v: &[f64]) -> f64 {
 /// a known frame).
 #[cfg(test)]
 pub(crate) fn base_phase_of(run: &Run, rig: &RigInfo) -> f64 {
-    let (v, a) = slope_and_curvature(&run.x_m, run.sample_interval_s(), window_half_width(run));
-    let (k, c) = stiffness_and_damping(rig);
-    let rig_side: Vec<f64> = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
+    let (v, rig_side) = slope_and_rig_side(run, rig);
     base_phase(run, &rig_side, &v)
 }
 
-/// The rig's stiffness k (N/m) and damping c (N s/m).
-fn stiffness_and_damping(rig: &RigInfo) -> (f64, f64) {
-    let omega = 2.0 * std::f64::consts::PI * rig.natural_frequency_hz;
-    let k = rig.mass_kg * omega * omega;
-    (k, 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt())
+/// `run`'s velocity derived from its displacement (m/s), and the rig's
+/// side of the equation of motion, m x'' + c x' + k x (N: k u + F).
+fn slope_and_rig_side(run: &Run, rig: &RigInfo) -> (Vec<f64>, Vec<f64>) {
+    let (v, a) = slope_and_curvature(&run.x_m, run.sample_interval_s(), window_half_width(run));
+    let (k, c) = (rig.stiffness_n_per_m(), rig.damping_n_s_per_m());
+    let rig_side = (0..run.len()).map(|i| rig.mass_kg * a[i] + c * v[i] + k * run.x_m[i]).collect();
+    (v, rig_side)
 }
 
 /// The noise a derived velocity carries from displacement noise of
@@ -297,8 +295,7 @@ mod tests {
         let (f_hz, u0) = (8.0, 2e-3);
         let dt = 1.0 / 600.0;
         let w = 2.0 * PI * f_hz;
-        let k = rig.mass_kg * (2.0 * PI * rig.natural_frequency_hz).powi(2);
-        let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
+        let (k, c) = (rig.stiffness_n_per_m(), rig.damping_n_s_per_m());
         // x = X sin(wt + φ): the force is whatever balances it.
         let (amp, phi) = (3e-3, 0.4);
         let t: Vec<f64> = (0..3000).map(|i| i as f64 * dt).collect();

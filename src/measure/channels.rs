@@ -243,8 +243,7 @@ pub(super) fn check_force_balance(run: &Run, rig: &RigInfo) -> Result<()> {
     if n < MIN_SAMPLES * BALANCE_STRETCHES {
         return Ok(());
     }
-    let k = rig.mass_kg * (std::f64::consts::TAU * rig.natural_frequency_hz).powi(2);
-    let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
+    let (k, c) = (rig.stiffness_n_per_m(), rig.damping_n_s_per_m());
     let w = std::f64::consts::TAU * run.excitation_frequency_hz;
     let sample_rate_hz = super::sample_rate_hz(run);
     let harmonics: Vec<usize> = (2..=BALANCE_HARMONICS)
@@ -399,8 +398,7 @@ mod tests {
     /// read with a sensor's noise.
     fn balanced_run(shaped: bool, gain: f64) -> (Run, RigInfo) {
         let rig = RigInfo { mass_kg: 1.028, natural_frequency_hz: 10.05, damping_ratio: 0.00225 };
-        let k = rig.mass_kg * (std::f64::consts::TAU * rig.natural_frequency_hz).powi(2);
-        let c = 2.0 * rig.damping_ratio * (k * rig.mass_kg).sqrt();
+        let (k, c) = (rig.stiffness_n_per_m(), rig.damping_n_s_per_m());
         let w = std::f64::consts::TAU * 7.0;
         let parts: &[(f64, f64, f64)] =
             if shaped { &[(1.0, 4e-3, 0.0), (3.0, 2e-4, 1.0), (5.0, 5e-5, 2.0)] } else { &[(1.0, 4e-3, 0.0)] };

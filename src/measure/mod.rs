@@ -111,6 +111,18 @@ pub struct RigInfo {
     pub damping_ratio: f64,
 }
 
+impl RigInfo {
+    /// The leaf springs' stiffness k = m (2π f0)², N/m.
+    pub fn stiffness_n_per_m(&self) -> f64 {
+        self.mass_kg * (std::f64::consts::TAU * self.natural_frequency_hz).powi(2)
+    }
+
+    /// The viscous damping c = 2 ζ √(k m), N s/m.
+    pub fn damping_n_s_per_m(&self) -> f64 {
+        2.0 * self.damping_ratio * (self.stiffness_n_per_m() * self.mass_kg).sqrt()
+    }
+}
+
 /// One time-series record: a run file plus its manifest entry.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Run {
