@@ -106,10 +106,11 @@ impl DerivedChannels {
 }
 
 /// `set` with the channels `DerivedChannels::for_runs` says derived in
-/// every run, and which those are (the set unchanged where none is).
+/// every run, and which those are (`None`, the set as it is, where no
+/// channel is derived: a nominal load alone changes none of its runs).
 pub fn with_derived_channels(set: &MeasurementSet) -> (Option<MeasurementSet>, DerivedChannels) {
     let derived = DerivedChannels::for_runs(&set.runs);
-    if !derived.any() {
+    if !(derived.v || derived.friction) {
         return (None, derived);
     }
     let mut out = set.clone();
@@ -134,7 +135,7 @@ pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
         let k = rig.stiffness_n_per_m();
         let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
         let u0 = run.excitation_amplitude_m;
-        // What the rig's side of the equation of motion gives: k u + F.
+        // The rig's side is k u + F: F is what k u leaves of it.
         let phase = if derived.base_from_record { base_phase(run, &rig_side, &v) } else { 0.0 };
         let mut force: Vec<f64> =
             (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect();
