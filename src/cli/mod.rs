@@ -520,6 +520,21 @@ fn check_fig8_frequency(hz: f64) -> Result<()> {
     Ok(())
 }
 
+/// Says on stderr which grid frequency Figure 8 shows when it is not the
+/// `--fig8-frequency` asked for (`hz`): the figure takes the nearest.
+fn note_fig8_frequency(hz: f64, grid_hz: impl IntoIterator<Item = f64>) {
+    let nearest = grid_hz.into_iter().min_by(|a, b| (a - hz).abs().total_cmp(&(b - hz).abs()));
+    if let Some(f) = nearest
+        && f != hz
+    {
+        info(&format!(
+            "note: Figure 8 shows {} Hz, the grid frequency nearest to --fig8-frequency {} Hz",
+            crate::engine::model::fmt_value(f),
+            crate::engine::model::fmt_value(hz)
+        ));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -149,6 +149,7 @@ pub(crate) fn run_plot(args: PlotArgs) -> Result<()> {
             }
             None => Vec::new(),
         };
+        super::note_fig8_frequency(args.fig8_frequency, result.conditions.iter().map(|c| c.excitation_frequency_hz));
         let opts = PlotOptions {
             fig8_frequency_hz: args.fig8_frequency,
             size: args.size.into(),

@@ -198,6 +198,9 @@ pub(crate) fn run_sweep(args: SweepArgs) -> Result<()> {
     let (frequencies, forces) = (prepared.grid.frequencies_hz.len(), prepared.grid.normal_forces_n.len());
     let progress = Progress::bar("sweep");
     let plots = (!args.no_plots).then_some(args.fig8_frequency);
+    if plots.is_some() {
+        super::note_fig8_frequency(args.fig8_frequency, prepared.conditions.iter().map(|c| c.excitation_frequency_hz));
+    }
     let swept = prepared.run(&engine, plots, &mut |done, total| progress.position(done, total))?;
     progress.finish();
     if swept.widened_points > 0 {
@@ -231,6 +234,7 @@ pub(crate) fn merge(args: MergeArgs) -> Result<()> {
     let description = format!("merged from {} shards", args.shards.len());
     let timings = serde_json::json!({ "merged_shards": args.shards.len() });
     let plots = Some(args.fig8_frequency);
+    super::note_fig8_frequency(args.fig8_frequency, result.conditions.iter().map(|c| c.excitation_frequency_hz));
     write_output_set(out.dir(), &model, &identity, Shard::WHOLE, &result, &description, timings, None, plots)?;
     out.commit()?;
     emit(&format!(

@@ -55,9 +55,12 @@ pub struct PointStats {
     /// Share of measured time spent stuck, –.
     pub stick_fraction: f64,
     /// Circular mean of the per-period phase lag of the response's
-    /// fundamental behind the base, degrees in (−180, 180].
+    /// fundamental behind the base, degrees in (−180, 180]; NaN where the
+    /// block stuck throughout every measured period (a block that never
+    /// moves has no fundamental, so no lag: see [`PointAccumulator::moved`]).
     pub phase_mean_deg: f64,
-    /// Circular variance of that phase, degrees² (see [`circular_mean_var`]).
+    /// Circular variance of that phase, degrees² (see [`circular_mean_var`]);
+    /// NaN where the mean is.
     pub phase_var_deg2: f64,
 }
 
@@ -319,9 +322,20 @@ impl PointAccumulator {
         (f64::from(self.range.centre_f32()) + mean_q * quantum, var_q * quantum * quantum)
     }
 
+    /// Whether the block moved in any measured period: `false` when every
+    /// period was stuck throughout (stick fraction exactly 1), where the
+    /// per-period fundamentals are round-off and their phases mean nothing.
+    pub fn moved(&self) -> bool {
+        (self.stick_units as f64) < STICK_UNITS_PER_PERIOD * self.peaks as f64
+    }
+
     /// Circular mean (rad, in (−π, π]) and circular variance (rad²) of the
-    /// phases, from the exact sums (see [`circular_mean_var`]).
+    /// phases, from the exact sums (see [`circular_mean_var`]); `(NaN, NaN)`
+    /// where the block never moved ([`Self::moved`]).
     pub fn phase_moments(&self) -> (f64, f64) {
+        if !self.moved() {
+            return (f64::NAN, f64::NAN);
+        }
         let (s, v) = (self.sum_phase_sin as f64 / PHASE_QUANTA, self.sum_phase_versine as f64 / PHASE_QUANTA);
         let n = self.peaks as f64;
         let mean = f64::from(self.range.phase_ref_f32()) + s.atan2(n - v);
@@ -406,6 +420,20 @@ mod tests {
         b.merge(&a);
         assert_eq!(whole, b);
         assert_eq!(whole.stats(Condition { excitation_frequency_hz: 7.0, normal_force_n: 1.0 }).stick_fraction, 0.25);
+    }
+
+    #[test]
+    fn a_block_stuck_throughout_has_no_phase() {
+        let mut acc = PointAccumulator::new(range());
+        (0..100).for_each(|i| acc.tally_period(1e-3, 0.1 * f64::from(i), 1.0));
+        assert!(!acc.moved());
+        let stats = acc.stats(Condition { excitation_frequency_hz: 7.0, normal_force_n: 1.0 });
+        assert_eq!(stats.stick_fraction, 1.0);
+        assert!(stats.phase_mean_deg.is_nan() && stats.phase_var_deg2.is_nan());
+        // One period with a little motion gives the phases back.
+        acc.tally_period(1e-3, 0.3, 0.9);
+        assert!(acc.moved());
+        assert!(acc.phase_moments().0.is_finite());
     }
 
     #[test]

@@ -38,7 +38,7 @@ pub fn write_sweep_csv(path: &Path, rows: &[PointStats]) -> Result<()> {
         for r in rows {
             writeln!(
                 w,
-                "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{},{},{:e}",
+                "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{},{},{}",
                 r.excitation_frequency_hz,
                 r.normal_force_n,
                 r.realisations,
@@ -49,12 +49,18 @@ pub fn write_sweep_csv(path: &Path, rows: &[PointStats]) -> Result<()> {
                 r.peak_p50_m,
                 r.peak_p95_m,
                 r.stick_fraction,
-                r.phase_mean_deg,
-                r.phase_var_deg2
+                blank_if_nan(r.phase_mean_deg, |v| v.to_string()),
+                blank_if_nan(r.phase_var_deg2, |v| format!("{v:e}"))
             )?;
         }
         Ok(())
     })
+}
+
+/// A cell: `value` as `show` writes it, or blank where it is NaN (a phase
+/// of a block that never moved).
+fn blank_if_nan(value: f64, show: impl Fn(f64) -> String) -> String {
+    if value.is_nan() { String::new() } else { show(value) }
 }
 
 /// Writes `histograms.csv`: every non-empty bin of every point, in metres,
@@ -125,7 +131,9 @@ pub fn write_output_set(
 
 /// Refuses a result with a statistic that is not finite, or with a point
 /// whose peaks lie outside its range (its quantiles would be the range's
-/// edge): nothing of either is written or plotted.
+/// edge): nothing of either is written or plotted. The one exception is the
+/// phase of a point whose block never moved, which is undefined (NaN,
+/// written blank).
 pub fn check_finite(result: &SweepResult) -> Result<()> {
     for (c, a) in result.conditions.iter().zip(&result.accumulators) {
         if a.outside_range() > 0 {
@@ -140,17 +148,11 @@ pub fn check_finite(result: &SweepResult) -> Result<()> {
         }
     }
     for row in result.rows() {
-        let values = [
-            row.peak_mean_m,
-            row.peak_var_m2,
-            row.peak_p05_m,
-            row.peak_p50_m,
-            row.peak_p95_m,
-            row.stick_fraction,
-            row.phase_mean_deg,
-            row.phase_var_deg2,
-        ];
-        if values.iter().any(|v| !v.is_finite()) || row.peaks == 0 {
+        let values =
+            [row.peak_mean_m, row.peak_var_m2, row.peak_p05_m, row.peak_p50_m, row.peak_p95_m, row.stick_fraction];
+        let never_moved = row.stick_fraction == 1.0;
+        let phase_ok = [row.phase_mean_deg, row.phase_var_deg2].iter().all(|v| v.is_finite() || never_moved);
+        if values.iter().any(|v| !v.is_finite()) || !phase_ok || row.peaks == 0 {
             return Err(Error::Diverged {
                 point: format!("{} Hz, {} N", row.excitation_frequency_hz, row.normal_force_n),
                 message: format!("a statistic is not finite ({} peaks); nothing was written", row.peaks),

@@ -493,6 +493,17 @@ fn ambiguity_is_refused_or_said() {
         stderr(&o).contains("--frequencies gives 5 more than once") && stderr(&o).contains("--normal-forces gives 4")
     );
     assert_eq!(std::fs::read_to_string(out.join("sweep.csv")).unwrap().lines().count(), 2, "one row for 5 Hz, 4 N");
+    // A base that does not move leaves the block stuck: no phase is
+    // written (blank cells), and Figure 8's grid frequency is named.
+    let o = run(&sweep_args(
+        out.to_str().unwrap(),
+        &["--set", "excitation.amplitude_m=0", "--frequencies", "5", "--normal-forces", "4"],
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("Figure 8 shows 5 Hz, the grid frequency nearest to --fig8-frequency 7 Hz"));
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.ends_with(",1,,"), "stuck throughout, no phase: {row}");
 }
 
 /// No control character reaches the terminal raw: a flag's value, a path
