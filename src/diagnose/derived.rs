@@ -248,12 +248,9 @@ fn slope_and_rig_side(run: &Run, rig: &RigInfo) -> (Vec<f64>, Vec<f64>) {
 /// excitation frequency, where nearly all of the displacement is.
 fn curvature_gain(run: &Run, half: usize) -> f64 {
     let theta = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz * run.sample_interval_s();
-    let h = half as f64;
-    let sum_k2 = h * (h + 1.0) * (2.0 * h + 1.0) / 3.0;
-    let p = |k: f64| k * k - sum_k2 / (2.0 * h + 1.0);
-    let ks = || (-(half as i64)..=half as i64).map(|k| k as f64);
-    let sum_p2: f64 = ks().map(|k| p(k).powi(2)).sum();
-    let gain = -2.0 * ks().map(|k| p(k) * (k * theta).cos()).sum::<f64>() / (sum_p2 * theta * theta);
+    let w = Weights::of(half);
+    let ks = (-(half as i64)..=half as i64).map(|k| k as f64);
+    let gain = -2.0 * ks.map(|k| w.p(k) * (k * theta).cos()).sum::<f64>() / (w.sum_p2 * theta * theta);
     if gain.is_finite() && gain > 0.5 { gain } else { 1.0 }
 }
 
@@ -261,9 +258,7 @@ fn curvature_gain(run: &Run, half: usize) -> f64 {
 /// `x_noise_m` (m) in `run`: the white noise through the slope's filter,
 /// m/s.
 pub fn velocity_noise(run: &Run, x_noise_m: f64) -> f64 {
-    let half = window_half_width(run) as f64;
-    let sum_k2 = half * (half + 1.0) * (2.0 * half + 1.0) / 3.0;
-    x_noise_m / sum_k2.sqrt() / run.sample_interval_s()
+    x_noise_m / Weights::of(window_half_width(run)).sum_k2.sqrt() / run.sample_interval_s()
 }
 
 /// The filter's half-width in samples: about a forty-eighth of an
@@ -271,6 +266,31 @@ pub fn velocity_noise(run: &Run, x_noise_m: f64) -> f64 {
 fn window_half_width(run: &Run) -> usize {
     let per_period = 1.0 / (run.excitation_frequency_hz * run.sample_interval_s()).max(1e-12);
     ((per_period / 48.0).round() as usize).max(2)
+}
+
+/// The sums behind the least-squares quadratic over the `2 half + 1`
+/// samples k = −half..half: Σk², and the quadratic's part orthogonal to
+/// the constant, P(k) = k² − Σk²/(2 half + 1), with ΣP².
+struct Weights {
+    sum_k2: f64,
+    width: f64,
+    sum_p2: f64,
+}
+
+impl Weights {
+    fn of(half: usize) -> Weights {
+        let h = half as f64;
+        let width = 2.0 * h + 1.0;
+        let sum_k2 = h * (h + 1.0) * (2.0 * h + 1.0) / 3.0;
+        let mut w = Weights { sum_k2, width, sum_p2: 0.0 };
+        w.sum_p2 = (-(half as i64)..=half as i64).map(|k| w.p(k as f64).powi(2)).sum();
+        w
+    }
+
+    /// P(k).
+    fn p(&self, k: f64) -> f64 {
+        k * k - self.sum_k2 / self.width
+    }
 }
 
 /// The first and second time derivatives of `x` (sampled every `dt` s)
@@ -282,11 +302,8 @@ fn slope_and_curvature(x: &[f64], dt: f64, half: usize) -> (Vec<f64>, Vec<f64>) 
     let n = x.len();
     let half = half.min((n.saturating_sub(1)) / 2).max(1);
     let h = half as f64;
-    let width = 2.0 * h + 1.0;
-    let sum_k2 = h * (h + 1.0) * (2.0 * h + 1.0) / 3.0;
-    // The quadratic's orthogonal part: P(k) = k² − Σk²/n, and ΣP².
-    let p = |k: f64| k * k - sum_k2 / width;
-    let sum_p2: f64 = (-(half as i64)..=half as i64).map(|k| p(k as f64).powi(2)).sum();
+    let w = Weights::of(half);
+    let (sum_k2, sum_p2, p) = (w.sum_k2, w.sum_p2, |k: f64| w.p(k));
     let fit_at = |centre: usize| -> (f64, f64) {
         let (mut s1, mut s2) = (0.0, 0.0);
         for j in 0..=2 * half {
