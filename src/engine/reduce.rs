@@ -279,8 +279,11 @@ impl PointAccumulator {
         (self.outside_range() > 0).then(|| self.range.holding(f64::from(lowest), f64::from(highest)))?
     }
 
-    /// Quantile from the histogram, interpolating linearly inside the bin.
-    /// Returns the range edge when the quantile falls outside the range.
+    /// Quantile from the histogram, interpolating linearly inside the bin
+    /// and held within the lowest and highest peak (so the peaks of a block
+    /// stuck throughout, all one value, give that value at every p, not a
+    /// spread across their bin). Returns the range edge when the quantile
+    /// falls outside the range.
     pub fn quantile(&self, p: f64) -> f64 {
         let target = p * self.peaks as f64;
         let mut below = 0.0;
@@ -295,7 +298,13 @@ impl PointAccumulator {
                     return self.range.hi_m;
                 }
                 let (lo, hi) = self.range.bin_edges(b);
-                return lo + (hi - lo) * ((target - below) / count).clamp(0.0, 1.0);
+                let inside = lo + (hi - lo) * ((target - below) / count).clamp(0.0, 1.0);
+                return match self.peak_extremes_m {
+                    Some((lowest, highest)) => {
+                        inside.clamp(f64::from(lowest), f64::from(highest).max(f64::from(lowest)))
+                    }
+                    None => inside,
+                };
             }
             below += count;
         }
@@ -463,6 +472,17 @@ mod tests {
         let bin = 4e-3 / f64::from(HISTOGRAM_BINS - 2);
         assert!((acc.quantile(0.5) - 1.1e-3).abs() < bin);
         assert!((acc.quantile(0.05) - 1.01e-3).abs() < bin);
+    }
+
+    #[test]
+    fn the_quantiles_of_one_repeated_peak_are_that_peak() {
+        let mut acc = PointAccumulator::new(range());
+        let peak = 1.2345e-3;
+        (0..500).for_each(|_| acc.tally_period(peak, 0.3, 0.0));
+        for p in [0.05, 0.5, 0.95] {
+            // The peak as the accumulator keeps it (f32), not spread across its bin.
+            assert_eq!(acc.quantile(p), f64::from(peak as f32), "p {p}");
+        }
     }
 
     /// Peaks far outside the range (clamped ones among them) are counted,
