@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::diagnose::cache::Caches;
 use crate::diagnose::derived::DerivedChannels;
-use crate::diagnose::features::{RunFeatures, run_features};
+use crate::diagnose::features::{RunFeatures, run_features, white_noise_sd};
 use crate::diagnose::law::{self, FrictionLaw};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
@@ -335,21 +335,6 @@ fn choose_folds(conditions: &[Condition], run_index: Option<&[usize]>) -> Folds 
     Folds { kind: FoldKind::Nothing, folds: Vec::new() }
 }
 
-/// Standard deviation of the white measurement noise on a uniformly sampled
-/// channel: from the median absolute fourth difference, which a smooth signal
-/// barely moves at the sample rate while white noise of sd σ gives sd √70 σ
-/// (the median makes the occasional kink of a stick/slip event harmless).
-pub(crate) fn white_noise_sd(values: &[f64]) -> f64 {
-    if values.len() < 64 {
-        return 0.0;
-    }
-    let mut d4: Vec<f64> =
-        values.windows(5).map(|w| (w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4]).abs()).collect();
-    let mid = d4.len() / 2;
-    let (_, median, _) = d4.select_nth_unstable_by(mid, f64::total_cmp);
-    (*median / 0.674_489_750_196_081_7 / 70f64.sqrt()).max(0.0)
-}
-
 /// The measurement noise estimated on the records' channels, added to every
 /// simulated replicate record so that features see the same noise on both
 /// sides (a stick test at 1% of the largest speed, say, is decided by it).
@@ -518,7 +503,9 @@ impl<'a> Data<'a> {
             noise.sort_by(f64::total_cmp);
             sensor.v_m_per_s = noise.get(noise.len() / 2).copied().unwrap_or(0.0);
         }
-        let measured_law = law::fit_friction_law(&all_runs, sensor.v_m_per_s);
+        let reading =
+            law::Reading { v_noise_m_per_s: sensor.v_m_per_s, derived_with: derived.friction.then_some(&set.rig) };
+        let measured_law = law::fit_friction_law(&all_runs, &reading);
         Ok(Data {
             set,
             units,
@@ -556,7 +543,7 @@ impl<'a> Data<'a> {
                 .filter(|u| !u.heldout)
                 .flat_map(|u| u.runs.iter().map(|&r| &self.set.runs[r]))
                 .collect();
-            view.measured_law = law::fit_friction_law_at(&runs, self.sensor.v_m_per_s, all.c);
+            view.measured_law = law::fit_friction_law_at(&runs, &self.reading(), all.c);
         }
         view
     }
@@ -585,6 +572,15 @@ impl<'a> Data<'a> {
     pub(crate) fn states_normal_force_noise(&self) -> bool {
         self.set.summary.iter().any(|s| s.normal_force_var_n2.is_some())
             || self.set.runs.iter().any(|r| r.normal_force.is_some())
+    }
+
+    /// How the friction law reads this data's records, and the model's
+    /// replicates of them ([`law::Reading`]).
+    pub(crate) fn reading(&self) -> law::Reading<'a> {
+        law::Reading {
+            v_noise_m_per_s: self.sensor.v_m_per_s,
+            derived_with: self.derived.friction.then_some(&self.set.rig),
+        }
     }
 
     pub(crate) fn has_heldout(&self) -> bool {

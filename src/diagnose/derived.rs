@@ -26,6 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::diagnose::features::{load_of, white_noise_sd};
 use crate::measure::{MeasurementSet, RigInfo, Run, TimeOrigin};
 
 /// Which channels of a set's runs were derived from the displacement
@@ -261,6 +262,36 @@ pub fn velocity_noise(run: &Run, x_noise_m: f64) -> f64 {
     x_noise_m / Weights::of(window_half_width(run)).sum_k2.sqrt() / run.sample_interval_s()
 }
 
+/// The variance the displacement sensor's white noise puts into the μ of a
+/// friction force derived from `run`'s displacement, –²: the noise
+/// (estimated on the record, [`white_noise_sd`]) through the filter and
+/// the equation of motion, `m x''/gain + c x' + k x`, a force of the same
+/// size whatever the load, over the record's mean normal force squared.
+/// The replicates' records, derived alike, give theirs the same way.
+pub(crate) fn mu_noise_variance(run: &Run, rig: &RigInfo) -> f64 {
+    let half = window_half_width(run);
+    let dt = run.sample_interval_s();
+    let w = Weights::of(half);
+    let gain = curvature_gain(run, half);
+    let (m, c, k) = (rig.mass_kg, rig.damping_n_s_per_m(), rig.stiffness_n_per_m());
+    // Each sample's force as weights on the displacements about it.
+    let per_unit_variance: f64 = (-(half as i64)..=half as i64)
+        .map(|j| {
+            let j = j as f64;
+            let inertia = m / gain * 2.0 * w.p(j) / (w.sum_p2 * dt * dt);
+            let damping = c * j / (w.sum_k2 * dt);
+            inertia + damping + if j == 0.0 { k } else { 0.0 }
+        })
+        .map(|weight| weight * weight)
+        .sum();
+    let load = load_of(run);
+    let mean_load = load.iter().sum::<f64>() / load.len().max(1) as f64;
+    if !(mean_load > 0.0) {
+        return 0.0;
+    }
+    per_unit_variance * white_noise_sd(&run.x_m).powi(2) / (mean_load * mean_load)
+}
+
 /// The filter's half-width in samples: about a forty-eighth of an
 /// excitation period (a window of a twenty-fourth), at least two.
 fn window_half_width(run: &Run) -> usize {
@@ -443,6 +474,34 @@ mod tests {
     /// which the sinusoid alone cannot tell from the base's, and the
     /// base's known amplitude does (read without it, the phase was off by
     /// up to 0.1 rad here, a force of a tenth of k U0).
+    #[test]
+    fn the_noise_a_derived_force_carries_is_the_sensors_through_the_filter() {
+        use rand::{RngExt, SeedableRng};
+        let rig = RigInfo { mass_kg: 1.2, natural_frequency_hz: 10.5, damping_ratio: 0.005 };
+        let (f_hz, dt, sigma_x) = (7.0, 1.0 / 600.0, 2e-6);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut gauss = || {
+            let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        // A still base and a still block: the derived force is the
+        // sensor's noise through the filter alone.
+        let t: Vec<f64> = (0..30_000).map(|i| i as f64 * dt).collect();
+        let x: Vec<f64> = t.iter().map(|_| sigma_x * gauss()).collect();
+        let mut run = run_of(t, x, f_hz, 0.0);
+        let all = DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false };
+        let expected = mu_noise_variance(&run, &rig);
+        derive(&mut run, all, &rig);
+        let force = run.friction_force.as_ref().unwrap();
+        let n = force.len() as f64;
+        let measured = force.iter().map(|f| f * f).sum::<f64>() / n / run.normal_force_n.powi(2);
+        // The sample variance of 30 000 correlated samples: within a few percent.
+        assert!((measured / expected - 1.0).abs() < 0.05, "{measured} against {expected}");
+        // At four times the load, a sixteenth of the variance.
+        run.normal_force_n *= 4.0;
+        assert!((mu_noise_variance(&run, &rig) * 16.0 / expected - 1.0).abs() < 1e-9);
+    }
+
     #[test]
     fn the_base_phase_is_read_from_records_of_another_integrator() {
         use crate::diagnose::benchmark::independent::{RecordShape, random_truth, write_set};

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use crate::diagnose::features::solve_normal;
 use crate::engine::Model;
-use crate::measure::Run;
+use crate::measure::{RigInfo, Run};
 
 /// The paper's law `μ(v) = a + b / (1 + c |v|) + d v²` fitted to slipping
 /// samples, with the residual standard deviation around it.
@@ -46,6 +46,7 @@ impl FrictionLaw {
             speed: measured.anchors_m_per_s.to_vec(),
             mu: measured.anchors_m_per_s.iter().map(|&v| self.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
             record: vec![0; measured.anchors_m_per_s.len()],
+            sensor_variance: vec![0.0],
             anchors_m_per_s: speed_deciles(&measured.anchors_m_per_s),
         };
         anchors.fit_at(self.c).filter(|l| l.plausible())
@@ -89,6 +90,8 @@ struct SlipSamples {
     speed: Vec<f64>,
     mu: Vec<f64>,
     record: Vec<usize>,
+    /// The variance each record's sensors put into its μ ([`Reading`]), –².
+    sensor_variance: Vec<f64>,
     /// The speeds' 5%, 15%, …, 95% quantiles, m/s (sorted once: every law
     /// fitted to these samples carries them).
     anchors_m_per_s: [f64; 10],
@@ -114,6 +117,29 @@ fn speed_deciles(speed: &[f64]) -> [f64; 10] {
 
 /// No friction law is fitted to fewer slipping samples than this.
 pub(crate) const MIN_SLIP_SAMPLES: usize = 50;
+
+/// How the records a law is read from were measured: the velocity
+/// channel's white noise, which a slipping sample's speed must stand
+/// above ([`SLIP_SPEED_NOISE_SDS`]), and, for a friction force derived from
+/// the displacement, the rig it was derived with, which sets how much of
+/// the displacement sensor's noise each record's μ carries
+/// ([`crate::diagnose::derived::mu_noise_variance`]). The measured records
+/// and the model's replicates are read with the same one.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Reading<'a> {
+    /// m/s
+    pub(crate) v_noise_m_per_s: f64,
+    /// `None` where the friction force is recorded: its sensor's share of
+    /// μ's spread is then taken as nil, and every record weighs alike.
+    pub(crate) derived_with: Option<&'a RigInfo>,
+}
+
+impl Reading<'_> {
+    /// The variance the sensors put into `run`'s μ, –².
+    fn sensor_variance(&self, run: &Run) -> f64 {
+        self.derived_with.map_or(0.0, |rig| crate::diagnose::derived::mu_noise_variance(run, rig))
+    }
+}
 
 /// A sample counts as slipping only beyond this many standard deviations of
 /// the velocity sensor's noise (and beyond 5% of its record's largest
@@ -162,8 +188,14 @@ fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
 pub(crate) struct LawMoments {
     /// Samples.
     count: usize,
+    /// The samples' summed weight (their count where the records are not
+    /// weighted, [`LawMoments::weighted`]).
+    weight: f64,
     /// Records with at least one sample.
     records: usize,
+    /// Σ over the samples of the variance their record's sensors put into
+    /// μ (0 for a recorded force, [`Reading`]), –².
+    sensor_variance_sum: f64,
     /// Σμ, –.
     sum_mu: f64,
     /// Σs², m²/s².
@@ -196,7 +228,8 @@ impl LawMoments {
         let (sum_mu, sum_s2, sum_g) =
             speed.iter().zip(mu).fold((0.0, 0.0, 0.0), |(m, d, q), (&s, &y)| (m + y, d + s * s, q + g(s)));
         let (mean_mu, mean_s2, mean_g) = (sum_mu / n as f64, sum_s2 / n as f64, sum_g / n as f64);
-        let mut m = LawMoments { count: n, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
+        let mut m =
+            LawMoments { count: n, weight: n as f64, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
         for (&s, &y) in speed.iter().zip(mu) {
             let (d, q, y) = (s * s - mean_s2, g(s) - mean_g, y - mean_mu);
             m.dd += d * d;
@@ -210,10 +243,17 @@ impl LawMoments {
     }
 
     /// The moments of one run's slipping samples ([`slipping_samples`]) at
-    /// Stribeck rate `c` (s/m).
-    pub(crate) fn of_run(run: &Run, v_noise_m_per_s: f64, c: f64) -> LawMoments {
-        let (speed, mu) = slipping_samples(run, v_noise_m_per_s);
-        LawMoments::of_record(&speed, &mu, c)
+    /// Stribeck rate `c` (s/m), read as `reading` says.
+    pub(crate) fn of_run(run: &Run, reading: &Reading<'_>, c: f64) -> LawMoments {
+        let (speed, mu) = slipping_samples(run, reading.v_noise_m_per_s);
+        LawMoments::of_record(&speed, &mu, c).with_sensor_variance(reading.sensor_variance(run))
+    }
+
+    /// These moments of one record whose sensors put `variance` (–²) into
+    /// each sample's μ.
+    fn with_sensor_variance(mut self, variance: f64) -> LawMoments {
+        self.sensor_variance_sum = variance * self.count as f64;
+        self
     }
 
     /// How many samples the moments are of.
@@ -226,6 +266,8 @@ impl LawMoments {
         self.count += other.count;
         self.records += other.records;
         for (a, b) in [
+            (&mut self.weight, other.weight),
+            (&mut self.sensor_variance_sum, other.sensor_variance_sum),
             (&mut self.sum_mu, other.sum_mu),
             (&mut self.sum_s2, other.sum_s2),
             (&mut self.sum_g, other.sum_g),
@@ -278,21 +320,82 @@ impl LawMoments {
         if d.abs() > MAX_D_S2_PER_M2 {
             (b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
         }
-        let n = self.count as f64;
+        let n = self.weight;
         let a = self.sum_mu / n - d * self.sum_s2 / n - b * self.sum_g / n;
-        let sigma = (rss.max(0.0) / (self.count.saturating_sub(p + self.records)).max(1) as f64).sqrt();
+        // Degrees of freedom as a share of the samples, applied to their weight.
+        let free = (self.count.saturating_sub(p + self.records)).max(1) as f64 / self.count.max(1) as f64;
+        let sigma = (rss.max(0.0) / (free * n)).sqrt();
         Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s })
+    }
+
+    /// These moments with every sample weighted by `w`.
+    fn weighted(mut self, w: f64) -> LawMoments {
+        for x in [
+            &mut self.weight,
+            &mut self.sum_mu,
+            &mut self.sum_s2,
+            &mut self.sum_g,
+            &mut self.dd,
+            &mut self.dg,
+            &mut self.gg,
+            &mut self.dy,
+            &mut self.gy,
+            &mut self.yy,
+        ] {
+            *x *= w;
+        }
+        self
+    }
+
+    /// The law at Stribeck rate `c` (s/m) of records whose moments (taken
+    /// at `c`) are `records`, each record weighted by the inverse of the
+    /// variance its μ is expected to have about the law: the friction's
+    /// own (the unweighted fit's residual variance less the sensors' mean
+    /// share, at least [`FRICTION_SHARE_FLOOR`] of it) plus what its
+    /// sensors put in. A friction force derived from the displacement
+    /// carries the sensor's noise through the filter as a force of fixed
+    /// size, whose share of μ grows as 1/N²: at the lightest loads it is
+    /// nearly all of μ's spread, and unweighted those records would bury
+    /// the friction's own noise under a 1% error in the sensor's. The
+    /// weights come from the sensors alone, never from a record's own
+    /// residual, so a record whose friction departs from the law (an
+    /// effect) weighs as much as its neighbours. With recorded forces
+    /// every record weighs alike: the unweighted fit.
+    pub(crate) fn law_of_records(records: &[LawMoments], c: f64, anchors_m_per_s: [f64; 10]) -> Option<FrictionLaw> {
+        let mut pooled = LawMoments::default();
+        records.iter().for_each(|r| pooled.add(r));
+        let first = pooled.law(c, anchors_m_per_s)?;
+        if pooled.sensor_variance_sum <= 0.0 || pooled.count == 0 {
+            return Some(first);
+        }
+        let total = first.sigma.powi(2);
+        let friction = (total - pooled.sensor_variance_sum / pooled.count as f64).max(FRICTION_SHARE_FLOOR * total);
+        let weight = |r: &LawMoments| 1.0 / (friction + r.sensor_variance_sum / r.count.max(1) as f64);
+        let sum: f64 = records.iter().map(|r| weight(r) * r.count as f64).sum();
+        if !(sum > 0.0 && sum.is_finite()) {
+            return Some(first);
+        }
+        let scale = pooled.count as f64 / sum;
+        let mut weighted = LawMoments::default();
+        records.iter().for_each(|r| weighted.add(&r.weighted(weight(r) * scale)));
+        weighted.law(c, anchors_m_per_s)
     }
 }
 
+/// The least share of the records' residual variance that is taken to be
+/// the friction's own when records are weighted
+/// ([`LawMoments::law_of_records`]): where the sensors' estimated share
+/// comes to all of it, the lightest-loaded records still weigh something.
+const FRICTION_SHARE_FLOOR: f64 = 0.05;
+
 impl SlipSamples {
-    /// The slipping samples of `runs` ([`slipping_samples`]), whose
-    /// velocity channel carries white sensor noise of `v_noise_m_per_s`
-    /// (m/s); `None` with fewer than 50.
-    fn of(runs: &[&Run], v_noise_m_per_s: f64) -> Option<SlipSamples> {
+    /// The slipping samples of `runs` ([`slipping_samples`]), read as
+    /// `reading` says; `None` with fewer than 50.
+    fn of(runs: &[&Run], reading: &Reading<'_>) -> Option<SlipSamples> {
         let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
+        let sensor_variance = runs.iter().map(|r| reading.sensor_variance(r)).collect();
         for (k, r) in runs.iter().enumerate() {
-            let (s, m) = slipping_samples(r, v_noise_m_per_s);
+            let (s, m) = slipping_samples(r, reading.v_noise_m_per_s);
             record.extend(std::iter::repeat_n(k, s.len()));
             speed.extend(s);
             mu.extend(m);
@@ -301,22 +404,26 @@ impl SlipSamples {
             return None;
         }
         let anchors_m_per_s = speed_deciles(&speed);
-        Some(SlipSamples { speed, mu, record, anchors_m_per_s })
+        Some(SlipSamples { speed, mu, record, sensor_variance, anchors_m_per_s })
     }
 
     /// The within-record least-squares law at a given `c` (s/m; see
     /// [`LawMoments::law`]), with these samples' anchors. With one record
     /// this is the ordinary fit with an intercept.
     fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
-        let mut moments = LawMoments::default();
+        let mut records = Vec::new();
         let mut start = 0;
         // Samples are grouped by record (in the order they were collected).
         while start < self.record.len() {
             let end = start + self.record[start..].iter().take_while(|&&k| k == self.record[start]).count();
-            moments.add(&LawMoments::of_record(&self.speed[start..end], &self.mu[start..end], c));
+            let sensor_variance = self.sensor_variance[self.record[start]];
+            records.push(
+                LawMoments::of_record(&self.speed[start..end], &self.mu[start..end], c)
+                    .with_sensor_variance(sensor_variance),
+            );
             start = end;
         }
-        moments.law(c, self.anchors_m_per_s)
+        LawMoments::law_of_records(&records, c, self.anchors_m_per_s)
     }
 
     /// The law with the smallest residual: over [`law_c_grid`], then by
@@ -357,22 +464,21 @@ impl SlipSamples {
 }
 
 /// How far the friction level of `runs` stands from `law`: the mean of
-/// μ − law(|v|) over their slipping samples ([`slipping_samples`], with
-/// velocity sensor noise `v_noise_m_per_s`, m/s), –, and how many samples
+/// μ − law(|v|) over their slipping samples ([`slipping_samples`], read
+/// as `reading` says), –, and how many samples
 /// there are; `None` with fewer than [`MIN_SLIP_SAMPLES`] (records of a
 /// block that barely slips say nothing about its sliding friction).
-pub(crate) fn level_against(runs: &[&Run], v_noise_m_per_s: f64, law: &FrictionLaw) -> Option<(f64, usize)> {
-    let samples = SlipSamples::of(runs, v_noise_m_per_s)?;
+pub(crate) fn level_against(runs: &[&Run], reading: &Reading<'_>, law: &FrictionLaw) -> Option<(f64, usize)> {
+    let samples = SlipSamples::of(runs, reading)?;
     let sum: f64 = samples.speed.iter().zip(&samples.mu).map(|(&v, &m)| m - law.mu(v)).sum();
     Some((sum / samples.mu.len() as f64, samples.mu.len()))
 }
 
 /// The law of eq. 7 with the smallest residual (see [`SlipSamples::fit`])
-/// on the slipping samples of `runs`, whose velocity sensor noise is
-/// `v_noise_m_per_s` (m/s); `None` without force channels or with fewer
-/// than 50 slipping samples.
-pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<FrictionLaw> {
-    SlipSamples::of(runs, v_noise_m_per_s)?.fit()
+/// on the slipping samples of `runs`, read as `reading` says; `None`
+/// without force channels or with fewer than 50 slipping samples.
+pub(crate) fn fit_friction_law(runs: &[&Run], reading: &Reading<'_>) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, reading)?.fit()
 }
 
 /// The law of eq. 7 at the Stribeck rate `c` (s/m) on the slipping samples
@@ -386,8 +492,8 @@ pub(crate) fn fit_friction_law(runs: &[&Run], v_noise_m_per_s: f64) -> Option<Fr
 /// under a memory. Refused, that fold would lose its force channels: its
 /// level would be solved from the response alone, at many times the cost,
 /// and the fold judged by another yardstick than its neighbours.
-pub(crate) fn fit_friction_law_at(runs: &[&Run], v_noise_m_per_s: f64, c: f64) -> Option<FrictionLaw> {
-    SlipSamples::of(runs, v_noise_m_per_s)?.fit_at(c).filter(|l| [l.a, l.b, l.d, l.sigma].iter().all(|t| t.is_finite()))
+pub(crate) fn fit_friction_law_at(runs: &[&Run], reading: &Reading<'_>, c: f64) -> Option<FrictionLaw> {
+    SlipSamples::of(runs, reading)?.fit_at(c).filter(|l| [l.a, l.b, l.d, l.sigma].iter().all(|t| t.is_finite()))
 }
 
 #[cfg(test)]
@@ -448,7 +554,7 @@ mod tests {
     fn friction_levels_that_differ_between_records_are_not_read_as_a_stribeck_curve() {
         let (fast, slow) =
             (record_at(0.22, 0.1, 20.0, 0.0, 0.03, 5, 0.4), record_at(0.30, 0.1, 20.0, 0.0, 0.03, 6, 0.1));
-        let law = fit_friction_law(&[&fast, &slow], 0.0).unwrap();
+        let law = fit_friction_law(&[&fast, &slow], &Reading::default()).unwrap();
         let shape = |l: &FrictionLaw, v: f64| mu(l, v) - mu(l, 0.1);
         let truth = FrictionLaw { a: 0.26, b: 0.1, c: 20.0, d: 0.0, sigma: 0.03, anchors_m_per_s: [0.0; 10] };
         let worst = (1..=20)
@@ -472,12 +578,12 @@ mod tests {
         let law = FrictionLaw { a: 0.22, b: 0.1, c: 20.0, d: 0.0, sigma: 0.03, anchors_m_per_s: [0.0; 10] };
         for (offset, v0, seed) in [(0.0, 0.4, 1), (0.03, 0.1, 2), (-0.02, 0.25, 3)] {
             let run = record_at(0.22 + offset, 0.1, 20.0, 0.0, 0.03, seed, v0);
-            let (level, count) = level_against(&[&run], 0.0, &law).unwrap();
+            let (level, count) = level_against(&[&run], &Reading::default(), &law).unwrap();
             assert!(count > 5_000, "{count} slipping samples");
             assert!((level - offset).abs() < 0.002, "level {level} against an offset of {offset}");
         }
         let stuck = record_at(0.3, 0.1, 20.0, 0.0, 0.03, 4, 0.0);
-        assert_eq!(level_against(&[&stuck], 0.0, &law), None);
+        assert_eq!(level_against(&[&stuck], &Reading::default(), &law), None);
     }
 
     /// The law from moments summed record by record (as the diagnosis sums
@@ -485,11 +591,41 @@ mod tests {
     /// μ − its record's mean on the centred columns (s², g(s)), solved here
     /// directly on the pooled rows, with and without the Stribeck term.
     #[test]
+    fn records_are_weighted_by_the_noise_their_sensors_put_into_mu() {
+        // Three records of one law, two read as well as a force channel
+        // reads it (σ 0.02) and one whose sensors add noise ten times that
+        // (a force derived from the displacement at a light load).
+        let (a, b, c, d) = (0.3, 0.1, 20.0, 0.3);
+        let runs = [record_d(a, b, c, d, 0.02, 3), record_d(a, b, c, d, 0.02, 4), record_d(a, b, c, d, 0.2, 5)];
+        let sensor = [0.0, 0.0, 0.2f64.powi(2) - 0.02f64.powi(2)];
+        let moments = |sensor: &[f64]| -> Vec<LawMoments> {
+            runs.iter()
+                .zip(sensor)
+                .map(|(r, &v)| LawMoments::of_run(r, &Reading::default(), c).with_sensor_variance(v))
+                .collect()
+        };
+        let unweighted = LawMoments::law_of_records(&moments(&[0.0; 3]), c, [0.0; 10]).unwrap();
+        // Unweighted, the noisy record sets σ near √((2·0.02² + 0.2²)/3) = 0.117.
+        assert!(unweighted.sigma > 0.1, "{unweighted:?}");
+        // Weighted by the sensors' share, the friction's own σ (0.02)
+        // weighs each quiet record a hundred times the noisy one: σ is
+        // √(3 / (2/0.02² + 1/0.2²)) = 0.0245, and the curve is the law's.
+        let weighted = LawMoments::law_of_records(&moments(&sensor), c, [0.0; 10]).unwrap();
+        assert!((weighted.sigma / 0.0245 - 1.0).abs() < 0.05, "{weighted:?}");
+        assert!((weighted.a - a).abs() < 0.005 && (weighted.d - d).abs() < 0.05, "{weighted:?}");
+        // A record whose μ departs from the law, its sensors no noisier,
+        // weighs as much as the others: the weights come from the sensors.
+        let mut pooled = LawMoments::default();
+        moments(&[0.0; 3]).iter().for_each(|m| pooled.add(m));
+        assert_eq!(pooled.law(c, [0.0; 10]), Some(unweighted));
+    }
+
+    #[test]
     fn moments_added_by_record_give_the_pooled_least_squares_fit() {
         let runs = [record_d(0.22, 0.1, 20.0, 0.3, 0.03, 7), record_at(0.30, 0.1, 20.0, 0.3, 0.02, 8, 0.2)];
         for c in [0.0, 20.0] {
             let mut moments = LawMoments::default();
-            runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, 0.0, c)));
+            runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, &Reading::default(), c)));
             let law = moments.law(c, [0.0; 10]).unwrap();
             let records: Vec<(Vec<f64>, Vec<f64>)> = runs.iter().map(|r| slipping_samples(r, 0.0)).collect();
             let g = |s: f64| 1.0 / (1.0 + c * s);
@@ -558,8 +694,8 @@ mod tests {
         let off = |l: &FrictionLaw| {
             (3..=12).map(|i| 0.0025 * f64::from(i)).map(|v| (mu(l, v) - mu(&truth, v)).abs()).fold(0.0, f64::max)
         };
-        let with_noise = fit_friction_law(&[&run], v_noise).unwrap();
-        let without = fit_friction_law(&[&run], 0.0).unwrap();
+        let with_noise = fit_friction_law(&[&run], &Reading { v_noise_m_per_s: v_noise, derived_with: None }).unwrap();
+        let without = fit_friction_law(&[&run], &Reading::default()).unwrap();
         println!(
             "law off by {:.4} (sigma {:.4}) with the sensor noise, {:.4} (sigma {:.4}) without",
             off(&with_noise),
@@ -588,24 +724,27 @@ mod tests {
     fn friction_law_fit_recovers_a_known_law() {
         let speeds = (1..=20).map(|i| 0.02 * f64::from(i));
         let truth = FrictionLaw { a: 0.25, b: 0.1, c: 20.0, d: 0.0, sigma: 0.04, anchors_m_per_s: [0.0; 10] };
-        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)], 0.0).unwrap();
+        let law = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)], &Reading::default()).unwrap();
         let worst = speeds.clone().map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.005, "{law:?}: the curve is {worst} off");
         assert!((law.sigma / 0.04 - 1.0).abs() < 0.03, "{law:?}");
         let truth = FrictionLaw { a: 0.19, b: 0.075, c: 13.5, d: 0.105, sigma: 0.019, anchors_m_per_s: [0.0; 10] };
-        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)], 0.0).unwrap();
+        let with_d = fit_friction_law(&[&record_d(0.19, 0.075, 13.5, 0.105, 0.019, 3)], &Reading::default()).unwrap();
         let worst = speeds.map(|v| (mu(&with_d, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003 && (with_d.d - 0.105).abs() < 0.03, "{with_d:?}: the curve is {worst} off");
         assert!((with_d.sigma / 0.019 - 1.0).abs() < 0.03, "{with_d:?}");
         // At a fixed c the fit is the unconstrained least squares, so a law
         // with friction falling below zero at rest is still reported.
-        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)], 0.0).unwrap();
+        let samples = SlipSamples::of(&[&record(0.4, -0.3, 80.0, 0.0, 2)], &Reading::default()).unwrap();
         let rising = samples.fit_at(80.0).unwrap();
         assert!((rising.b + 0.3).abs() < 1e-6 && (rising.a - 0.4).abs() < 1e-6, "{rising:?}");
-        assert!(fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)], 0.0).is_none_or(|l| l.a + l.b >= 0.0));
+        assert!(
+            fit_friction_law(&[&record(0.4, -0.5, 80.0, 0.0, 2)], &Reading::default()).is_none_or(|l| l.a + l.b >= 0.0)
+        );
         // A fold's law at the whole data's c is that statistic too: kept
         // where friction at rest comes out just below zero.
-        let fold = fit_friction_law_at(&[&record(0.4, -0.41, 80.0, 0.0, 2)], 0.0, 80.0).expect("a law at c");
+        let fold =
+            fit_friction_law_at(&[&record(0.4, -0.41, 80.0, 0.0, 2)], &Reading::default(), 80.0).expect("a law at c");
         assert!(fold.a + fold.b < 0.0 && (fold.b + 0.41).abs() < 1e-6, "{fold:?}");
     }
 }

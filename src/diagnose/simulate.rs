@@ -151,7 +151,7 @@ fn readings_of(
     }
     if !short.is_empty() {
         let c = data.law_c;
-        let sensor_v = data.sensor.v_m_per_s;
+        let reading = data.reading();
         let mut added = BTreeMap::new();
         for ((have, _), group) in short {
             let numbers = have as u32..settings.replicates;
@@ -181,7 +181,7 @@ fn readings_of(
                         .into_par_iter()
                         .map(|(grid, run)| RecordReading {
                             features: run_features_on(run, &grid),
-                            moments: c.map(|c| LawMoments::of_run(run, sensor_v, c)),
+                            moments: c.map(|c| LawMoments::of_run(run, &reading, c)),
                         })
                         .collect::<Vec<_>>()
                         .into_iter();
@@ -228,10 +228,10 @@ pub(crate) fn fitting_records(
     let readings = readings_of(engine, model, data, settings, &units)?;
     let features = readings.iter().map(|r| r.iter().map(|x| x.features.clone()).collect()).collect();
     let law = data.measured_law.and_then(|measured| {
-        let mut moments = LawMoments::default();
-        readings.iter().flatten().filter_map(|x| x.moments.as_ref()).for_each(|m| moments.add(m));
+        let records: Vec<LawMoments> = readings.iter().flatten().filter_map(|x| x.moments).collect();
         // As few slipping samples as the measured law is refused for.
-        (moments.count() >= MIN_SLIP_SAMPLES).then(|| moments.law(measured.c, [0.0; 10])).flatten()
+        let count: usize = records.iter().map(LawMoments::count).sum();
+        (count >= MIN_SLIP_SAMPLES).then(|| LawMoments::law_of_records(&records, measured.c, [0.0; 10])).flatten()
     });
     Ok(FittingRecords { units, features, law })
 }

@@ -62,7 +62,7 @@ impl Context<'_> {
             .filter(|u| !u.heldout && !u.runs.is_empty())
             .filter_map(|u| {
                 let runs: Vec<&Run> = u.runs.iter().map(|&r| &self.data.set.runs[r]).collect();
-                let (level, count) = law::level_against(&runs, self.data.sensor.v_m_per_s, &law)?;
+                let (level, count) = law::level_against(&runs, &self.data.reading(), &law)?;
                 let n0 = self.data.simulated_condition(u, self.model, 0).normal_force_n;
                 Some((n0, level, count as f64))
             })

@@ -24,7 +24,7 @@ mod record;
 mod stats;
 
 pub(crate) use friction::GAUSSIAN_TAIL_RATIO;
-pub(crate) use stats::{least_squares, solve_normal};
+pub(crate) use stats::{least_squares, solve_normal, white_noise_sd};
 
 use std::borrow::Cow;
 

@@ -226,6 +226,21 @@ pub(crate) fn solve_normal<const P: usize>(ata: &[[f64; P]; P], aty: &[f64; P], 
     coef.iter().all(|c| c.is_finite()).then_some((coef, ssr))
 }
 
+/// Standard deviation of the white measurement noise on a uniformly sampled
+/// channel: from the median absolute fourth difference, which a smooth signal
+/// barely moves at the sample rate while white noise of sd σ gives sd √70 σ
+/// (the median makes the occasional kink of a stick/slip event harmless).
+pub(crate) fn white_noise_sd(values: &[f64]) -> f64 {
+    if values.len() < 64 {
+        return 0.0;
+    }
+    let mut d4: Vec<f64> =
+        values.windows(5).map(|w| (w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4]).abs()).collect();
+    let mid = d4.len() / 2;
+    let (_, median, _) = d4.select_nth_unstable_by(mid, f64::total_cmp);
+    (*median / 0.674_489_750_196_081_7 / 70f64.sqrt()).max(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
