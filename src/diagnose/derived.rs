@@ -286,7 +286,7 @@ pub(crate) fn mu_noise_variance(run: &Run, rig: &RigInfo) -> f64 {
         .sum();
     let load = load_of(run);
     let mean_load = load.iter().sum::<f64>() / load.len().max(1) as f64;
-    if !(mean_load > 0.0) {
+    if mean_load.is_nan() || mean_load <= 0.0 {
         return 0.0;
     }
     per_unit_variance * white_noise_sd(&run.x_m).powi(2) / (mean_load * mean_load)

@@ -372,7 +372,7 @@ impl LawMoments {
         let friction = (total - pooled.sensor_variance_sum / pooled.count as f64).max(FRICTION_SHARE_FLOOR * total);
         let weight = |r: &LawMoments| 1.0 / (friction + r.sensor_variance_sum / r.count.max(1) as f64);
         let sum: f64 = records.iter().map(|r| weight(r) * r.count as f64).sum();
-        if !(sum > 0.0 && sum.is_finite()) {
+        if !sum.is_finite() || sum <= 0.0 {
             return Some(first);
         }
         let scale = pooled.count as f64 / sum;
