@@ -188,9 +188,6 @@ fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
 pub(crate) struct LawMoments {
     /// Samples.
     count: usize,
-    /// The samples' summed weight (their count where the records are not
-    /// weighted, [`LawMoments::weighted`]).
-    weight: f64,
     /// Records with at least one sample.
     records: usize,
     /// Σ over the samples of the variance their record's sensors put into
@@ -228,8 +225,7 @@ impl LawMoments {
         let (sum_mu, sum_s2, sum_g) =
             speed.iter().zip(mu).fold((0.0, 0.0, 0.0), |(m, d, q), (&s, &y)| (m + y, d + s * s, q + g(s)));
         let (mean_mu, mean_s2, mean_g) = (sum_mu / n as f64, sum_s2 / n as f64, sum_g / n as f64);
-        let mut m =
-            LawMoments { count: n, weight: n as f64, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
+        let mut m = LawMoments { count: n, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
         for (&s, &y) in speed.iter().zip(mu) {
             let (d, q, y) = (s * s - mean_s2, g(s) - mean_g, y - mean_mu);
             m.dd += d * d;
@@ -266,7 +262,6 @@ impl LawMoments {
         self.count += other.count;
         self.records += other.records;
         for (a, b) in [
-            (&mut self.weight, other.weight),
             (&mut self.sensor_variance_sum, other.sensor_variance_sum),
             (&mut self.sum_mu, other.sum_mu),
             (&mut self.sum_s2, other.sum_s2),
@@ -320,65 +315,53 @@ impl LawMoments {
         if d.abs() > MAX_D_S2_PER_M2 {
             (b, d, rss, p) = solve(Some(d.clamp(-MAX_D_S2_PER_M2, MAX_D_S2_PER_M2)))?;
         }
-        let n = self.weight;
+        let n = self.count as f64;
         let a = self.sum_mu / n - d * self.sum_s2 / n - b * self.sum_g / n;
-        // Degrees of freedom as a share of the samples, applied to their weight.
-        let free = (self.count.saturating_sub(p + self.records)).max(1) as f64 / self.count.max(1) as f64;
-        let sigma = (rss.max(0.0) / (free * n)).sqrt();
+        let sigma = (rss.max(0.0) / (self.count.saturating_sub(p + self.records)).max(1) as f64).sqrt();
         Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s })
     }
 
-    /// These moments with every sample weighted by `w`.
-    fn weighted(mut self, w: f64) -> LawMoments {
-        for x in [
-            &mut self.weight,
-            &mut self.sum_mu,
-            &mut self.sum_s2,
-            &mut self.sum_g,
-            &mut self.dd,
-            &mut self.dg,
-            &mut self.gg,
-            &mut self.dy,
-            &mut self.gy,
-            &mut self.yy,
-        ] {
-            *x *= w;
-        }
-        self
+    /// The sum of squares about the law with Stribeck term `b` and `d` (the
+    /// rate the moments were taken at), each record about its own mean, –.
+    fn residual_sum_of_squares(&self, b: f64, d: f64) -> f64 {
+        let fitted = b * b * self.gg + 2.0 * b * d * self.dg + d * d * self.dd;
+        (self.yy - 2.0 * b * self.gy - 2.0 * d * self.dy + fitted).max(0.0)
     }
 
     /// The law at Stribeck rate `c` (s/m) of records whose moments (taken
-    /// at `c`) are `records`, each record weighted by the inverse of the
-    /// variance its μ is expected to have about the law: the friction's
-    /// own (the unweighted fit's residual variance less the sensors' mean
-    /// share, at least [`FRICTION_SHARE_FLOOR`] of it) plus what its
-    /// sensors put in. A friction force derived from the displacement
-    /// carries the sensor's noise through the filter as a force of fixed
-    /// size, whose share of μ grows as 1/N²: at the lightest loads it is
-    /// nearly all of μ's spread, and unweighted those records would bury
-    /// the friction's own noise under a 1% error in the sensor's. The
-    /// weights come from the sensors alone, never from a record's own
-    /// residual, so a record whose friction departs from the law (an
-    /// effect) weighs as much as its neighbours. With recorded forces
-    /// every record weighs alike: the unweighted fit.
+    /// at `c`) are `records`: its curve from every slipping sample alike,
+    /// and its residual σ with each record weighted by the inverse of the
+    /// variance its μ is expected to have about the curve: the friction's
+    /// own (the unweighted residual variance less the sensors' mean share,
+    /// at least [`FRICTION_SHARE_FLOOR`] of it) plus what its sensors put
+    /// in. A friction force derived from the displacement carries the
+    /// sensor's noise through the filter as a force of fixed size, whose
+    /// share of μ grows as 1/N²: at the lightest loads it is nearly all of
+    /// μ's spread, and unweighted those records would bury the friction's
+    /// own noise under a 1% error in the sensor's. The curve stays
+    /// unweighted: the lighter loads slide fastest, and a curve read at the
+    /// heavy loads' slow speeds alone would leave theirs to an
+    /// extrapolation. The weights come from the sensors alone, never from a
+    /// record's own residual, so a record whose friction departs from the
+    /// law (an effect) weighs as much as its neighbours. With recorded
+    /// forces every record weighs alike: the unweighted fit.
     pub(crate) fn law_of_records(records: &[LawMoments], c: f64, anchors_m_per_s: [f64; 10]) -> Option<FrictionLaw> {
         let mut pooled = LawMoments::default();
         records.iter().for_each(|r| pooled.add(r));
-        let first = pooled.law(c, anchors_m_per_s)?;
+        let law = pooled.law(c, anchors_m_per_s)?;
         if pooled.sensor_variance_sum <= 0.0 || pooled.count == 0 {
-            return Some(first);
+            return Some(law);
         }
-        let total = first.sigma.powi(2);
+        let total = law.sigma.powi(2);
         let friction = (total - pooled.sensor_variance_sum / pooled.count as f64).max(FRICTION_SHARE_FLOOR * total);
-        let weight = |r: &LawMoments| 1.0 / (friction + r.sensor_variance_sum / r.count.max(1) as f64);
-        let sum: f64 = records.iter().map(|r| weight(r) * r.count as f64).sum();
-        if !sum.is_finite() || sum <= 0.0 {
-            return Some(first);
+        let (mut sum_rss, mut sum_dof) = (0.0, 0.0);
+        for r in records.iter().filter(|r| r.count > 1) {
+            let weight = 1.0 / (friction + r.sensor_variance_sum / r.count as f64);
+            sum_rss += weight * r.residual_sum_of_squares(law.b, law.d);
+            sum_dof += weight * (r.count - 1) as f64;
         }
-        let scale = pooled.count as f64 / sum;
-        let mut weighted = LawMoments::default();
-        records.iter().for_each(|r| weighted.add(&r.weighted(weight(r) * scale)));
-        weighted.law(c, anchors_m_per_s)
+        let sigma = (sum_rss / sum_dof).sqrt();
+        Some(if sigma.is_finite() { FrictionLaw { sigma, ..law } } else { law })
     }
 }
 
@@ -609,10 +592,12 @@ mod tests {
         assert!(unweighted.sigma > 0.1, "{unweighted:?}");
         // Weighted by the sensors' share, the friction's own σ (0.02)
         // weighs each quiet record a hundred times the noisy one: σ is
-        // √(3 / (2/0.02² + 1/0.2²)) = 0.0245, and the curve is the law's.
+        // √(3 / (2/0.02² + 1/0.2²)) = 0.0245. The curve is read from every
+        // sample alike, as unweighted.
         let weighted = LawMoments::law_of_records(&moments(&sensor), c, [0.0; 10]).unwrap();
         assert!((weighted.sigma / 0.0245 - 1.0).abs() < 0.05, "{weighted:?}");
-        assert!((weighted.a - a).abs() < 0.005 && (weighted.d - d).abs() < 0.05, "{weighted:?}");
+        assert_eq!((weighted.a, weighted.b, weighted.d), (unweighted.a, unweighted.b, unweighted.d));
+        assert!((weighted.a - a).abs() < 0.02 && (weighted.d - d).abs() < 0.1, "{weighted:?}");
         // A record whose μ departs from the law, its sensors no noisier,
         // weighs as much as the others: the weights come from the sensors.
         let mut pooled = LawMoments::default();
