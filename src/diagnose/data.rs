@@ -503,9 +503,7 @@ impl<'a> Data<'a> {
             noise.sort_by(f64::total_cmp);
             sensor.v_m_per_s = noise.get(noise.len() / 2).copied().unwrap_or(0.0);
         }
-        let reading =
-            law::Reading { v_noise_m_per_s: sensor.v_m_per_s, derived_with: derived.friction.then_some(&set.rig) };
-        let measured_law = law::fit_friction_law(&all_runs, &reading);
+        let measured_law = law::fit_friction_law(&all_runs, &reading_of(set, &sensor, derived));
         Ok(Data {
             set,
             units,
@@ -577,10 +575,7 @@ impl<'a> Data<'a> {
     /// How the friction law reads this data's records, and the model's
     /// replicates of them ([`law::Reading`]).
     pub(crate) fn reading(&self) -> law::Reading<'a> {
-        law::Reading {
-            v_noise_m_per_s: self.sensor.v_m_per_s,
-            derived_with: self.derived.friction.then_some(&self.set.rig),
-        }
+        reading_of(self.set, &self.sensor, self.derived)
     }
 
     pub(crate) fn has_heldout(&self) -> bool {
@@ -614,6 +609,13 @@ impl<'a> Data<'a> {
         };
         Condition { normal_force_n: load.mean_n / (factor * position), ..u.condition }
     }
+}
+
+/// How the friction law reads `set`'s records: with the sensors' velocity
+/// noise, and through the rig's equation of motion where the friction is
+/// derived from the displacement ([`law::Reading`]).
+fn reading_of<'a>(set: &'a MeasurementSet, sensor: &SensorNoise, derived: DerivedChannels) -> law::Reading<'a> {
+    law::Reading { v_noise_m_per_s: sensor.v_m_per_s, derived_with: derived.friction.then_some(&set.rig) }
 }
 
 #[cfg(test)]
