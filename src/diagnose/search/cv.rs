@@ -383,11 +383,13 @@ impl Weights<'_> {
     /// The share of `reference`'s explainable gap (above the null loss)
     /// that `losses` close, and whether that fall is beyond the noise of a
     /// paired difference ([`NullLoss::fall_noise`]: the scores the change
-    /// moved carry it).
+    /// moved carry it). An explainable gap is counted as at least its noise
+    /// threshold: one within its noise cannot be told from none, and a
+    /// share of it would be a ratio of noises, without bound.
     pub(crate) fn share(&self, losses: &UnitLosses, reference: &UnitLosses) -> (f64, bool) {
         let (r, n) = self.gap(reference);
         let (l, _, moved) = weighted_gap(losses, self.units, self.w);
-        ((r - l) / (r - self.null.mean).max(1e-12), r - l > self.null.fall_noise(n, moved))
+        ((r - l) / (r - self.null.mean).max(self.noise(n)), r - l > self.null.fall_noise(n, moved))
     }
 
     /// The entrant that closes the largest share of the current model's
@@ -525,6 +527,28 @@ pub(crate) mod tests {
         let c = contest(&fits, &[Entrant { losses: &better, reference: &fits }], &units, NULL, 1);
         assert_eq!(c.leader, None);
         assert!(c.fits > 0.99, "{c:?}");
+    }
+
+    /// A reference (the current model in an entrant's yardstick) within
+    /// its noise of a right model's loss has no gap to speak of: what an
+    /// entrant closes of it is a share of at most the fall over the noise
+    /// threshold, never the ratio of two noises.
+    #[test]
+    fn a_gap_within_its_noise_is_not_a_denominator() {
+        let units: Vec<usize> = (0..12).collect();
+        let ones = vec![1.0; 12];
+        let w = Weights { units: &units, w: &ones, null: NULL };
+        // A reference a hair above the floor, and an entrant below it.
+        let z_at = |l: f64| 3.0 * (l.exp() - 1.0).sqrt();
+        let reference = at(&[z_at(NULL.mean + 1e-9); 12]);
+        let entrant = at(&[z_at(NULL.mean - 0.05); 12]);
+        let (share, _) = w.share(&entrant, &reference);
+        let noise = w.noise(120.0);
+        assert!((share - 0.05 / noise).abs() < 1e-6, "{share} against {}", 0.05 / noise);
+        // Above the noise the share is of the explainable gap itself.
+        let current = at(&[z_at(NULL.mean + 3.0 * noise); 12]);
+        let halfway = at(&[z_at(NULL.mean + 1.5 * noise); 12]);
+        assert!((w.share(&halfway, &current).0 - 0.5).abs() < 1e-9);
     }
 
     /// A change that lowers the loss at two units of twelve and leaves the
