@@ -691,6 +691,23 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     Ok(m)
 }
 
+/// What the report says where the baseline's σ_N (N) is not read from the
+/// data: with friction channels (recorded or derived) the law and σ_μ come
+/// from them, and σ_N from a normal-force channel or a stated variance;
+/// with neither, `baseline`'s σ_N is the paper's. `None` where the data
+/// give σ_N, or where the response sets it (no friction channels).
+pub(crate) fn assumed_normal_force_noise_note(data: &Data<'_>, baseline: &Model) -> Option<String> {
+    (data.measured_law.is_some() && !data.states_normal_force_noise()).then(|| {
+        format!(
+            "no run records the normal force and no summary states its variance, so the normal force's noise is \
+             not read from the data: the baseline keeps σ_N = {:.3} N (the paper's). μ is read as the friction \
+             force over the nominal load, so a σ_N unlike the rig's moves into σ_μ, most at the lightest loads; a \
+             normal-force channel settles it",
+            baseline.normal_force.sigma
+        )
+    })
+}
+
 /// An error in a parameter of the model that the manifest's `rig` gave,
 /// named by the manifest and its key instead of as a model parameter.
 fn named_by_manifest(data: &Data<'_>, e: Error) -> Error {

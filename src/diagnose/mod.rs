@@ -397,6 +397,7 @@ pub fn diagnose_set(
         Scope::All,
     )?;
     let (baseline, mut baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
+    notes.extend(calibrate::assumed_normal_force_noise_note(&data, &baseline));
     for (note, line) in frame::check_phases(&mut data, &baseline_scores) {
         progress(line);
         notes.push(note);

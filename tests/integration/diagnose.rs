@@ -585,9 +585,9 @@ fn three_effects_name_at_most_two_and_note_what_is_left() {
 }
 
 /// A set of `t` and `x` alone is diagnosed on the velocity and friction
-/// force derived from `x`: the report says so, the friction observables are
-/// scored, and the law calibrated from them lands where the full channels'
-/// does (the paper's rig: a = 0.427).
+/// force derived from `x`: the report says so (and that σ_N is assumed), the
+/// friction observables are scored, and the law calibrated from them lands
+/// where the full channels' does (the paper's rig: a = 0.427).
 #[test]
 fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
     let root = scratch("x-alone");
@@ -625,7 +625,11 @@ fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
     assert!(notes.iter().any(|n| n.contains("derived from the displacement")), "{notes:?}");
     let derived = &report["derived_channels"];
     assert_eq!((derived["v"].as_bool(), derived["friction"].as_bool()), (Some(true), Some(true)), "{derived}");
-    let (full_report, _) = report_in(&root.join("out-full"));
+    // Without a normal-force channel σ_N is the paper's, and said to be;
+    // the full records give their own.
+    assert!(notes.iter().any(|n| n.contains("keeps σ_N = 0.332 N")), "{notes:?}");
+    let (full_report, full_notes) = report_in(&root.join("out-full"));
+    assert!(!full_notes.iter().any(|n| n.contains("keeps σ_N")), "{full_notes:?}");
     assert_eq!(full_report["derived_channels"]["friction"].as_bool(), Some(false));
     let scores = std::fs::read_to_string(root.join("out-alone/scores.csv")).unwrap();
     assert!(scores.contains("friction_mu_mean") && scores.contains("stick_fraction"), "{scores}");
