@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::diagnose::cache::Caches;
 use crate::diagnose::derived::DerivedChannels;
-use crate::diagnose::features::{RunFeatures, run_features, white_noise_sd};
+use crate::diagnose::features::{RunFeatures, run_features_read, white_noise_sd};
 use crate::diagnose::law::{self, FrictionLaw};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
@@ -456,6 +456,15 @@ impl<'a> Data<'a> {
                 message: "no runs and no summary rows".into(),
             });
         }
+        let mut sensor = SensorNoise::estimate(&set.runs);
+        if derived.v {
+            let mut noise: Vec<f64> =
+                set.runs.iter().map(|r| crate::diagnose::derived::velocity_noise(r, sensor.x_m)).collect();
+            noise.sort_by(f64::total_cmp);
+            sensor.v_m_per_s = noise.get(noise.len() / 2).copied().unwrap_or(0.0);
+        }
+        // The measured records read as the model's replicates are.
+        let reading = reading_of(set, &sensor, derived);
         let mut measured = Vec::new();
         let mut features = Vec::new();
         let mut record_s = Vec::new();
@@ -477,7 +486,8 @@ impl<'a> Data<'a> {
                 features.push(Vec::new());
                 record_s.push(row.n_peaks.unwrap_or(350) as f64 / row.excitation_frequency_hz);
             } else {
-                let feats: Vec<RunFeatures> = u.runs.iter().map(|&r| run_features(&set.runs[r])).collect();
+                let feats: Vec<RunFeatures> =
+                    u.runs.iter().map(|&r| run_features_read(&set.runs[r], reading.motion(&set.runs[r]))).collect();
                 measured.push(average_features(&feats));
                 features.push(feats);
                 record_s.push(mean(&u.runs.iter().map(|&r| set.runs[r].duration_s()).collect::<Vec<_>>()));
@@ -496,14 +506,7 @@ impl<'a> Data<'a> {
         let measured_load = forces.into_iter().map(|(k, v)| (k, MeasuredLoad::mean(&v))).collect();
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
-        let mut sensor = SensorNoise::estimate(&set.runs);
-        if derived.v {
-            let mut noise: Vec<f64> =
-                set.runs.iter().map(|r| crate::diagnose::derived::velocity_noise(r, sensor.x_m)).collect();
-            noise.sort_by(f64::total_cmp);
-            sensor.v_m_per_s = noise.get(noise.len() / 2).copied().unwrap_or(0.0);
-        }
-        let measured_law = law::fit_friction_law(&all_runs, &reading_of(set, &sensor, derived));
+        let measured_law = law::fit_friction_law(&all_runs, &reading);
         Ok(Data {
             set,
             units,

@@ -73,8 +73,11 @@ impl DerivedChannels {
     /// The note a report carries about them (`None` where none was derived).
     pub fn note(self) -> Option<String> {
         let rate = if self.friction {
-            "; the filter blurs how fast friction drops from rest, so the law's Stribeck rate c is not read from \
-             a derived force: the model keeps the paper's, and the law's other terms are inferred at it"
+            "; the friction law and the friction observables read a derived force only where the filter's whole \
+             window lies within one slip (nearer a stop, a reversal or a brief slip it blends the spring's force \
+             at rest into the friction); the filter blurs how fast friction drops from rest, so the law's \
+             Stribeck rate c is not read from a derived force: the model keeps the paper's, and the law's other \
+             terms are inferred at it"
         } else {
             ""
         };
@@ -176,7 +179,7 @@ fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64) -> f64
     let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
     let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let moving: Vec<bool> = v.iter().map(|v| v.abs() > 0.05 * vmax).collect();
-    let reach = window_half_width(run) + 1;
+    let reach = blur_samples(run);
     let slipping: Vec<usize> =
         (reach..v.len().saturating_sub(reach)).filter(|&i| moving[i - reach..=i + reach].iter().all(|&m| m)).collect();
     let fit = crate::diagnose::features::least_squares(
@@ -290,6 +293,13 @@ pub(crate) fn mu_noise_variance(run: &Run, rig: &RigInfo) -> f64 {
         return 0.0;
     }
     per_unit_variance * white_noise_sd(&run.x_m).powi(2) / (mean_load * mean_load)
+}
+
+/// How many samples either side of one a force derived from `run`'s
+/// displacement reads: the filter's half-width, and one more for the
+/// velocity (itself a slope over that window) that tells whether they slip.
+pub(crate) fn blur_samples(run: &Run) -> usize {
+    window_half_width(run) + 1
 }
 
 /// The filter's half-width in samples: about a forty-eighth of an
@@ -466,14 +476,6 @@ mod tests {
         assert!(load_only.note().is_some_and(|n| n.starts_with("no run records the normal force")));
     }
 
-    /// The base's phase read from records of another integrator (the
-    /// benchmark's independent generator, its friction law drawn from the
-    /// whole eq. 7 family) in the model's frame is 0 to within a few
-    /// milliradians, below resonance and above it: a friction that varies
-    /// with the speed leaves part of itself in phase with the velocity,
-    /// which the sinusoid alone cannot tell from the base's, and the
-    /// base's known amplitude does (read without it, the phase was off by
-    /// up to 0.1 rad here, a force of a tenth of k U0).
     #[test]
     fn the_noise_a_derived_force_carries_is_the_sensors_through_the_filter() {
         use rand::{RngExt, SeedableRng};
@@ -502,6 +504,14 @@ mod tests {
         assert!((mu_noise_variance(&run, &rig) * 16.0 / expected - 1.0).abs() < 1e-9);
     }
 
+    /// The base's phase read from records of another integrator (the
+    /// benchmark's independent generator, its friction law drawn from the
+    /// whole eq. 7 family) in the model's frame is 0 to within a few
+    /// milliradians, below resonance and above it: a friction that varies
+    /// with the speed leaves part of itself in phase with the velocity,
+    /// which the sinusoid alone cannot tell from the base's, and the
+    /// base's known amplitude does (read without it, the phase was off by
+    /// up to 0.1 rad here, a force of a tenth of k U0).
     #[test]
     fn the_base_phase_is_read_from_records_of_another_integrator() {
         use crate::diagnose::benchmark::independent::{RecordShape, random_truth, write_set};

@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use crate::diagnose::features::solve_normal;
+use crate::diagnose::features::{MotionReading, solve_normal};
 use crate::engine::Model;
 use crate::measure::{RigInfo, Run};
 
@@ -118,13 +118,15 @@ fn speed_deciles(speed: &[f64]) -> [f64; 10] {
 /// No friction law is fitted to fewer slipping samples than this.
 pub(crate) const MIN_SLIP_SAMPLES: usize = 50;
 
-/// How the records a law is read from were measured: the velocity
-/// channel's white noise, which a slipping sample's speed must stand
-/// above ([`SLIP_SPEED_NOISE_SDS`]), and, for a friction force derived from
-/// the displacement, the rig it was derived with, which sets how much of
-/// the displacement sensor's noise each record's μ carries
-/// ([`crate::diagnose::derived::mu_noise_variance`]). The measured records
-/// and the model's replicates are read with the same one.
+/// How the records a law (and their friction features) are read from were
+/// measured: the velocity channel's white noise, which a slipping sample's
+/// speed must stand above
+/// ([`crate::diagnose::features::SLIP_SPEED_NOISE_SDS`]), and, for a
+/// friction force derived from the displacement, the rig it was derived
+/// with, which sets how much of the displacement sensor's noise each
+/// record's μ carries ([`crate::diagnose::derived::mu_noise_variance`])
+/// and how far its filter blurs ([`Reading::motion`]). The measured
+/// records and the model's replicates are read with the same one.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Reading<'a> {
     /// m/s
@@ -139,37 +141,51 @@ impl Reading<'_> {
     fn sensor_variance(&self, run: &Run) -> f64 {
         self.derived_with.map_or(0.0, |rig| crate::diagnose::derived::mu_noise_variance(run, rig))
     }
-}
 
-/// A sample counts as slipping only beyond this many standard deviations of
-/// the velocity sensor's noise (and beyond 5% of its record's largest
-/// speed): a stuck block's measured speed is that noise alone, and its
-/// |F|/N (the spring's force, anywhere below the static friction) read as
-/// friction at a low speed bends the fitted Stribeck curve. At 3 sd a stuck
-/// sample passes with probability 0.0013 (half of that with the sign
-/// friction has while slipping).
-const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
+    /// How `run`'s friction features tell its slipping samples apart. A
+    /// force derived from the displacement is read only where it resolves
+    /// a slip: above the derived velocity's noise, and clear of the
+    /// filter's blur. Otherwise a block that the noise frees for a few
+    /// samples at a time (a load that holds it) shows a "friction" that is
+    /// the filter's blend of the spring's force at rest, and the velocity's
+    /// noise alone passes a twentieth of a largest speed that is itself
+    /// noise. A recorded force is read at every sample above a twentieth of
+    /// the largest speed, as it always was.
+    pub(crate) fn motion(&self, run: &Run) -> MotionReading {
+        match self.derived_with {
+            Some(_) => MotionReading {
+                v_noise_m_per_s: self.v_noise_m_per_s,
+                blur_samples: crate::diagnose::derived::blur_samples(run),
+            },
+            None => MotionReading::default(),
+        }
+    }
+}
 
 /// The samples of one run that count as slipping: speed |v| (m/s) and
 /// μ = |F|/N, where |v| is above 5% of the run's largest and above
-/// [`SLIP_SPEED_NOISE_SDS`] standard deviations of the velocity sensor's
-/// white noise `v_noise_m_per_s` (m/s; the data's estimate, which the
-/// simulated records carry too, so both sides pick alike), the friction
-/// opposes the motion and N is at least a tenth of its median
+/// [`crate::diagnose::features::SLIP_SPEED_NOISE_SDS`] standard deviations
+/// of the velocity's white noise `v_noise_m_per_s` (m/s; the data's
+/// estimate, which the simulated records carry too, so both sides pick
+/// alike; [`MotionReading::slipping`]), the friction opposes the motion and
+/// N is at least a tenth of its median
 /// ([`crate::diagnose::features::normal_force_floor`]; the nominal load
 /// without a normal-force channel, [`crate::diagnose::features::load_of`]).
-/// Empty without velocity and friction channels.
+/// Every such sample, a derived force's blurred ones too: the slowest
+/// slips, at a stick's ends, are what pin μ(0) = a + b, and read clear of
+/// the blur a few records leave the law's curve free to wander, while the
+/// indirect inference reads the replicates' blur alike. Empty without
+/// velocity and friction channels.
 fn slipping_samples(run: &Run, v_noise_m_per_s: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut speed, mut mu) = (Vec::new(), Vec::new());
     let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
         return (speed, mu);
     };
     let n = &crate::diagnose::features::load_of(run);
-    let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let threshold = (0.05 * vmax).max(SLIP_SPEED_NOISE_SDS * v_noise_m_per_s);
+    let moving = MotionReading { v_noise_m_per_s, blur_samples: 0 }.slipping(v);
     let floor = crate::diagnose::features::normal_force_floor(n);
     for i in 0..v.len().min(f.len()).min(n.len()) {
-        if v[i].abs() > threshold && f[i] * v[i] < 0.0 && n[i] >= floor {
+        if moving[i] && f[i] * v[i] < 0.0 && n[i] >= floor {
             speed.push(v[i].abs());
             mu.push(f[i].abs() / n[i]);
         }
@@ -482,6 +498,7 @@ pub(crate) fn fit_friction_law_at(runs: &[&Run], reading: &Reading<'_>, c: f64) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::derived::{DerivedChannels, derive, velocity_noise};
     use crate::diagnose::features::least_squares;
     use crate::engine::Sample;
     use rand::rngs::StdRng;
@@ -731,5 +748,35 @@ mod tests {
         let fold =
             fit_friction_law_at(&[&record(0.4, -0.41, 80.0, 0.0, 2)], &Reading::default(), 80.0).expect("a law at c");
         assert!(fold.a + fold.b < 0.0 && (fold.b + 0.41).abs() < 1e-6, "{fold:?}");
+    }
+
+    /// A block its load holds still, recorded as `x` alone: its derived
+    /// velocity is the displacement sensor's noise through the filter,
+    /// and read against a twentieth of its largest value most samples
+    /// "slip", with the spring's force at rest read as friction. Read as
+    /// a diagnosis reads a derived force (above the velocity's noise and
+    /// clear of the filter's blur), it has no friction features at all.
+    #[test]
+    fn a_held_block_shows_no_friction_through_a_derived_force() {
+        let rig = RigInfo { mass_kg: 1.1, natural_frequency_hz: 9.0, damping_ratio: 0.005 };
+        let (f_hz, dt, sigma_x) = (7.0, 1.0 / 600.0, 2e-6);
+        let mut rng = StdRng::seed_from_u64(5);
+        // Only `t` and `x` are kept: the rest is derived from them.
+        let samples: Vec<Sample> = (0..30_000)
+            .map(|i| {
+                let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+                let x_m = sigma_x * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos();
+                Sample { t_s: f64::from(i) * dt, x_m, v_m_per_s: 0.0, normal_force_n: 16.0, friction_force_n: 0.0 }
+            })
+            .collect();
+        let mut run = Run::from_samples(&samples, f_hz, 1.6e-3, 16.0);
+        (run.v_m_per_s, run.normal_force, run.friction_force) = (None, None, None);
+        let all = DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false };
+        derive(&mut run, all, &rig);
+        let as_recorded = crate::diagnose::features::run_features(&run).friction;
+        assert!(as_recorded.as_ref().is_some_and(|f| f.slip_samples > 3000), "{as_recorded:?}");
+        let reading = Reading { v_noise_m_per_s: velocity_noise(&run, sigma_x), derived_with: Some(&rig) };
+        let read = crate::diagnose::features::run_features_read(&run, reading.motion(&run)).friction;
+        assert!(read.is_none(), "{read:?}");
     }
 }

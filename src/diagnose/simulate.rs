@@ -180,7 +180,7 @@ fn readings_of(
                     let mut readings = records
                         .into_par_iter()
                         .map(|(grid, run)| RecordReading {
-                            features: run_features_on(run, &grid),
+                            features: run_features_on(run, &grid, reading.motion(run)),
                             moments: c.map(|c| LawMoments::of_run(run, &reading, c)),
                         })
                         .collect::<Vec<_>>()

@@ -3,7 +3,7 @@
 
 use std::f64::consts::TAU;
 
-use stickslip::diagnose::features::{RunFeatures, SampleGrid, run_features, run_features_on};
+use stickslip::diagnose::features::{MotionReading, RunFeatures, SampleGrid, run_features, run_features_on};
 use stickslip::engine::{Condition, Model};
 use stickslip::measure::Run;
 
@@ -157,7 +157,7 @@ fn records_sampled_alike_share_a_grid_and_get_the_same_features() {
     let runs: Vec<Run> = (0..3).map(|_| replicate(&mut rng)).collect();
     let grid = SampleGrid::of(&runs[0]);
     for run in &runs {
-        assert_eq!(run_features_on(run, &grid), run_features(run));
+        assert_eq!(run_features_on(run, &grid, MotionReading::default()), run_features(run));
     }
     // A record the grid was not made for (other times, another frequency)
     // gets its own features, not the grid's.
@@ -166,7 +166,7 @@ fn records_sampled_alike_share_a_grid_and_get_the_same_features() {
     let mut other_frequency = replicate(&mut rng);
     other_frequency.excitation_frequency_hz = 1.5 * F_HZ;
     for run in [&shifted, &other_frequency] {
-        assert_eq!(run_features_on(run, &grid), run_features(run));
+        assert_eq!(run_features_on(run, &grid, MotionReading::default()), run_features(run));
     }
 }
 

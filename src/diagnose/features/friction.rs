@@ -5,7 +5,7 @@
 use super::stats::{moments, negligible, solve_normal};
 use super::{
     BREAKAWAY_SAMPLES, FrictionFeatures, HYSTERESIS_BINS, HYSTERESIS_MIN_PER_SIDE, LOW_SPEED_FRACTION, MIN_PAIRS,
-    MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
+    MIN_SLIP_SAMPLES, MIN_STICK_SAMPLES, MotionReading, SLIP_SPEED_FRACTION, STICK_SPEED_FRACTION,
 };
 
 /// How many Stribeck rates the friction baseline tries.
@@ -19,7 +19,12 @@ fn stribeck_grid() -> [f64; STRIBECK_RATES] {
 crate::vector::widest_vectors! {
 /// Friction-coefficient features (see [`FrictionFeatures`]), with the
 /// widest vectors there are (the Stribeck rates' sums side by side).
-pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Option<FrictionFeatures> {
+pub(super) fn friction_features(
+    v: &[f64],
+    force: &[f64],
+    normal: &[f64],
+    motion: MotionReading,
+) -> Option<FrictionFeatures> {
     let n = v.len().min(force.len()).min(normal.len());
     let (v, force, normal) = (&v[..n], &force[..n], &normal[..n]);
     let v_max = v.iter().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()));
@@ -28,8 +33,8 @@ pub(super) fn friction_features(v: &[f64], force: &[f64], normal: &[f64]) -> Opt
     }
     let floor = super::normal_force_floor(normal);
     let usable = |i: usize| v[i].is_finite() && force[i].is_finite() && normal[i].is_finite() && normal[i] >= floor;
-    let slipping: Vec<bool> =
-        (0..n).map(|i| usable(i) && v[i].abs() > SLIP_SPEED_FRACTION * v_max && force[i] * v[i] < 0.0).collect();
+    let moving = motion.slipping(v);
+    let slipping: Vec<bool> = (0..n).map(|i| moving[i] && usable(i) && force[i] * v[i] < 0.0).collect();
     let idx: Vec<usize> = (0..n).filter(|&i| slipping[i]).collect();
     if idx.len() < MIN_SLIP_SAMPLES {
         return None;

@@ -33,6 +33,14 @@ use crate::measure::Run;
 
 /// Slipping samples have `|v|` above this fraction of the record's largest `|v|`.
 pub const SLIP_SPEED_FRACTION: f64 = 0.05;
+/// A sample counts as slipping only beyond this many standard deviations of
+/// the velocity channel's white noise (and beyond [`SLIP_SPEED_FRACTION`]
+/// of its record's largest speed): a stuck block's measured speed is that
+/// noise alone, and its |F|/N (the spring's force, anywhere below the
+/// static friction) is not friction while slipping. At 3 sd a stuck sample
+/// passes with probability 0.0013 (half of that with the sign friction has
+/// while slipping).
+pub const SLIP_SPEED_NOISE_SDS: f64 = 3.0;
 /// Stuck samples have `|v|` at most this fraction of the record's largest `|v|`.
 pub const STICK_SPEED_FRACTION: f64 = 0.01;
 /// "Low-speed" slip, for the stiction feature: `|v|` below this fraction of the largest `|v|`.
@@ -73,6 +81,65 @@ pub fn normal_force_floor(normal_n: &[f64]) -> f64 {
     let mid = finite.len() / 2;
     let median = *finite.select_nth_unstable_by(mid, f64::total_cmp).1;
     (MIN_NORMAL_FORCE_SHARE * median).max(f64::MIN_POSITIVE)
+}
+
+/// How a record's slipping samples are told from its sensors' noise and
+/// from a derived force's blur. The measured records and the model's
+/// replicates are read with the same one.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotionReading {
+    /// The velocity channel's white noise, m/s (0 where none is known).
+    pub v_noise_m_per_s: f64,
+    /// How many samples either side of one a friction force derived from
+    /// the displacement reads (its filter's half-width and one more, 0 for
+    /// a recorded force): a sample's derived force is the friction of a
+    /// slip only where all of them slip, and the same way. Within a slip
+    /// shorter than the window, or near a stop or a reversal, it blends
+    /// the spring's force at rest into the friction.
+    pub blur_samples: usize,
+}
+
+impl MotionReading {
+    /// The speed a slipping sample of a record whose largest `|v|` is
+    /// `v_max_m_per_s` stands above, m/s: [`SLIP_SPEED_FRACTION`] of it,
+    /// and [`SLIP_SPEED_NOISE_SDS`] sd of the velocity's noise.
+    pub fn slip_threshold(&self, v_max_m_per_s: f64) -> f64 {
+        (SLIP_SPEED_FRACTION * v_max_m_per_s).max(SLIP_SPEED_NOISE_SDS * self.v_noise_m_per_s)
+    }
+
+    /// Which samples of `v` (m/s) slip: `|v|` above
+    /// [`MotionReading::slip_threshold`], and so at every sample within
+    /// [`MotionReading::blur_samples`] either side, all moving the same way.
+    pub fn slipping(&self, v: &[f64]) -> Vec<bool> {
+        let v_max = v.iter().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()));
+        let threshold = self.slip_threshold(v_max);
+        let direction = |x: f64| {
+            if x > threshold {
+                1i8
+            } else if x < -threshold {
+                -1
+            } else {
+                0
+            }
+        };
+        let reach = self.blur_samples;
+        if reach == 0 {
+            return v.iter().map(|&x| direction(x) != 0).collect();
+        }
+        // How many samples up to and including each move the same way
+        // without a break: sample i's neighbourhood does throughout when
+        // the run ending at i + reach is longer than 2 reach.
+        let mut run = vec![0usize; v.len()];
+        for i in 0..v.len() {
+            let d = direction(v[i]);
+            run[i] = match d {
+                0 => 0,
+                _ if i > 0 && direction(v[i - 1]) == d => run[i - 1] + 1,
+                _ => 1,
+            };
+        }
+        (0..v.len()).map(|i| i >= reach && i + reach < v.len() && run[i + reach] > 2 * reach).collect()
+    }
 }
 
 /// All features of one record.
@@ -173,8 +240,10 @@ pub const WANDER_WINDOW_S: f64 = 1.0;
 
 /// Features of the friction coefficient `μ = |F| / N` while slipping.
 ///
-/// Slipping samples: `|v|` above [`SLIP_SPEED_FRACTION`] of the largest
-/// `|v|`, friction opposing the motion (`F·v < 0`) and `N > 0`. A baseline
+/// Slipping samples: those [`MotionReading::slipping`] keeps (`|v|` above
+/// [`SLIP_SPEED_FRACTION`] of the largest `|v|` and above the velocity's
+/// noise, clear of a derived force's blur), with friction opposing the
+/// motion (`F·v < 0`) and `N` above [`normal_force_floor`]. A baseline
 /// law `μ(s) = p0 + p1 s + p2 s² + p3 / (1 + c s)`, `s = |v| / max|v|`, is
 /// fitted by least squares (`c` from a fixed grid, or without the last term,
 /// whichever fits best); its residuals `r` are the "random part".
@@ -267,18 +336,25 @@ pub fn load_of(run: &Run) -> Cow<'_, [f64]> {
     }
 }
 
-/// Computes every feature of `run`.
+/// Computes every feature of `run`, its channels read as they are (no
+/// velocity noise known, a recorded force).
 pub fn run_features(run: &Run) -> RunFeatures {
-    features_on_grid(run, &SampleGrid::of(run))
+    run_features_read(run, MotionReading::default())
+}
+
+/// Computes every feature of `run`, its slipping samples told apart as
+/// `motion` says.
+pub fn run_features_read(run: &Run, motion: MotionReading) -> RunFeatures {
+    features_on_grid(run, &SampleGrid::of(run), motion)
 }
 
 /// Computes every feature of `run` with what `grid` holds where `run` was
-/// sampled on it (else as [`run_features`] does).
-pub fn run_features_on(run: &Run, grid: &SampleGrid) -> RunFeatures {
-    if grid.serves(run) { features_on_grid(run, grid) } else { run_features(run) }
+/// sampled on it (else as [`run_features_read`] does).
+pub fn run_features_on(run: &Run, grid: &SampleGrid, motion: MotionReading) -> RunFeatures {
+    if grid.serves(run) { features_on_grid(run, grid, motion) } else { run_features_read(run, motion) }
 }
 
-fn features_on_grid(run: &Run, grid: &SampleGrid) -> RunFeatures {
+fn features_on_grid(run: &Run, grid: &SampleGrid, motion: MotionReading) -> RunFeatures {
     let base = &grid.base;
     RunFeatures {
         peaks: record::peak_features(run, base),
@@ -287,7 +363,7 @@ fn features_on_grid(run: &Run, grid: &SampleGrid) -> RunFeatures {
             .as_deref()
             .and_then(|n| record::normal_force_features(run, n, base, grid.normal_force.as_ref())),
         friction: match (&run.v_m_per_s, &run.friction_force) {
-            (Some(v), Some(f)) => friction::friction_features(v, f, &load_of(run)),
+            (Some(v), Some(f)) => friction::friction_features(v, f, &load_of(run), motion),
             _ => None,
         },
         stick_fraction: record::stick_fraction(run),
@@ -339,5 +415,57 @@ impl RunFeatures {
     /// The features that are present (and finite), for scoring.
     pub fn named_values(&self) -> Vec<(Observable, f64)> {
         self.all().into_iter().filter_map(|(name, value)| value.filter(|v| v.is_finite()).map(|v| (name, v))).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// A stuck block's measured speed is its sensor's noise: read against
+    /// its own largest value alone, a third of its samples "slip"; above
+    /// three of the noise's standard deviations, almost none do.
+    #[test]
+    fn a_stuck_record_does_not_slip_on_its_noise() {
+        let sd = 4e-4;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        // Box–Muller: a Gaussian of sd `sd` from two uniforms.
+        let v: Vec<f64> = (0..30_000)
+            .map(|_| {
+                let (u1, u2) = (1.0 - rng.random::<f64>(), rng.random::<f64>());
+                sd * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+            })
+            .collect();
+        let share = |motion: MotionReading| motion.slipping(&v).iter().filter(|&&s| s).count() as f64 / v.len() as f64;
+        assert!(share(MotionReading::default()) > 0.5, "{}", share(MotionReading::default()));
+        let read = share(MotionReading { v_noise_m_per_s: sd, blur_samples: 0 });
+        assert!(read < 0.005, "{read}");
+    }
+
+    /// A derived force is read only where the filter's reach lies within
+    /// one slip: a slip no longer than twice the reach gives no sample, a
+    /// longer one its interior, and a reversal between two slips none
+    /// within the reach of it.
+    #[test]
+    fn a_derived_force_is_read_clear_of_its_blur() {
+        let reach = 3;
+        let motion = MotionReading { v_noise_m_per_s: 0.0, blur_samples: reach };
+        // At rest, a slip of 6 samples, rest, a slip of 20, then 20 back.
+        let mut v = vec![0.0; 10];
+        v.extend([1.0; 6]);
+        v.extend([0.0; 10]);
+        v.extend([1.0; 20]);
+        v.extend([-1.0; 20]);
+        v.extend([0.0; 10]);
+        let kept: Vec<usize> = motion.slipping(&v).iter().enumerate().filter(|(_, s)| **s).map(|(i, _)| i).collect();
+        let forward = 26..46;
+        let back = 46..66;
+        let expected: Vec<usize> =
+            (forward.start + reach..forward.end - reach).chain(back.start + reach..back.end - reach).collect();
+        assert_eq!(kept, expected);
+        // Without a reach, every moving sample.
+        let all = MotionReading::default().slipping(&v).iter().filter(|&&s| s).count();
+        assert_eq!(all, 46);
     }
 }
