@@ -469,6 +469,15 @@ pub(crate) fn calibrate_and_score(
                 response = ((now.1 - r0) / (now.0 - s0)).clamp(MIN_SIGMA_RESPONSE, 1.5);
             }
             last = Some(now);
+            if crate::diagnose::search::fit::tracing() {
+                let law = |l: &FrictionLaw| format!("a {:.4} b {:.4} d {:.4} sigma {:.4}", l.a, l.b, l.d, l.sigma);
+                eprintln!(
+                    "law step: model sigma {:.4}; measured {}; simulated {}; response {response:.3}",
+                    m.friction.sigma,
+                    law(&measured),
+                    law(&simulated)
+                );
+            }
             step_law(&mut m, &measured, &simulated, response);
         }
         let scores = score(engine, &m, data, settings, scope)?;
