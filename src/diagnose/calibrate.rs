@@ -431,7 +431,7 @@ fn noise_scales(parts: &[(f64, f64, f64)], free_normal: bool) -> Option<(f64, f6
 ///
 /// With friction channels this is indirect inference over the whole of
 /// eq. 7: the same least-squares fit of `a + b/(1 + c|v|) + d v²`
-/// ([`fit_friction_law`]) is run on the measured records and on the model's
+/// ([`crate::diagnose::law::fit_friction_law`]) is run on the measured records and on the model's
 /// simulated replicate records (which carry the data's measurement noise),
 /// and `a`, `b`, `d` are moved by the difference (`c` stays the measured
 /// law's) and σ_μ² by the difference of the residual variances within
@@ -469,7 +469,7 @@ pub(crate) fn calibrate_and_score(
                 response = ((now.1 - r0) / (now.0 - s0)).clamp(MIN_SIGMA_RESPONSE, 1.5);
             }
             last = Some(now);
-            if crate::diagnose::search::fit::tracing() {
+            if crate::diagnose::tracing() {
                 let law = |l: &FrictionLaw| format!("a {:.4} b {:.4} d {:.4} sigma {:.4}", l.a, l.b, l.d, l.sigma);
                 eprintln!(
                     "law step: model sigma {:.4}; measured {}; simulated {}; response {response:.3}",

@@ -338,6 +338,12 @@ pub(crate) fn records_window_s(data: &Data<'_>, settings: &DiagnoseSettings) -> 
     [start, start + data.longest_record_s.max(1e-3)]
 }
 
+/// Whether tracing is on (`STICKSLIP_DEBUG` set): every trial, decision
+/// and calibration step is printed to stderr.
+pub(crate) fn tracing() -> bool {
+    std::env::var_os("STICKSLIP_DEBUG").is_some()
+}
+
 /// Arithmetic mean; 0 for no values.
 pub(crate) fn mean(values: &[f64]) -> f64 {
     values.iter().sum::<f64>() / values.len().max(1) as f64

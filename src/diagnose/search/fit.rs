@@ -2,12 +2,12 @@
 //! parameters, its friction law recalibrated), the coordinate search over
 //! the parameters, and the polish of the best trial on every replicate.
 
-use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law, law_step};
 use crate::diagnose::candidates::{Param, Variant};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::{Scope, Score, add_heldout, count_of, gap_noise, gap_of, score};
 use crate::diagnose::search::cv::{mean_loss, pair_losses};
+use crate::diagnose::{DiagnoseSettings, tracing};
 use crate::engine::{Engine, Model};
 use crate::error::Result;
 
@@ -77,12 +77,6 @@ impl From<Trial> for Fitted {
     fn from(t: Trial) -> Fitted {
         Fitted { model: t.model, scores: t.scores }
     }
-}
-
-/// Whether tracing is on (`STICKSLIP_DEBUG` set): every trial and decision
-/// is printed to stderr.
-pub(crate) fn tracing() -> bool {
-    std::env::var_os("STICKSLIP_DEBUG").is_some()
 }
 
 /// Whether a trial on `data` can be scored at the law it starts from

@@ -53,6 +53,7 @@ use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
+use crate::diagnose::tracing;
 use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexplained};
 use crate::engine::{Effect, Engine, Model};
 use crate::error::Result;
@@ -62,7 +63,7 @@ use cv::{
 };
 use family::{Family, round};
 pub(crate) use fit::Fitted;
-use fit::{fits_per_task, polish, search_settings, tracing};
+use fit::{fits_per_task, polish, search_settings};
 use rayon::prelude::*;
 use refit::refit_folds;
 
