@@ -73,9 +73,9 @@ impl DerivedChannels {
     /// The note a report carries about them (`None` where none was derived).
     pub fn note(self) -> Option<String> {
         let rate = if self.friction {
-            "; the friction observables and the law's σ_μ read a derived force only where the filter's whole \
-             window lies within one slip (nearer a stop, a reversal or a brief slip it blends the spring's force \
-             at rest into the friction), the law's curve every slip; the filter blurs how fast friction drops from rest, so the law's \
+            "; the friction observables read a derived force only where the filter's whole window lies within \
+             one slip (nearer a stop, a reversal or a brief slip it blends the spring's force at rest into the \
+             friction); the filter blurs how fast friction drops from rest, so the law's \
              Stribeck rate c is not read from a derived force: the model keeps the paper's, and the law's other \
              terms are inferred at it"
         } else {

@@ -50,7 +50,6 @@ impl FrictionLaw {
             speed: measured.anchors_m_per_s.to_vec(),
             mu: measured.anchors_m_per_s.iter().map(|&v| self.mu(v) + measured.mu(v) - simulated.mu(v)).collect(),
             record: vec![0; measured.anchors_m_per_s.len()],
-            clear: None,
             sensor_variance: vec![0.0],
             anchors_m_per_s: speed_deciles(&measured.anchors_m_per_s),
         };
@@ -95,9 +94,6 @@ struct SlipSamples {
     speed: Vec<f64>,
     mu: Vec<f64>,
     record: Vec<usize>,
-    /// For a derived force, whether each sample is clear of the filter's
-    /// blur ([`RecordSlips::clear`]).
-    clear: Option<Vec<bool>>,
     /// The variance each record's sensors put into its μ ([`Reading`]), –².
     sensor_variance: Vec<f64>,
     /// The speeds' 5%, 15%, …, 95% quantiles, m/s (sorted once: every law
@@ -182,42 +178,23 @@ impl Reading<'_> {
 /// Every such sample, a derived force's blurred ones too: the slowest
 /// slips, at a stick's ends, are what pin μ(0) = a + b, and read clear of
 /// the blur a few records leave the law's curve free to wander, while the
-/// indirect inference reads the replicates' blur alike. For a derived
-/// force, which of them are also clear of the blur
-/// ([`Reading::motion`]): the friction's spread is read there
-/// ([`LawMoments::law_of_records`]). Empty without velocity and friction
-/// channels.
-fn slipping_samples(run: &Run, reading: &Reading<'_>) -> RecordSlips {
-    let mut slips = RecordSlips::default();
+/// indirect inference reads the replicates' blur alike. Empty without
+/// velocity and friction channels.
+fn slipping_samples(run: &Run, reading: &Reading<'_>) -> (Vec<f64>, Vec<f64>) {
+    let (mut speed, mut mu) = (Vec::new(), Vec::new());
     let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
-        return slips;
+        return (speed, mu);
     };
     let n = &crate::diagnose::features::load_of(run);
     let moving = MotionReading { v_noise_m_per_s: reading.v_noise_m_per_s, blur_samples: 0 }.slipping(v);
-    let clear = reading.derived_with.map(|_| reading.motion(run).slipping(v));
     let floor = crate::diagnose::features::normal_force_floor(n);
-    let mut clear_of_blur = Vec::new();
     for i in 0..v.len().min(f.len()).min(n.len()) {
         if moving[i] && f[i] * v[i] < 0.0 && n[i] >= floor {
-            slips.speed.push(v[i].abs());
-            slips.mu.push(f[i].abs() / n[i]);
-            clear_of_blur.extend(clear.as_ref().map(|c| c[i]));
+            speed.push(v[i].abs());
+            mu.push(f[i].abs() / n[i]);
         }
     }
-    slips.clear = clear.map(|_| clear_of_blur);
-    slips
-}
-
-/// One record's slipping samples ([`slipping_samples`]).
-#[derive(Debug, Default)]
-struct RecordSlips {
-    /// |v|, m/s.
-    speed: Vec<f64>,
-    /// |F|/N, –.
-    mu: Vec<f64>,
-    /// For a derived force, whether each sample is clear of the filter's
-    /// blur; `None` for a recorded force (every sample is).
-    clear: Option<Vec<bool>>,
+    (speed, mu)
 }
 
 impl SlipSamples {
@@ -225,34 +202,24 @@ impl SlipSamples {
     /// `reading` says; `None` with fewer than 50.
     fn of(runs: &[&Run], reading: &Reading<'_>) -> Option<SlipSamples> {
         let (mut speed, mut mu, mut record) = (Vec::new(), Vec::new(), Vec::new());
-        let mut clear = reading.derived_with.map(|_| Vec::new());
         let sensor_variance = runs.iter().map(|r| reading.sensor_variance(r)).collect();
         for (k, r) in runs.iter().enumerate() {
-            let slips = slipping_samples(r, reading);
-            record.extend(std::iter::repeat_n(k, slips.speed.len()));
-            speed.extend(slips.speed);
-            mu.extend(slips.mu);
-            if let (Some(all), Some(of_run)) = (clear.as_mut(), slips.clear) {
-                all.extend(of_run);
-            }
+            let (s, m) = slipping_samples(r, reading);
+            record.extend(std::iter::repeat_n(k, s.len()));
+            speed.extend(s);
+            mu.extend(m);
         }
         if mu.len() < MIN_SLIP_SAMPLES {
             return None;
         }
         let anchors_m_per_s = speed_deciles(&speed);
-        Some(SlipSamples { speed, mu, record, clear, sensor_variance, anchors_m_per_s })
+        Some(SlipSamples { speed, mu, record, sensor_variance, anchors_m_per_s })
     }
 
     /// The within-record least-squares law at a given `c` (s/m; see
     /// [`LawMoments::law`]), with these samples' anchors. With one record
     /// this is the ordinary fit with an intercept.
     fn fit_at(&self, c: f64) -> Option<FrictionLaw> {
-        self.fit_scored(c).map(|(law, _)| law)
-    }
-
-    /// [`SlipSamples::fit_at`], and the weighted residual σ of its curve
-    /// over every sample (–; [`LawMoments::law_of_records`]).
-    fn fit_scored(&self, c: f64) -> Option<(FrictionLaw, f64)> {
         let mut records = Vec::new();
         let mut start = 0;
         // Samples are grouped by record (in the order they were collected).
@@ -260,31 +227,25 @@ impl SlipSamples {
             let end = start + self.record[start..].iter().take_while(|&&k| k == self.record[start]).count();
             let sensor_variance = self.sensor_variance[self.record[start]];
             records.push(
-                LawMoments::of_record(
-                    &self.speed[start..end],
-                    &self.mu[start..end],
-                    self.clear.as_ref().map(|c| &c[start..end]),
-                    c,
-                )
-                .with_sensor_variance(sensor_variance),
+                LawMoments::of_record(&self.speed[start..end], &self.mu[start..end], c)
+                    .with_sensor_variance(sensor_variance),
             );
             start = end;
         }
-        LawMoments::law_and_curve_sigma(&records, c, self.anchors_m_per_s)
+        LawMoments::law_of_records(&records, c, self.anchors_m_per_s)
     }
 
-    /// The law with the smallest residual over every slipping sample
-    /// ([`SlipSamples::fit_scored`]): over [`law_c_grid`], then by
+    /// The law with the smallest residual: over [`law_c_grid`], then by
     /// golden-section search in log c between the best point's neighbours.
     fn fit(&self) -> Option<FrictionLaw> {
         let grid: Vec<f64> = law_c_grid().collect();
-        let laws: Vec<Option<(FrictionLaw, f64)>> = grid.par_iter().map(|&c| self.fit_scored(c)).collect();
-        let (best, (law, score)) = laws
+        let laws: Vec<Option<FrictionLaw>> = grid.par_iter().map(|&c| self.fit_at(c)).collect();
+        let (best, law) = laws
             .iter()
             .enumerate()
             .filter_map(|(i, l)| l.map(|l| (i, l)))
-            .filter(|(_, (l, _))| l.plausible())
-            .min_by(|x, y| x.1.1.total_cmp(&y.1.1))?;
+            .filter(|(_, l)| l.plausible())
+            .min_by(|x, y| x.1.sigma.total_cmp(&y.1.sigma))?;
         if best == 0 {
             return Some(law);
         }
@@ -292,8 +253,7 @@ impl SlipSamples {
         let hi = grid.get(best + 1).copied().unwrap_or(grid[best] * 3.0);
         let (mut lo, mut hi) = (lo.ln(), hi.ln());
         let golden = 0.5 * (5f64.sqrt() - 1.0);
-        let sigma_at =
-            |x: f64| self.fit_scored(x.exp()).filter(|(l, _)| l.plausible()).map_or(f64::INFINITY, |(_, s)| s);
+        let sigma_at = |x: f64| self.fit_at(x.exp()).filter(|l| l.plausible()).map_or(f64::INFINITY, |l| l.sigma);
         let (mut x1, mut x2) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
         let (mut f1, mut f2) = (sigma_at(x1), sigma_at(x2));
         for _ in 0..14 {
@@ -307,8 +267,8 @@ impl SlipSamples {
                 f2 = sigma_at(x2);
             }
         }
-        let refined = self.fit_scored((0.5 * (lo + hi)).exp()).filter(|(l, _)| l.plausible());
-        Some(refined.filter(|&(_, s)| s <= score).map_or(law, |(l, _)| l))
+        let refined = self.fit_at((0.5 * (lo + hi)).exp()).filter(|l| l.plausible());
+        Some(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law))
     }
 }
 

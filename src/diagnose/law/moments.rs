@@ -1,10 +1,9 @@
 //! What the within-record fit of eq. 7 reads from slipping samples, as sums
 //! that add over records ([`LawMoments`]), and the law and its residual σ_μ
-//! (–) read from them: the curve from every slipping sample, σ_μ weighted
-//! by the noise each record's sensors put into μ and, for a force derived
-//! from the displacement, read clear of its filter's blur.
+//! (–) read from them: the curve from every slipping sample alike, σ_μ
+//! weighted by the noise each record's sensors put into μ.
 
-use super::{FrictionLaw, MAX_D_S2_PER_M2, MIN_SLIP_SAMPLES, Reading, slipping_samples};
+use super::{FrictionLaw, MAX_D_S2_PER_M2, Reading, slipping_samples};
 use crate::diagnose::features::solve_normal;
 use crate::measure::Run;
 
@@ -56,37 +55,6 @@ impl Products {
     }
 }
 
-/// What the residual about a law reads from the slipping samples of one
-/// record that are clear of a derived force's blur: their count, the sums
-/// of their centred columns and their [`Products`] (centred on the whole
-/// record's mean, as [`LawMoments`]' are), so the residual about any (b, d)
-/// and its spread about its own mean can be read
-/// ([`ClearMoments::residual_sum_of_squares`]).
-#[derive(Clone, Copy, Debug, Default)]
-struct ClearMoments {
-    /// Samples.
-    count: usize,
-    /// Σ of the centred s², m²/s².
-    d: f64,
-    /// Σ of the centred g, –.
-    g: f64,
-    /// Σ of the centred μ, –.
-    y: f64,
-    products: Products,
-}
-
-impl ClearMoments {
-    /// The sum of squares of the residual μ − b g − d s² about its own
-    /// mean over these samples, –.
-    fn residual_sum_of_squares(&self, b: f64, d: f64) -> f64 {
-        if self.count == 0 {
-            return 0.0;
-        }
-        let sum = self.y - b * self.g - d * self.d;
-        (self.products.residual_squares(b, d) - sum * sum / self.count as f64).max(0.0)
-    }
-}
-
 /// What the within-record fit of eq. 7 at one Stribeck rate `c` reads from
 /// slipping samples ([`super::SlipSamples::fit_at`]), as sums that add over
 /// records: the samples' count and sums of μ, s² and g(s) = 1/(1 + c s)
@@ -111,46 +79,32 @@ pub(crate) struct LawMoments {
     sum_g: f64,
     /// The columns' cross products, each centred on its record's mean.
     products: Products,
-    /// For one record of a derived force, the same read at its samples
-    /// clear of the filter's blur; `None` for a recorded force, and once
-    /// records are added together.
-    clear: Option<ClearMoments>,
 }
 
 impl LawMoments {
     /// The moments of one record's slipping samples (`speed`, m/s; `mu`, –)
-    /// at Stribeck rate `c` (s/m), with those of the samples `clear` of a
-    /// derived force's blur.
-    pub(super) fn of_record(speed: &[f64], mu: &[f64], clear: Option<&[bool]>, c: f64) -> LawMoments {
+    /// at Stribeck rate `c` (s/m).
+    pub(super) fn of_record(speed: &[f64], mu: &[f64], c: f64) -> LawMoments {
         let n = speed.len();
         if n == 0 {
-            return LawMoments { clear: clear.map(|_| ClearMoments::default()), ..LawMoments::default() };
+            return LawMoments::default();
         }
         let g = |s: f64| 1.0 / (1.0 + c * s);
         let (sum_mu, sum_s2, sum_g) =
             speed.iter().zip(mu).fold((0.0, 0.0, 0.0), |(m, d, q), (&s, &y)| (m + y, d + s * s, q + g(s)));
         let (mean_mu, mean_s2, mean_g) = (sum_mu / n as f64, sum_s2 / n as f64, sum_g / n as f64);
         let mut m = LawMoments { count: n, records: 1, sum_mu, sum_s2, sum_g, ..LawMoments::default() };
-        let mut cm = ClearMoments::default();
-        for (i, (&s, &y)) in speed.iter().zip(mu).enumerate() {
-            let (d, q, y) = (s * s - mean_s2, g(s) - mean_g, y - mean_mu);
-            m.products.add_sample(d, q, y);
-            if clear.is_some_and(|c| c[i]) {
-                cm.count += 1;
-                (cm.d, cm.g, cm.y) = (cm.d + d, cm.g + q, cm.y + y);
-                cm.products.add_sample(d, q, y);
-            }
+        for (&s, &y) in speed.iter().zip(mu) {
+            m.products.add_sample(s * s - mean_s2, g(s) - mean_g, y - mean_mu);
         }
-        m.clear = clear.map(|_| cm);
         m
     }
 
     /// The moments of one run's slipping samples ([`slipping_samples`]) at
     /// Stribeck rate `c` (s/m), read as `reading` says.
     pub(crate) fn of_run(run: &Run, reading: &Reading<'_>, c: f64) -> LawMoments {
-        let slips = slipping_samples(run, reading);
-        LawMoments::of_record(&slips.speed, &slips.mu, slips.clear.as_deref(), c)
-            .with_sensor_variance(reading.sensor_variance(run))
+        let (speed, mu) = slipping_samples(run, reading);
+        LawMoments::of_record(&speed, &mu, c).with_sensor_variance(reading.sensor_variance(run))
     }
 
     /// These moments of one record whose sensors put `variance` (–²) into
@@ -169,7 +123,6 @@ impl LawMoments {
     pub(crate) fn add(&mut self, other: &LawMoments) {
         self.count += other.count;
         self.records += other.records;
-        self.clear = None;
         for (a, b) in [
             (&mut self.sensor_variance_sum, other.sensor_variance_sum),
             (&mut self.sum_mu, other.sum_mu),
@@ -248,71 +201,24 @@ impl LawMoments {
     /// record's own residual, so a record whose friction departs from the
     /// law (an effect) weighs as much as its neighbours. With recorded
     /// forces every record weighs alike: the unweighted fit.
-    ///
-    /// A derived force's σ is read at the samples clear of the filter's
-    /// blur ([`ClearMoments`]), each record's about its own mean, where
-    /// there are at least [`MIN_SLIP_SAMPLES`]: near a stop the filter
-    /// blends the spring's force at rest into the friction, a spread the
-    /// friction does not have, and an ageing memory or a noisier law would
-    /// be fitted to stand in for it. The curve still needs those slowest
-    /// slips, which pin μ(0) = a + b.
     pub(crate) fn law_of_records(records: &[LawMoments], c: f64, anchors_m_per_s: [f64; 10]) -> Option<FrictionLaw> {
-        LawMoments::law_and_curve_sigma(records, c, anchors_m_per_s).map(|(law, _)| law)
-    }
-
-    /// [`LawMoments::law_of_records`], and the weighted residual σ of its
-    /// curve over every slipping sample (–; the σ of a recorded force),
-    /// which a Stribeck rate is chosen by ([`super::SlipSamples::fit`]).
-    pub(super) fn law_and_curve_sigma(
-        records: &[LawMoments],
-        c: f64,
-        anchors: [f64; 10],
-    ) -> Option<(FrictionLaw, f64)> {
         let mut pooled = LawMoments::default();
         records.iter().for_each(|r| pooled.add(r));
-        let law = pooled.law(c, anchors)?;
-        let every = |r: &LawMoments| Some((r.residual_sum_of_squares(law.b, law.d), r.count));
-        let curve_sigma = if pooled.sensor_variance_sum > 0.0 {
-            weighted_sigma(records, law.sigma.powi(2), every).unwrap_or(law.sigma)
-        } else {
-            law.sigma
-        };
-        let clear = |r: &LawMoments| r.clear.map(|m| (m.residual_sum_of_squares(law.b, law.d), m.count));
-        let clear_count: usize = records.iter().filter_map(clear).map(|(_, n)| n).sum();
-        if records.iter().any(|r| r.count > 0 && r.clear.is_none()) || clear_count < MIN_SLIP_SAMPLES {
-            return Some((FrictionLaw { sigma: curve_sigma, ..law }, curve_sigma));
+        let law = pooled.law(c, anchors_m_per_s)?;
+        if pooled.sensor_variance_sum <= 0.0 || pooled.count == 0 {
+            return Some(law);
         }
-        let (rss, dof) =
-            records.iter().filter_map(clear).fold((0.0, 0usize), |(s, k), (rss, n)| (s + rss, k + n.saturating_sub(1)));
-        let sigma = weighted_sigma(records, rss / dof.max(1) as f64, clear).unwrap_or(curve_sigma);
-        Some((FrictionLaw { sigma, ..law }, curve_sigma))
+        let total = law.sigma.powi(2);
+        let friction = (total - pooled.sensor_variance_sum / pooled.count as f64).max(FRICTION_SHARE_FLOOR * total);
+        let (mut sum_rss, mut sum_dof) = (0.0, 0.0);
+        for r in records.iter().filter(|r| r.count > 1) {
+            let weight = 1.0 / (friction + r.sensor_variance_sum / r.count as f64);
+            sum_rss += weight * r.residual_sum_of_squares(law.b, law.d);
+            sum_dof += weight * (r.count - 1) as f64;
+        }
+        let sigma = (sum_rss / sum_dof).sqrt();
+        Some(if sigma.is_finite() { FrictionLaw { sigma, ..law } } else { law })
     }
-}
-
-/// The residual σ (–) of `records` about a law, each record weighted as
-/// [`LawMoments::law_of_records`] says, from each record's residual sum of
-/// squares and sample count as `read` gives them (each record about its
-/// own mean), with `total` (–²) their unweighted residual variance; `None`
-/// where it is not finite.
-fn weighted_sigma(
-    records: &[LawMoments],
-    total: f64,
-    read: impl Fn(&LawMoments) -> Option<(f64, usize)>,
-) -> Option<f64> {
-    let read = || records.iter().filter_map(|r| read(r).filter(|&(_, n)| n > 0).map(|x| (r, x)));
-    let (mut sensor, mut count) = (0.0, 0usize);
-    for (r, (_, n)) in read() {
-        sensor += r.sensor_variance_sum / r.count as f64 * n as f64;
-        count += n;
-    }
-    let friction = (total - sensor / count.max(1) as f64).max(FRICTION_SHARE_FLOOR * total);
-    let (mut sum_rss, mut sum_dof) = (0.0, 0.0);
-    for (r, (rss, n)) in read().filter(|(_, (_, n))| *n > 1) {
-        let weight = 1.0 / (friction + r.sensor_variance_sum / r.count as f64);
-        sum_rss += weight * rss;
-        sum_dof += weight * (n - 1) as f64;
-    }
-    Some((sum_rss / sum_dof).sqrt()).filter(|s| s.is_finite())
 }
 
 /// The least share of the records' residual variance that is taken to be
@@ -326,8 +232,6 @@ mod tests {
     use super::super::tests::{record_at, record_d};
     use super::*;
     use crate::diagnose::features::least_squares;
-    use rand::rngs::StdRng;
-    use rand::{RngExt, SeedableRng};
 
     /// Records are weighted by the noise their sensors put into μ, not by
     /// their own residual; the curve is read from every sample alike.
@@ -363,43 +267,6 @@ mod tests {
         assert_eq!(pooled.law(c, [0.0; 10]), Some(unweighted));
     }
 
-    /// A derived force's slowest slips carry the filter's blur: a spread
-    /// (and a level) the friction does not have. Its law's curve is read
-    /// from every slipping sample, the blurred ones too, and its σ from the
-    /// samples clear of the blur about their own mean: here σ 0.02 on the
-    /// clear samples, and on the slips below 0.12 m/s 0.08 more noise and a
-    /// level 0.05 higher.
-    #[test]
-    fn a_derived_forces_spread_is_read_clear_of_its_blur() {
-        let (c, sigma) = (20.0, 0.02);
-        let slips = slipping_samples(&record_d(0.3, 0.1, c, 0.3, sigma, 11), &Reading::default());
-        let clear: Vec<bool> = slips.speed.iter().map(|&s| s > 0.12).collect();
-        let mut rng = StdRng::seed_from_u64(12);
-        let mu: Vec<f64> = slips
-            .mu
-            .iter()
-            .zip(&clear)
-            .map(|(&m, &clear)| {
-                let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
-                let blur = 0.08 * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                if clear { m } else { m + 0.05 + blur }
-            })
-            .collect();
-        assert!(clear.iter().filter(|&&c| !c).count() > 1000, "the premise: many blurred samples");
-        let read = |clear: Option<&[bool]>| {
-            let moments = LawMoments::of_record(&slips.speed, &mu, clear, c).with_sensor_variance(1e-6);
-            LawMoments::law_of_records(&[moments], c, [0.0; 10]).unwrap()
-        };
-        let (split, every) = (read(Some(&clear)), read(None));
-        assert_eq!((split.a, split.b, split.d), (every.a, every.b, every.d), "one curve, from every sample");
-        assert!(every.sigma > 2.0 * sigma, "the premise: the blur inflates σ, {every:?}");
-        assert!((split.sigma / sigma - 1.0).abs() < 0.05, "σ clear of the blur: {split:?}");
-        // A record without a sample clear of the blur reads as before.
-        let none = LawMoments::of_record(&slips.speed, &mu, Some(&vec![false; mu.len()]), c);
-        let none = LawMoments::law_of_records(&[none.with_sensor_variance(1e-6)], c, [0.0; 10]).unwrap();
-        assert_eq!(none, every);
-    }
-
     /// The law from moments summed record by record (as the diagnosis sums
     /// its replicates' in parallel) is the ordinary least-squares fit of
     /// μ − its record's mean on the centred columns (s², g(s)), solved here
@@ -412,7 +279,7 @@ mod tests {
             runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, &Reading::default(), c)));
             let law = moments.law(c, [0.0; 10]).unwrap();
             let records: Vec<(Vec<f64>, Vec<f64>)> =
-                runs.iter().map(|r| slipping_samples(r, &Reading::default())).map(|s| (s.speed, s.mu)).collect();
+                runs.iter().map(|r| slipping_samples(r, &Reading::default())).collect();
             let g = |s: f64| 1.0 / (1.0 + c * s);
             let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
             let mut rows = Vec::new();
