@@ -46,9 +46,9 @@ impl Products {
         self.yy += other.yy;
     }
 
-    /// Σ(y − b q − d·d)² over the samples, –: the residual about the law
-    /// with Stribeck term `b` and `d` (s²/m²), each record about its own
-    /// mean.
+    /// The sum over the samples of the squared residual about the law with
+    /// Stribeck term `b` and v² term `d` (s²/m²), y − b q − d (the centred
+    /// s²), –: each record about its own mean.
     fn residual_squares(&self, b: f64, d: f64) -> f64 {
         let fitted = b * b * self.gg + 2.0 * b * d * self.dg + d * d * self.dd;
         self.yy - 2.0 * b * self.gy - 2.0 * d * self.dy + fitted
