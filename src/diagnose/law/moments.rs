@@ -47,11 +47,12 @@ impl Products {
     }
 
     /// The sum over the samples of the squared residual about the law with
-    /// Stribeck term `b` and v² term `d` (s²/m²), y − b q − d (the centred
-    /// s²), –: each record about its own mean.
-    fn residual_squares(&self, b: f64, d: f64) -> f64 {
+    /// Stribeck term `b` and v² term `d` (s²/m²; the rate the products were
+    /// taken at), y − b q − d (the centred s²), –: each record about its own
+    /// mean.
+    fn residual_sum_of_squares(&self, b: f64, d: f64) -> f64 {
         let fitted = b * b * self.gg + 2.0 * b * d * self.dg + d * d * self.dd;
-        self.yy - 2.0 * b * self.gy - 2.0 * d * self.dy + fitted
+        (self.yy - 2.0 * b * self.gy - 2.0 * d * self.dy + fitted).max(0.0)
     }
 }
 
@@ -178,12 +179,6 @@ impl LawMoments {
         Some(FrictionLaw { a, b, c, d, sigma, anchors_m_per_s })
     }
 
-    /// The sum of squares about the law with Stribeck term `b` and `d` (the
-    /// rate the moments were taken at), each record about its own mean, –.
-    fn residual_sum_of_squares(&self, b: f64, d: f64) -> f64 {
-        self.products.residual_squares(b, d).max(0.0)
-    }
-
     /// The law at Stribeck rate `c` (s/m) of records whose moments (taken
     /// at `c`) are `records`: its curve from every slipping sample alike,
     /// and its residual σ with each record weighted by the inverse of the
@@ -213,7 +208,7 @@ impl LawMoments {
         let (mut sum_rss, mut sum_dof) = (0.0, 0.0);
         for r in records.iter().filter(|r| r.count > 1) {
             let weight = 1.0 / (friction + r.sensor_variance_sum / r.count as f64);
-            sum_rss += weight * r.residual_sum_of_squares(law.b, law.d);
+            sum_rss += weight * r.products.residual_sum_of_squares(law.b, law.d);
             sum_dof += weight * (r.count - 1) as f64;
         }
         let sigma = (sum_rss / sum_dof).sqrt();
