@@ -65,13 +65,31 @@ impl Family {
     }
 }
 
-/// The form `form` of `effect` as the context `ctx` builds it (the bent
-/// load dependence from the linear one at `values`), if there is one.
-pub(super) fn variant_named(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Context<'_>) -> Option<Variant> {
-    variants(effect, ctx)
+/// The form `form` of `effect` at `values` as the context `ctx` of a fold
+/// builds it (the bent load dependence from the linear one), with the
+/// values it takes, if there is one. A fold that withholds one of three
+/// loads cannot bend a line through the other two: there the bent load
+/// dependence is refitted as the straight one it bends, from its slope.
+/// Refused instead, a family whose full-data fit happened to bend would
+/// end the search with nothing named and no reason given.
+pub(super) fn fold_variant(
+    effect: Effect,
+    form: SearchedForm,
+    values: &[f64],
+    ctx: &Context<'_>,
+) -> Option<(Variant, Vec<f64>)> {
+    let built = variants(effect, ctx)
         .into_iter()
         .find(|v| v.form == form)
-        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form))
+        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form));
+    if let Some(v) = built {
+        return Some((v, values.to_vec()));
+    }
+    let straight = (effect == Effect::LoadDependentFriction && form == SearchedForm::Quadratic)
+        .then(|| variants(effect, ctx).into_iter().find(|v| v.form == SearchedForm::Linear))
+        .flatten()?;
+    let n = straight.params.len();
+    Some((straight, values.get(..n)?.to_vec()))
 }
 
 /// Every family's coarse fit on the full data (each form at the start the

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::FoldSet;
-use super::family::{Family, variant_named};
+use super::family::{Family, fold_variant};
 use super::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::calibrate::converge_law;
@@ -68,11 +68,10 @@ fn refit_fold(
     let member = &family.pool[member];
     let (view, base): (&Data<'_>, &Fitted) = (&folds.views[k], &folds.current[k]);
     let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
-    let Some(variant) = variant_named(family.effect, member.form, &member.values, &ctx) else {
+    let Some((variant, values)) = fold_variant(family.effect, member.form, &member.values, &ctx) else {
         return Ok(None);
     };
-    let Some(mut start) =
-        evaluate(&variant, &member.values, &base.model, &base.scores, 1, slope, view, search, engine)?
+    let Some(mut start) = evaluate(&variant, &values, &base.model, &base.scores, 1, slope, view, search, engine)?
     else {
         return Ok(None);
     };
@@ -91,8 +90,7 @@ fn refit_fold(
     // its records' law is then no guide for a step back.
     if start.objective >= 1.0 {
         if law_can_stay(view)
-            && let Some(kept) =
-                evaluate(&variant, &member.values, &base.model, &base.scores, 0, slope, view, search, engine)?
+            && let Some(kept) = evaluate(&variant, &values, &base.model, &base.scores, 0, slope, view, search, engine)?
             && kept.objective < start.objective
         {
             start = kept;
@@ -100,8 +98,7 @@ fn refit_fold(
         let mut with_law = base.model.clone();
         with_law.friction = family.best.model.friction.clone();
         if with_law.friction != base.model.friction
-            && let Some(t) =
-                evaluate(&variant, &member.values, &with_law, &base.scores, 1, slope, view, search, engine)?
+            && let Some(t) = evaluate(&variant, &values, &with_law, &base.scores, 1, slope, view, search, engine)?
             && t.objective < start.objective
         {
             start = t;
@@ -123,7 +120,7 @@ fn refit_fold(
             view.folds.folds[k].label,
             family.effect,
             variant.form,
-            member.values,
+            values,
             gap_of(&scores, false),
             gap_of(&scores, true)
         );
