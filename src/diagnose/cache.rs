@@ -5,7 +5,7 @@
 //! simulated once per diagnosis.
 
 use std::collections::{BTreeMap, HashMap, VecDeque};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::features::{RunFeatures, SampleGrid};
@@ -25,6 +25,10 @@ pub(crate) struct Caches {
     pub(crate) records: RecordCache,
     /// Each unit's simulated records' sample grid, made once.
     pub(crate) grids: UnitGrids,
+    /// How far the replicates' friction residual variance moves per unit
+    /// of σ_μ² through a derived force's filter (–), measured once
+    /// ([`crate::diagnose::calibrate`]).
+    pub(crate) sigma_response: OnceLock<f64>,
 }
 
 /// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,

@@ -11,7 +11,7 @@
 
 use crate::diagnose::data::Data;
 use crate::diagnose::features::run_features;
-use crate::diagnose::law::FrictionLaw;
+use crate::diagnose::law::{FrictionLaw, variance_gap};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
 use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fitting_records};
@@ -436,7 +436,8 @@ fn noise_scales(parts: &[(f64, f64, f64)], free_normal: bool) -> Option<(f64, f6
 /// and `a`, `b`, `d` are moved by the difference (`c` stays the measured
 /// law's) and σ_μ² by the difference of the residual variances within
 /// records (each record's mean residual removed, so a friction level that changes with
-/// the load or over time is left to the effect that makes it). The fit's numbers are then
+/// the load or over time is left to the effect that makes it), condition by
+/// condition ([`crate::diagnose::law::variance_gap`]). The fit's numbers are then
 /// those of the data whatever else the model carries (`law_steps` steps, 0
 /// for the baseline's [`LAW_STEPS`], each from the fitting units'
 /// replicates alone), so an effect that
@@ -456,29 +457,19 @@ pub(crate) fn calibrate_and_score(
 ) -> Result<(Model, Vec<Score>, f64)> {
     if let Some(measured) = data.measured_law {
         let mut m = model.clone();
-        // The simulated residual variance's response to σ_μ²: one for one
-        // with a recorded friction force; through a derived one's filter
-        // ([`crate::diagnose::derived`]) a fraction, read between successive
-        // steps (one for one until two are taken).
-        let (mut response, mut last): (f64, Option<(f64, f64)>) = (1.0, None);
+        let response = sigma_response(engine, &m, data, settings)?;
         for _ in 0..if law_steps == 0 { LAW_STEPS } else { law_steps } {
-            let Some(simulated) = simulated_law(engine, &m, data, settings)? else { break };
-            let now = (m.friction.sigma.powi(2), simulated.sigma.powi(2));
-            let measured_response = last.filter(|(s0, _)| data.derived.friction && (now.0 - s0).abs() > 1e-12);
-            if let Some((s0, r0)) = measured_response {
-                response = ((now.1 - r0) / (now.0 - s0)).clamp(MIN_SIGMA_RESPONSE, 1.5);
-            }
-            last = Some(now);
+            let Some((simulated, gap)) = simulated_law(engine, &m, data, settings)? else { break };
             if crate::diagnose::tracing() {
                 let law = |l: &FrictionLaw| format!("a {:.4} b {:.4} d {:.4} sigma {:.4}", l.a, l.b, l.d, l.sigma);
                 eprintln!(
-                    "law step: model sigma {:.4}; measured {}; simulated {}; response {response:.3}",
+                    "law step: model sigma {:.4}; measured {}; simulated {}; variance gap {gap:.3e}; response {response:.3}",
                     m.friction.sigma,
                     law(&measured),
                     law(&simulated)
                 );
             }
-            step_law(&mut m, &measured, &simulated, response);
+            step_law(&mut m, &measured, &simulated, gap, response);
         }
         let scores = score(engine, &m, data, settings, scope)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
@@ -564,13 +555,56 @@ pub(crate) fn converge_law(
 /// better over the benchmark (`benches/RESULTS.md`). The records are the
 /// ones the model's score on the fitting units reads ([`fitting_records`]):
 /// simulated once for both.
+///
+/// With it, how much more the friction's residual variance is in the data
+/// than in the replicates, –²: condition by condition where any condition
+/// has slipping samples on both sides ([`crate::diagnose::law::variance_gap`]),
+/// else the pooled laws' σ² apart.
 fn simulated_law(
     engine: &Engine,
     model: &Model,
     data: &Data<'_>,
     settings: &DiagnoseSettings,
-) -> Result<Option<FrictionLaw>> {
-    Ok(fitting_records(engine, model, data, settings)?.law)
+) -> Result<Option<(FrictionLaw, f64)>> {
+    let records = fitting_records(engine, model, data, settings)?;
+    let (Some(simulated), Some(measured)) = (records.law, data.measured_law) else { return Ok(None) };
+    let gap = variance_gap(&data.measured_spreads(&records.units), &records.spreads)
+        .unwrap_or(measured.sigma.powi(2) - simulated.sigma.powi(2));
+    Ok(Some((simulated, gap)))
+}
+
+/// How far the replicates' friction residual variance moves per unit of
+/// σ_μ² (–), which a σ step divides the variance gap by: one for one with
+/// a recorded friction force; through a derived one's filter
+/// ([`crate::diagnose::derived`]) a fraction, measured once per diagnosis
+/// on `model` (the first asked for it: the initial baseline) as the gap's
+/// fall when σ_μ alone is raised by a quarter, the replicates' noise the
+/// same. Read between successive steps instead, it also carried what the
+/// law's move between them did to the residual, and came out at either
+/// bound of its clamp: a step ten times too long, or σ left a fifth short.
+fn sigma_response(engine: &Engine, model: &Model, data: &Data<'_>, settings: &DiagnoseSettings) -> Result<f64> {
+    if !data.derived.friction {
+        return Ok(1.0);
+    }
+    if let Some(&r) = data.caches.sigma_response.get() {
+        return Ok(r);
+    }
+    let mut raised = model.clone();
+    raised.friction.sigma = 1.25 * model.friction.sigma.max(1e-3);
+    let (Some((_, before)), Some((_, after))) =
+        (simulated_law(engine, model, data, settings)?, simulated_law(engine, &raised, data, settings)?)
+    else {
+        return Ok(1.0);
+    };
+    let base_variance = model.friction.sigma.powi(2);
+    let response = ((before - after) / (raised.friction.sigma.powi(2) - base_variance)).clamp(MIN_SIGMA_RESPONSE, 1.5);
+    if crate::diagnose::tracing() {
+        eprintln!(
+            "sigma response {response:.3} (gap {before:.3e} at sigma {:.4}, {after:.3e} at {:.4})",
+            model.friction.sigma, raised.friction.sigma
+        );
+    }
+    Ok(*data.caches.sigma_response.get_or_init(|| response))
 }
 
 /// `model` with its friction law moved one step towards the data from what
@@ -590,8 +624,9 @@ pub(crate) fn law_step(
 ) -> Result<Model> {
     let mut m = model.clone();
     if let Some(measured) = data.measured_law {
-        if let Some(simulated) = simulated_law(engine, model, data, settings)? {
-            step_law(&mut m, &measured, &simulated, 1.0);
+        if let Some((simulated, gap)) = simulated_law(engine, model, data, settings)? {
+            let response = sigma_response(engine, model, data, settings)?;
+            step_law(&mut m, &measured, &simulated, gap, response);
         }
         return Ok(m);
     }
@@ -622,7 +657,9 @@ pub(crate) fn law_step(
 /// `response`: how far the simulated residual variance moves per unit of
 /// σ_μ² (1 with recorded channels; a derived friction force, read through
 /// a smoothing filter, passes a fraction of the noise, [`crate::diagnose::derived`]).
-fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw, response: f64) {
+/// `variance_gap`: how much more the friction's residual variance is in
+/// the data than in the replicates, –² ([`simulated_law`]).
+fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw, variance_gap: f64, response: f64) {
     if let Some(law) = FrictionLaw::of(model).moved(measured, simulated) {
         let f = &mut model.friction;
         f.a = law.a.max(0.0);
@@ -630,7 +667,7 @@ fn step_law(model: &mut Model, measured: &FrictionLaw, simulated: &FrictionLaw, 
         f.d = law.d;
     }
     let f = &mut model.friction;
-    let variance = f.sigma.powi(2) + measured.sigma.powi(2) / response - simulated.sigma.powi(2) / response;
+    let variance = f.sigma.powi(2) + variance_gap / response;
     f.sigma = variance.max((0.1 * measured.sigma).powi(2)).sqrt().max(SIGMA_STEP_MIN_SHARE * f.sigma);
 }
 
@@ -830,19 +867,60 @@ mod tests {
             anchors_m_per_s: std::array::from_fn(|k| 0.01 * (k + 1) as f64),
             ..FrictionLaw::of(&model)
         };
+        let gap = |simulated: f64| 0.02f64.powi(2) - simulated * simulated;
         // The simulated residual far above the measured one (a trial's
         // effect adds a residual of its own): the full step would end at
         // the floor, 0.1 × 0.02; it ends at half of 0.03.
         let mut m = model.clone();
-        step_law(&mut m, &law(0.02), &law(0.1), 1.0);
+        step_law(&mut m, &law(0.02), &law(0.1), gap(0.1), 1.0);
         assert!((m.friction.sigma - 0.015).abs() < 1e-12, "sigma {}", m.friction.sigma);
         // A moderate step down and a step up are the Newton step itself:
         // σ² + measured² − simulated².
         for simulated in [0.025, 0.01] {
             let mut m = model.clone();
-            step_law(&mut m, &law(0.02), &law(simulated), 1.0);
+            step_law(&mut m, &law(0.02), &law(simulated), gap(simulated), 1.0);
             let expected = (0.03f64.powi(2) + 0.02f64.powi(2) - simulated * simulated).sqrt();
             assert!((m.friction.sigma - expected).abs() < 1e-12, "simulated {simulated}: sigma {}", m.friction.sigma);
         }
+    }
+}
+
+#[cfg(test)]
+mod derived_tests {
+    use super::*;
+    use crate::diagnose::derived::with_derived_channels;
+    use crate::diagnose::score::Scope;
+
+    /// Through a derived friction force's filter the replicates' residual
+    /// variance moves by a fraction of σ_μ² (measured once, with the law
+    /// held), and σ_μ calibrated with that fraction comes back from half
+    /// as much again as the truth's in the baseline's three steps.
+    #[test]
+    fn sigma_through_a_derived_force_is_stepped_by_the_filters_measured_response() {
+        let dir = std::env::temp_dir().join(format!("stickslip-sigma-response-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let truth = Model::paper_rig(&[]).expect("the paper rig");
+        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
+        let shape =
+            crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 10.0, sample_rate_hz: 600.0 };
+        crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 5).expect("set");
+        let mut set = crate::measure::read_measurement_set(&dir).expect("read");
+        let _ = std::fs::remove_dir_all(&dir);
+        for run in &mut set.runs {
+            (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
+        }
+        let (derived_set, derived) = with_derived_channels(&set);
+        let set = derived_set.expect("derived");
+        let data = Data::new(&set, derived).expect("data");
+        let engine = Engine::cpu("test");
+        let settings = DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let mut start = truth.clone();
+        start.friction.sigma *= 1.5;
+        let response = sigma_response(&engine, &start, &data, &settings).expect("response");
+        assert!(response > MIN_SIGMA_RESPONSE && response < 0.8, "a fraction, not a bound: {response}");
+        let (m, _, _) =
+            calibrate_and_score(&start, &data, &settings, &engine, None, 0, Scope::Fitting).expect("calibrated");
+        let off = m.friction.sigma / truth.friction.sigma - 1.0;
+        assert!(off.abs() < 0.15, "sigma {} against the truth's {}", m.friction.sigma, truth.friction.sigma);
     }
 }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::diagnose::cache::Caches;
 use crate::diagnose::derived::DerivedChannels;
 use crate::diagnose::features::{RunFeatures, run_features_read, white_noise_sd};
-use crate::diagnose::law::{self, FrictionLaw};
+use crate::diagnose::law::{self, FrictionLaw, LawMoments, Spread};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
@@ -59,6 +59,10 @@ pub(crate) struct Data<'a> {
     /// s/m: the rate at which every view's measured law, and the law
     /// moments of every simulated record, are taken.
     pub(crate) law_c: Option<f64>,
+    /// Per unit, its records' law moments at `law_c` (empty without a law
+    /// or for summary rows): what each condition's spread about a view's
+    /// law is read from ([`Data::measured_spreads`]).
+    pub(crate) unit_moments: Arc<Vec<Vec<LawMoments>>>,
     /// The measurement noise on the records' channels.
     pub(crate) sensor: SensorNoise,
     /// The channels derived from the displacement (none of the runs
@@ -507,6 +511,13 @@ impl<'a> Data<'a> {
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
         let measured_law = law::fit_friction_law(&all_runs, &reading);
+        let unit_moments = units
+            .iter()
+            .map(|u| match measured_law {
+                Some(l) => u.runs.iter().map(|&r| LawMoments::of_run(&set.runs[r], &reading, l.c)).collect(),
+                None => Vec::new(),
+            })
+            .collect();
         Ok(Data {
             set,
             units,
@@ -518,6 +529,7 @@ impl<'a> Data<'a> {
             longest_record_s,
             measured_law,
             law_c: measured_law.map(|l| l.c),
+            unit_moments: Arc::new(unit_moments),
             sensor,
             derived,
             folds,
@@ -579,6 +591,12 @@ impl<'a> Data<'a> {
     /// replicates of them ([`law::Reading`]).
     pub(crate) fn reading(&self) -> law::Reading<'a> {
         reading_of(self.set, &self.sensor, self.derived)
+    }
+
+    /// Per unit of `units`, its records' spread about this view's measured
+    /// law ([`Spread::about`]; `None` without a law).
+    pub(crate) fn measured_spreads(&self, units: &[usize]) -> Vec<Option<Spread>> {
+        units.iter().map(|&u| self.measured_law.and_then(|l| Spread::about(&self.unit_moments[u], &l))).collect()
     }
 
     pub(crate) fn has_heldout(&self) -> bool {

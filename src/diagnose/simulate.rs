@@ -12,7 +12,7 @@ use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
 use crate::diagnose::derived;
 use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
-use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES};
+use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES, Spread};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::circular_mean_var;
@@ -126,6 +126,9 @@ pub(crate) struct FittingRecords {
     /// measured law or with fewer than 50 slipping samples). It carries no
     /// anchors: a simulated law is read through `mu` and `sigma` alone.
     pub(crate) law: Option<FrictionLaw>,
+    /// Per unit of `units`, its replicates' spread about `law`
+    /// ([`Spread::about`]; `None` without a law or with too few samples).
+    pub(crate) spreads: Vec<Option<Spread>>,
 }
 
 /// The readings of `model`'s replicates `0..settings.replicates` of the
@@ -227,13 +230,15 @@ pub(crate) fn fitting_records(
         (0..data.units.len()).filter(|&i| data.units[i].summary.is_none() && !data.units[i].heldout).collect();
     let readings = readings_of(engine, model, data, settings, &units)?;
     let features = readings.iter().map(|r| r.iter().map(|x| x.features.clone()).collect()).collect();
+    let by_unit: Vec<Vec<LawMoments>> = readings.iter().map(|r| r.iter().filter_map(|x| x.moments).collect()).collect();
     let law = data.measured_law.and_then(|measured| {
-        let records: Vec<LawMoments> = readings.iter().flatten().filter_map(|x| x.moments).collect();
+        let records: Vec<LawMoments> = by_unit.iter().flatten().copied().collect();
         // As few slipping samples as the measured law is refused for.
         let count: usize = records.iter().map(LawMoments::count).sum();
         (count >= MIN_SLIP_SAMPLES).then(|| LawMoments::law_of_records(&records, measured.c, [0.0; 10])).flatten()
     });
-    Ok(FittingRecords { units, features, law })
+    let spreads = by_unit.iter().map(|records| law.and_then(|l| Spread::about(records, &l))).collect();
+    Ok(FittingRecords { units, features, law, spreads })
 }
 
 /// One realisation's statistics over its measured periods.

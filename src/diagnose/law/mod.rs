@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 mod moments;
 
-pub(crate) use moments::LawMoments;
+pub(crate) use moments::{LawMoments, Spread};
 
 use crate::diagnose::features::MotionReading;
 use crate::engine::Model;
@@ -305,6 +305,33 @@ pub(crate) fn fit_friction_law_at(runs: &[&Run], reading: &Reading<'_>, c: f64) 
     SlipSamples::of(runs, reading)?.fit_at(c).filter(|l| [l.a, l.b, l.d, l.sigma].iter().all(|t| t.is_finite()))
 }
 
+/// How much more the friction's residual variance is in the data than in
+/// a model's replicates, –²: condition by condition (each unit's records
+/// about their own side's law, [`Spread::about`]), the differences averaged
+/// with each weighted by its precision, 1 / (v² (1/n_measured + 1/n_simulated))
+/// (a variance v read from n samples is known to about v √(2/n)). Pooled
+/// over the conditions instead, a model that slides where the data's block
+/// is held (a law whose friction at rest is too low) reads thousands of
+/// replicate samples at a load where the data give a hundred, and the
+/// replicates' pool is weighted by conditions the data hardly have: σ_μ is
+/// then stepped by a difference of mixtures, not of noise. A condition's
+/// sensors weigh in through v: where they put most of μ's spread (a force
+/// derived from the displacement at a light load) its difference is known
+/// least. `None` where no condition has a spread on both sides.
+pub(crate) fn variance_gap(measured: &[Option<Spread>], simulated: &[Option<Spread>]) -> Option<f64> {
+    let (mut sum, mut weights) = (0.0, 0.0);
+    for (m, s) in measured.iter().zip(simulated) {
+        let (Some(m), Some(s)) = (m, s) else { continue };
+        let v = 0.5 * (m.variance + s.variance);
+        let weight = 1.0 / (v * v * (1.0 / m.samples as f64 + 1.0 / s.samples as f64));
+        if weight.is_finite() && weight > 0.0 {
+            sum += weight * (m.variance - s.variance);
+            weights += weight;
+        }
+    }
+    (weights > 0.0).then(|| sum / weights)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -325,6 +352,49 @@ mod tests {
                 std::array::from_fn(|k| sorted[((0.05 + 0.1 * k as f64) * (n - 1) as f64) as usize]);
             assert_eq!(speed_deciles(&speed), expected, "n = {n}");
         }
+    }
+
+    /// The σ_μ step compares like with like. The data's block slides at a
+    /// light load (σ 0.05 about the law) and is nearly held at a heavy one
+    /// (σ 0.03, a few hundred samples); a model's replicates have the same
+    /// spread at each load but slide a great deal at the heavy one. Pooled,
+    /// the replicates read far less spread than the data and σ_μ would be
+    /// stepped up; condition by condition the gap is nil. A real gap (the
+    /// data 0.01² more at every load) comes back whatever the mixture.
+    #[test]
+    fn the_variance_gap_compares_each_condition_with_its_own_replicates() {
+        let law = |runs: &[&Run]| fit_friction_law(runs, &Reading::default()).unwrap();
+        let spread = |runs: &[&Run], l: &FrictionLaw| {
+            let moments: Vec<LawMoments> =
+                runs.iter().map(|r| LawMoments::of_run(r, &Reading::default(), l.c)).collect();
+            Spread::about(&moments, l)
+        };
+        // Light load: full swings; heavy load: a crawl, 1 sample in 40 kept.
+        let crawl = |sigma: f64, seed: u64| {
+            let mut run = record_at(0.3, 0.1, 20.0, 0.0, sigma, seed, 0.4);
+            let v = run.v_m_per_s.as_mut().unwrap();
+            v.iter_mut().enumerate().filter(|(i, _)| i % 40 != 0).for_each(|(_, x)| *x = 0.0);
+            run
+        };
+        for extra in [0.0, 0.01f64] {
+            let grow = |s: f64| (s * s + extra * extra).sqrt();
+            let (light, heavy) = (record_at(0.3, 0.1, 20.0, 0.0, grow(0.05), 1, 0.4), crawl(grow(0.03), 2));
+            let data = law(&[&light, &heavy]);
+            let measured = [spread(&[&light], &data), spread(&[&heavy], &data)];
+            let (light_sim, heavy_sim) =
+                (record_at(0.3, 0.1, 20.0, 0.0, 0.05, 3, 0.4), record_at(0.3, 0.1, 20.0, 0.0, 0.03, 4, 0.4));
+            let replicates = law(&[&light_sim, &heavy_sim]);
+            let simulated = [spread(&[&light_sim], &replicates), spread(&[&heavy_sim], &replicates)];
+            let gap = variance_gap(&measured, &simulated).unwrap();
+            let pooled = data.sigma.powi(2) - replicates.sigma.powi(2);
+            let truth = extra * extra;
+            assert!((gap - truth).abs() < 0.1 * 0.03f64.powi(2), "extra {extra}: gap {gap:.3e}, pooled {pooled:.3e}");
+            // The premise: pooled, the mixture alone reads as a gap.
+            assert!(pooled - truth > 0.5 * 0.03f64.powi(2), "extra {extra}: pooled {pooled:.3e}");
+        }
+        // No condition on both sides: no gap.
+        let one = Some(Spread { variance: 1e-3, samples: 100 });
+        assert_eq!(variance_gap(&[one, None], &[None, one]), None);
     }
 
     /// A record sliding back and forth at 1 Hz with friction from a known

@@ -216,6 +216,33 @@ impl LawMoments {
     }
 }
 
+/// How far one condition's records spread about a law: the residual
+/// variance of μ within records (each about its own mean level) around the
+/// law's curve, and the slipping samples it was read from. The σ_μ step of
+/// the indirect inference compares it condition by condition
+/// ([`super::variance_gap`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Spread {
+    /// –²
+    pub(crate) variance: f64,
+    pub(crate) samples: usize,
+}
+
+impl Spread {
+    /// The spread of the records whose moments are `records` about `law`'s
+    /// curve (its `b` and `d`; the moments taken at its `c`); `None` with
+    /// fewer than [`super::MIN_SLIP_SAMPLES`] slipping samples.
+    pub(crate) fn about(records: &[LawMoments], law: &FrictionLaw) -> Option<Spread> {
+        let (mut rss, mut dof, mut samples) = (0.0, 0usize, 0usize);
+        for r in records.iter().filter(|r| r.count > 1) {
+            rss += r.products.residual_sum_of_squares(law.b, law.d);
+            dof += r.count - 1;
+            samples += r.count;
+        }
+        (samples >= super::MIN_SLIP_SAMPLES).then(|| Spread { variance: rss / dof as f64, samples })
+    }
+}
+
 /// The least share of the records' residual variance that is taken to be
 /// the friction's own when records are weighted
 /// ([`LawMoments::law_of_records`]): where the sensors' estimated share
