@@ -897,18 +897,8 @@ mod derived_tests {
     /// as much again as the truth's in the baseline's three steps.
     #[test]
     fn sigma_through_a_derived_force_is_stepped_by_the_filters_measured_response() {
-        let dir = std::env::temp_dir().join(format!("stickslip-sigma-response-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
         let truth = Model::paper_rig(&[]).expect("the paper rig");
-        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
-        let shape =
-            crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 10.0, sample_rate_hz: 600.0 };
-        crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 5).expect("set");
-        let mut set = crate::measure::read_measurement_set(&dir).expect("read");
-        let _ = std::fs::remove_dir_all(&dir);
-        for run in &mut set.runs {
-            (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
-        }
+        let set = crate::diagnose::synthetic::displacement_only_set(&truth, 5);
         let (derived_set, derived) = with_derived_channels(&set);
         let set = derived_set.expect("derived");
         let data = Data::new(&set, derived).expect("data");

@@ -416,17 +416,9 @@ mod derived_tests {
     /// origin too (the base's phase read from each record).
     #[test]
     fn a_law_read_from_derived_channels_is_the_replicates_law() {
-        let dir = std::env::temp_dir().join(format!("stickslip-derived-law-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
         let truth = Model::paper_rig(&[]).expect("the paper rig");
-        let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
-        let shape =
-            crate::diagnose::synthetic::SetShape { runs_per_condition: 2, duration_s: 10.0, sample_rate_hz: 600.0 };
-        crate::diagnose::synthetic::write_set(&dir, &truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, 3).expect("set");
-        let mut set = crate::measure::read_measurement_set(&dir).expect("read");
-        let _ = std::fs::remove_dir_all(&dir);
-        for run in &mut set.runs {
-            (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
+        let set = crate::diagnose::synthetic::displacement_only_set(&truth, 3);
+        for run in &set.runs {
             // The base's phase read from a record in the model's frame is
             // about 0.
             let phase = crate::diagnose::derived::base_phase_of(run, &set.rig);
