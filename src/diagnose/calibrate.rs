@@ -581,7 +581,7 @@ fn simulated_law(
 /// fall when σ_μ alone is raised by a quarter, the replicates' noise the
 /// same. Read between successive steps instead, it also carried what the
 /// law's move between them did to the residual, and came out at either
-/// bound of its clamp: a step ten times too long, or σ left a fifth short.
+/// bound of its clamp: a step ten times too long, or σ left short.
 fn sigma_response(engine: &Engine, model: &Model, data: &Data<'_>, settings: &DiagnoseSettings) -> Result<f64> {
     if !data.derived.friction {
         return Ok(1.0);
