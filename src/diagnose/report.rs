@@ -551,6 +551,9 @@ pub fn parameter_meaning(name: &str) -> &'static str {
         "adhesion_n" => "N, the adhesion force added to μN (F = μN + A)",
         "bend" => "–, how the slope of friction against load bends (× (1 + bend (N0 − Nref)/Nref))",
         "phase_shift_rad" => "rad, a common phase turn of the harmonics (records without an absolute phase)",
+        "arc_added_per_n0" => "–, added to the arc term β of a load that follows the block (share of N0 per U0²)",
+        "share_of_n0" => "–, the first harmonic's amplitude as a share of N0",
+        "phase_rad" => "rad, the first harmonic's phase against the base's motion",
         "slow_share" => "–, the share (0–1) of the noise variance in its slow part",
         _ => "",
     }

@@ -286,11 +286,23 @@ pub fn benchmark_plan(nulls: u32, forms: &[u32], levels: &[u32], pairs: u32, pha
 /// displacement-only records the derived-channel tests read.
 #[cfg(test)]
 pub(crate) fn displacement_only_set(truth: &Model, seed: u64) -> crate::measure::MeasurementSet {
-    let dir = std::env::temp_dir().join(format!("stickslip-x-only-{}-{seed}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
     let at = |f: f64, n: f64| Condition { excitation_frequency_hz: f, normal_force_n: n };
     let shape = SetShape { runs_per_condition: 2, duration_s: 10.0, sample_rate_hz: 600.0 };
-    write_set(&dir, truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, seed).expect("set");
+    displacement_only_set_at(truth, &[at(6.0, 10.0), at(7.0, 14.0)], shape, seed)
+}
+
+/// A set of `truth`'s records at `conditions` in `shape` (noise from
+/// `seed`) with only `t` and `x` kept.
+#[cfg(test)]
+pub(crate) fn displacement_only_set_at(
+    truth: &Model,
+    conditions: &[Condition],
+    shape: SetShape,
+    seed: u64,
+) -> crate::measure::MeasurementSet {
+    let dir = std::env::temp_dir().join(format!("stickslip-x-only-{}-{seed}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    write_set(&dir, truth, conditions, shape, seed).expect("set");
     let mut set = crate::measure::read_measurement_set(&dir).expect("read");
     let _ = std::fs::remove_dir_all(&dir);
     for run in &mut set.runs {

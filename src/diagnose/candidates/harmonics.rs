@@ -1,4 +1,4 @@
-//! Normal-force harmonics: Fourier forms started at the measured N's harmonics, and a load that follows the block's position started at the regression of N on x.
+//! Normal-force harmonics: Fourier forms started at the measured N's harmonics, and a load that follows the block's position started at the regression of N (else of the friction derived from the motion) on x; where no record measures N, the first harmonic started at a reference size.
 
 use super::*;
 
@@ -97,34 +97,125 @@ fn position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
     (a.is_finite() && b.is_finite()).then_some((a, b))
 }
 
+/// The `position` form's α and β (–, shares of N0 per U0 and per U0² of
+/// displacement) that the friction derived from the motion suggests where
+/// no record measures N: that friction is μ(v) N/N0 times the nominal load,
+/// so a load N0 (1 + α r + β r²) (r = x/U0) multiplies the law by the same
+/// polynomial. Every fitting record's slipping samples' μ is fitted at once
+/// by least squares to the law's own terms at the current model's Stribeck
+/// rate c (1, 1/(1 + c|v|), v²), a memory's (r sgn v: a friction that
+/// depends on the slip since the last reversal), and r and r²; α and β are
+/// the last two coefficients over the samples' mean μ. One fit for every
+/// record, as the baseline has one law for them all: on one harmonic orbit
+/// r² and v² coincide, and only orbits of different sizes (frequencies
+/// through the resonance) set the load's x² apart from the law's v². α,
+/// odd in x where the law is even and a memory follows the motion's
+/// direction, is read clean; where the orbits are alike β is not, which is
+/// why the search also moves it on its own.
+fn derived_position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
+    let data = ctx.data;
+    let reading = data.reading();
+    let c = ctx.model.friction.c;
+    // Every fitting record's slipping samples: (v (m/s), r, μ).
+    let mut samples: Vec<(f64, f64, f64)> = Vec::new();
+    for u in data.units.iter().filter(|u| !u.heldout) {
+        for &k in &u.runs {
+            let run = &data.set.runs[k];
+            let (Some(v), Some(f), u0) = (&run.v_m_per_s, &run.friction_force, run.excitation_amplitude_m) else {
+                continue;
+            };
+            if u0 <= 0.0 || run.normal_force_n <= 0.0 {
+                continue;
+            }
+            let slipping = reading.motion(run).slipping(v);
+            samples.extend(
+                (0..v.len().min(f.len()).min(run.x_m.len()))
+                    .filter(|&i| slipping[i] && f[i] * v[i] < 0.0)
+                    .map(|i| (v[i], run.x_m[i] / u0, f[i].abs() / run.normal_force_n)),
+            );
+        }
+    }
+    if samples.len() < crate::diagnose::law::MIN_SLIP_SAMPLES {
+        return None;
+    }
+    let fill = |i: usize, row: &mut [f64]| {
+        let (v, r, _) = samples[i];
+        row.copy_from_slice(&[1.0, 1.0 / (1.0 + c * v.abs()), v * v, r * v.signum(), r, r * r]);
+    };
+    let (k, _) = least_squares(samples.len(), 6, fill, |i| samples[i].2)?;
+    let mu = mean(&samples.iter().map(|s| s.2).collect::<Vec<_>>());
+    let (a, b) = (k[4] / mu, k[5] / mu);
+    if crate::diagnose::tracing() {
+        eprintln!("normal_force_harmonics: the derived friction's position estimate alpha {a:.5} beta {b:.5}");
+    }
+    (mu > 0.0 && a.is_finite() && b.is_finite()).then_some((a, b))
+}
+
+/// The first Fourier harmonic searched where no record measures N: its
+/// share of N0 started at the size the power analysis calls the smallest
+/// of interest (2%, [`crate::diagnose::search::power`]), its phase stepped
+/// round the circle from the base's.
+fn unmeasured_fourier(effect: Effect) -> Variant {
+    Variant {
+        effect,
+        form: SearchedForm::FourierShareOfN0,
+        params: vec![
+            Param::log("share_of_n0", 0.02, 2.0, 1e-3, 0.3),
+            Param::linear("phase_rad", 0.0, std::f64::consts::FRAC_PI_2, -3.2, 3.2),
+        ],
+        apply: Box::new(move |m, p| {
+            let mut m = m.clone();
+            m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
+                form: HarmonicForm::Fourier,
+                amplitudes_n: [0.0; 4],
+                amplitudes_per_n0: [p[0], 0.0, 0.0, 0.0],
+                phases_rad: [p[1], 0.0, 0.0, 0.0],
+                shape: 2.0,
+            });
+            m
+        }),
+    }
+}
+
+/// The load that follows the block's position, its α and β scaled
+/// together from a start; with `arc_searched`, β also moved on its own
+/// (where the start's β is confounded with the law, see
+/// [`derived_position_estimate`]).
+fn position_variant(effect: Effect, (alpha, beta): (f64, f64), arc_searched: bool) -> Variant {
+    let mut params = vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)];
+    if arc_searched {
+        params.push(Param::linear("arc_added_per_n0", 0.0, 0.005, -0.1, 0.1));
+    }
+    Variant {
+        effect,
+        form: SearchedForm::Position,
+        params,
+        apply: Box::new(move |m, p| {
+            let mut m = m.clone();
+            let added = p.get(1).copied().unwrap_or(0.0);
+            m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
+                form: HarmonicForm::Position,
+                amplitudes_n: [0.0; 4],
+                amplitudes_per_n0: [alpha * p[0], beta * p[0] + added, 0.0, 0.0],
+                phases_rad: [0.0; 4],
+                shape: 2.0,
+            });
+            m
+        }),
+    }
+}
+
 /// The forms of the normal force's harmonics searched, started where the data point.
 pub(super) fn normal_force_harmonics(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
-    let normal_force = ctx.has(Observable::NormalForceHarmonic1N);
-    if !normal_force {
-        return Vec::new();
+    // The load that follows the block's position: started at the
+    // regression of the measured N (else of the derived friction) on x/U0
+    // and its square, both terms scaled together.
+    if !ctx.has(Observable::NormalForceHarmonic1N) {
+        let position = derived_position_estimate(ctx).map(|start| position_variant(effect, start, true));
+        return position.into_iter().chain([unmeasured_fourier(effect)]).collect();
     }
-    let mut out = Vec::new();
-    if let Some((alpha, beta)) = position_estimate(ctx) {
-        // The load that follows the block's position: started at
-        // the regression of the measured N on x/U0 and its square,
-        // both terms scaled together.
-        out.push(Variant {
-            effect,
-            form: SearchedForm::Position,
-            params: vec![Param::log("scale", 1.0, 1.25, 0.2, 5.0)],
-            apply: Box::new(move |m, p| {
-                let mut m = m.clone();
-                m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
-                    form: HarmonicForm::Position,
-                    amplitudes_n: [0.0; 4],
-                    amplitudes_per_n0: [alpha * p[0], beta * p[0], 0.0, 0.0],
-                    phases_rad: [0.0; 4],
-                    shape: 2.0,
-                });
-                m
-            }),
-        });
-    }
+    let mut out: Vec<Variant> =
+        position_estimate(ctx).map(|start| position_variant(effect, start, false)).into_iter().collect();
     let estimates = harmonic_estimates(ctx);
     if estimates.is_empty() {
         return out;
@@ -179,4 +270,57 @@ pub(super) fn normal_force_harmonics(effect: Effect, ctx: &Context<'_>) -> Vec<V
         },
     ]);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::derived::with_derived_channels;
+    use crate::diagnose::synthetic::SetShape;
+    use crate::engine::{Condition, Model};
+
+    /// The position estimate read from the friction derived from the
+    /// displacement alone, with `alpha` and `beta` in the truth's load.
+    fn derived_estimate(alpha: f64, beta: f64) -> (Option<(f64, f64)>, usize) {
+        let baseline = Model::paper_rig(&[]).expect("the paper rig");
+        let mut truth = baseline.clone();
+        truth.effects.normal_force_harmonics = Some(NormalForceHarmonics {
+            form: HarmonicForm::Position,
+            amplitudes_n: [0.0; 4],
+            amplitudes_per_n0: [alpha, beta, 0.0, 0.0],
+            phases_rad: [0.0; 4],
+            shape: 2.0,
+        });
+        // A sweep through the resonance (f0 = 10.05 Hz): the orbits' sizes
+        // differ between frequencies, which sets the load's x² apart from
+        // the law's v² (on one harmonic orbit they coincide).
+        let conditions: Vec<Condition> = [6.0, 8.0, 9.0, 11.0, 12.0]
+            .map(|f| Condition { excitation_frequency_hz: f, normal_force_n: 10.0 })
+            .to_vec();
+        let shape = SetShape { runs_per_condition: 1, duration_s: 20.0, sample_rate_hz: 600.0 };
+        let set = crate::diagnose::synthetic::displacement_only_set_at(&truth, &conditions, shape, 7);
+        let (derived_set, derived) = with_derived_channels(&set);
+        let set = derived_set.expect("derived");
+        let data = Data::new(&set, derived).expect("data");
+        let ctx = Context::new(&data, &baseline, &[], 5);
+        (derived_position_estimate(&ctx), normal_force_harmonics(Effect::NormalForceHarmonics, &ctx).len())
+    }
+
+    /// Without a normal-force channel the family is still searched, its
+    /// position form started where the derived friction points: at the
+    /// truth's tilt and arc where the load follows the block, near zero
+    /// where it does not.
+    #[test]
+    fn a_load_that_follows_the_block_is_read_from_the_derived_friction() {
+        let (estimate, forms) = derived_estimate(0.04, 0.03);
+        // Within a quarter: the derived force's filter blurs the friction
+        // the start is read from, and the search scales it by quarters.
+        let (alpha, beta) = estimate.expect("an estimate");
+        assert!((alpha / 0.04 - 1.0).abs() < 0.25, "tilt {alpha} against 0.04");
+        assert!((beta / 0.03 - 1.0).abs() < 0.25, "arc {beta} against 0.03");
+        assert_eq!(forms, 2, "the position form and the first harmonic");
+        // Without the effect, both below a tenth of those.
+        let (alpha, beta) = derived_estimate(0.0, 0.0).0.expect("an estimate");
+        assert!(alpha.abs() < 0.004 && beta.abs() < 0.003, "tilt {alpha}, arc {beta} where the load is constant");
+    }
 }

@@ -6,7 +6,7 @@
 //!
 //! | effect | forms searched | started from | signature |
 //! | --- | --- | --- | --- |
-//! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin); a load that follows the block's position, N0 (1 + α x/U0 + β (x/U0)²) | the measured N's harmonics; the regression of N on x | N's harmonics and residual variance |
+//! | normal-force harmonics | Fourier, amplitudes a share of N0 or in N, phases fitted (turned by a common shift for records with a free time origin); a load that follows the block's position, N0 (1 + α x/U0 + β (x/U0)²) | the measured N's harmonics; the regression of N on x (where no record measures N: of the derived friction on x, and the first harmonic at 2% of N0, its phase searched) | N's harmonics and residual variance |
 //! | non-Gaussian friction | skew; skew and tails set apart (Fleishman's power polynomial); each with a load exponent | the signs of the residual's skew and of its tails' excess | residual quantile skewness and tail weight |
 //! | hysteresis | build-up over a displacement, friction turning over one through a reversal (Dahl), lag in time (Hess & Soom), relaxation over a slip distance (rate-and-state slip law, Ruina), contact ageing (rate-and-state ageing law, Dieterich) | the sign of the branch asymmetry; the slipping speeds | branch asymmetry, low-speed μ, residual memory |
 //! | coloured noise | AR(1) with a coloured share (Lorentzian plus white), two corners | the residual autocorrelation | residual autocorrelation, peak variance |
