@@ -26,7 +26,7 @@ mod load;
 mod memory;
 mod noise;
 
-pub(crate) use load::bent;
+pub(crate) use load::{bent, straightened};
 
 use std::collections::BTreeMap;
 

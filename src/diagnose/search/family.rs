@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 
 use crate::diagnose::DiagnoseSettings;
-use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
+use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, straightened, variants};
 use crate::diagnose::data::{Data, Folds};
 use crate::diagnose::search::cv::{UnitLosses, fold_picks, pair_losses};
 use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
@@ -69,7 +69,8 @@ impl Family {
 /// builds it (the bent load dependence from the linear one), with the
 /// values it takes, if there is one. A fold that withholds one of three
 /// loads cannot bend a line through the other two: there the bent load
-/// dependence is refitted as the straight one it bends, from its slope.
+/// dependence is refitted as the straight one it bends, from its slope
+/// ([`straightened`]).
 /// Refused instead, a family whose full-data fit happened to bend would
 /// end the search with nothing named and no reason given.
 pub(super) fn fold_variant(
@@ -82,14 +83,10 @@ pub(super) fn fold_variant(
         .into_iter()
         .find(|v| v.form == form)
         .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form));
-    if let Some(v) = built {
-        return Some((v, values.to_vec()));
+    match built {
+        Some(v) => Some((v, values.to_vec())),
+        None => straightened(effect, form, values, ctx),
     }
-    let straight = (effect == Effect::LoadDependentFriction && form == SearchedForm::Quadratic)
-        .then(|| variants(effect, ctx).into_iter().find(|v| v.form == SearchedForm::Linear))
-        .flatten()?;
-    let n = straight.params.len();
-    Some((straight, values.get(..n)?.to_vec()))
 }
 
 /// Every family's coarse fit on the full data (each form at the start the
