@@ -8,6 +8,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::diagnose::candidates::parameter_meaning;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::Score;
 use crate::diagnose::search::power::Power;
@@ -529,34 +530,6 @@ pub fn write_diagnosis_with(
     write_atomically(&out.join("report.html"), |w| w.write_all(html.as_bytes()))?;
     set.commit()?;
     Ok(report)
-}
-
-/// A fitted parameter's unit and meaning, by its name.
-pub fn parameter_meaning(name: &str) -> &'static str {
-    match name {
-        "scale" => "–, a factor on the harmonics' amplitudes (1 = as estimated from the data)",
-        "strength" => "–, the strength of the effect's shape (skew, tail weight, or the ageing law's B; 0 = off)",
-        "load_exponent" => "–, how the strength grows with load: × (N0 / reference)^exponent",
-        "length_m" => "m, the slip distance over which friction builds up or relaxes",
-        "time_constant_s" => "s, the memory time of friction",
-        "correlation_time_s" => "s, how long the friction noise stays correlated",
-        "coloured_share" => "–, the share (0–1) of the noise variance that is correlated",
-        "excess" => "–, how much the static friction coefficient exceeds the sliding one",
-        "release_length_m" => "m, the slip over which the static excess fades",
-        "dwell_time_s" => "s, how long the block must stick for the static excess to grow",
-        "strength_per_n" => "1/N, the change of the friction coefficient per newton of normal force",
-        "exponent" => "–, the power of the load dependence",
-        "rate_per_s" => "1/s, the relative change of the normal force per second",
-        "curvature_per_s2" => "1/s², the relative bend of the normal force's drift",
-        "adhesion_n" => "N, the adhesion force added to μN (F = μN + A)",
-        "bend" => "–, how the slope of friction against load bends (× (1 + bend (N0 − Nref)/Nref))",
-        "phase_shift_rad" => "rad, a common phase turn of the harmonics (records without an absolute phase)",
-        "arc_added_per_n0" => "–, added to the arc term β of a load that follows the block (share of N0 per U0²)",
-        "share_of_n0" => "–, the first harmonic's amplitude as a share of N0",
-        "phase_rad" => "rad, the first harmonic's phase against the base's motion",
-        "slow_share" => "–, the share (0–1) of the noise variance in its slow part",
-        _ => "",
-    }
 }
 
 /// A number with about four significant digits and no e-notation for

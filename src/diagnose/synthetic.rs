@@ -292,6 +292,23 @@ pub(crate) fn displacement_only_set(truth: &Model, seed: u64) -> crate::measure:
 }
 
 /// A set of `truth`'s records at `conditions` in `shape` (noise from
+/// `seed`), every channel kept.
+#[cfg(test)]
+pub(crate) fn set_at(
+    truth: &Model,
+    conditions: &[Condition],
+    shape: SetShape,
+    seed: u64,
+) -> crate::measure::MeasurementSet {
+    let dir = std::env::temp_dir().join(format!("stickslip-set-at-{}-{seed}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    write_set(&dir, truth, conditions, shape, seed).expect("set");
+    let set = crate::measure::read_measurement_set(&dir).expect("read");
+    let _ = std::fs::remove_dir_all(&dir);
+    set
+}
+
+/// A set of `truth`'s records at `conditions` in `shape` (noise from
 /// `seed`) with only `t` and `x` kept.
 #[cfg(test)]
 pub(crate) fn displacement_only_set_at(
@@ -300,11 +317,7 @@ pub(crate) fn displacement_only_set_at(
     shape: SetShape,
     seed: u64,
 ) -> crate::measure::MeasurementSet {
-    let dir = std::env::temp_dir().join(format!("stickslip-x-only-{}-{seed}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    write_set(&dir, truth, conditions, shape, seed).expect("set");
-    let mut set = crate::measure::read_measurement_set(&dir).expect("read");
-    let _ = std::fs::remove_dir_all(&dir);
+    let mut set = set_at(truth, conditions, shape, seed);
     for run in &mut set.runs {
         (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
     }

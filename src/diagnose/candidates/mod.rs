@@ -80,6 +80,37 @@ impl Param {
     }
 }
 
+/// A fitted parameter's unit and meaning, by its name.
+pub fn parameter_meaning(name: &str) -> &'static str {
+    match name {
+        "scale" => "–, a factor on the harmonics' amplitudes (1 = as estimated from the data)",
+        "strength" => "–, the strength of the effect's shape (skew, tail weight, or the ageing law's B; 0 = off)",
+        "cubic" => {
+            "–, the polynomial noise's cubic coefficient d (tails heavier than a Gaussian's above 0, lighter below)"
+        }
+        "load_exponent" => "–, how the strength grows with load: × (N0 / reference)^exponent",
+        "length_m" => "m, the slip distance over which friction builds up or relaxes",
+        "time_constant_s" => "s, the memory time of friction",
+        "correlation_time_s" => "s, how long the friction noise stays correlated",
+        "coloured_share" => "–, the share (0–1) of the noise variance that is correlated",
+        "excess" => "–, how much the static friction coefficient exceeds the sliding one",
+        "release_length_m" => "m, the slip over which the static excess fades",
+        "dwell_time_s" => "s, how long the block must stick for the static excess to grow",
+        "strength_per_n" => "1/N, the change of the friction coefficient per newton of normal force",
+        "exponent" => "–, the power of the load dependence",
+        "rate_per_s" => "1/s, the relative change of the normal force per second",
+        "curvature_per_s2" => "1/s², the relative bend of the normal force's drift",
+        "adhesion_n" => "N, the adhesion force added to μN (F = μN + A)",
+        "bend" => "–, how the slope of friction against load bends (× (1 + bend (N0 − Nref)/Nref))",
+        "phase_shift_rad" => "rad, a common phase turn of the harmonics (records without an absolute phase)",
+        "arc_added_per_n0" => "–, added to the arc term β of a load that follows the block (share of N0 per U0²)",
+        "share_of_n0" => "–, the first harmonic's amplitude as a share of N0",
+        "phase_rad" => "rad, the first harmonic's phase against the base's motion",
+        "slow_share" => "–, the share (0–1) of the noise variance in its slow part",
+        _ => "",
+    }
+}
+
 /// A form the search fits, by name: the model file's form of the effect,
 /// with the parameterisation where one form is searched in two.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -413,3 +444,55 @@ pub(crate) const NULL_HUBER: f64 = 1.3;
 
 /// The standard deviation of the Huber loss of such a z-score: about 2.
 pub(crate) const NULL_HUBER_SD: f64 = 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::DiagnoseSettings;
+    use crate::diagnose::derived::with_derived_channels;
+    use crate::diagnose::score::{Scope, score};
+    use crate::diagnose::synthetic::{SetShape, set_at};
+    use crate::engine::{Condition, Engine};
+
+    /// Every parameter a form is searched by, from records with every
+    /// channel and from records of `x` alone, is explained in the report
+    /// (its unit and meaning).
+    #[test]
+    fn every_searched_parameter_has_a_meaning_in_the_report() {
+        let model = Model::paper_rig(&[]).expect("the paper rig");
+        let conditions: Vec<Condition> = [(7.0, 8.0), (7.0, 11.0), (9.0, 14.0)]
+            .map(|(f, n)| Condition { excitation_frequency_hz: f, normal_force_n: n })
+            .to_vec();
+        let shape = SetShape { runs_per_condition: 1, duration_s: 5.0, sample_rate_hz: 600.0 };
+        let engine = Engine::cpu("test");
+        let settings = DiagnoseSettings { replicates: 4, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let mut forms = 0;
+        for displacement_only in [false, true] {
+            let mut set = set_at(&model, &conditions, shape, 13);
+            if displacement_only {
+                for run in &mut set.runs {
+                    (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
+                }
+            }
+            let (derived_set, derived) = with_derived_channels(&set);
+            let set = derived_set.unwrap_or(set);
+            let data = Data::new(&set, derived).expect("data");
+            let scores = score(&engine, &model, &data, &settings, Scope::Fitting).expect("scores");
+            let ctx = Context::new(&data, &model, &scores, settings.warmup_cycles);
+            for effect in Effect::ALL {
+                for v in variants(effect, &ctx) {
+                    forms += 1;
+                    for p in &v.params {
+                        assert!(
+                            !parameter_meaning(p.name).is_empty(),
+                            "{effect} [{}]: `{}` unexplained",
+                            v.form,
+                            p.name
+                        );
+                    }
+                }
+            }
+        }
+        assert!(forms > 30, "{forms} forms");
+    }
+}
