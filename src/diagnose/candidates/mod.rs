@@ -451,7 +451,7 @@ mod tests {
     use crate::diagnose::DiagnoseSettings;
     use crate::diagnose::derived::with_derived_channels;
     use crate::diagnose::score::{Scope, score};
-    use crate::diagnose::synthetic::{SetShape, set_at};
+    use crate::diagnose::synthetic::{SetShape, displacement_only_set_at, set_at};
     use crate::engine::{Condition, Engine};
 
     /// Every parameter a form is searched by, from records with every
@@ -468,12 +468,11 @@ mod tests {
         let settings = DiagnoseSettings { replicates: 4, warmup_cycles: 5, ..DiagnoseSettings::default() };
         let mut forms = 0;
         for displacement_only in [false, true] {
-            let mut set = set_at(&model, &conditions, shape, 13);
-            if displacement_only {
-                for run in &mut set.runs {
-                    (run.v_m_per_s, run.friction_force, run.normal_force) = (None, None, None);
-                }
-            }
+            let set = if displacement_only {
+                displacement_only_set_at(&model, &conditions, shape, 13)
+            } else {
+                set_at(&model, &conditions, shape, 13)
+            };
             let (derived_set, derived) = with_derived_channels(&set);
             let set = derived_set.unwrap_or(set);
             let data = Data::new(&set, derived).expect("data");
