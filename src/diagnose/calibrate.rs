@@ -755,14 +755,35 @@ pub(crate) fn assumed_normal_force_noise_note(data: &Data<'_>, baseline: &Model)
 }
 
 /// An error in a parameter of the model that the manifest's `rig` gave,
-/// named by the manifest and its key instead of as a model parameter.
-fn named_by_manifest(data: &Data<'_>, e: Error) -> Error {
+/// or in the friction law the baseline was calibrated to from the records,
+/// named by the measurement set instead of as a model parameter the user
+/// never wrote. Other errors pass through.
+pub(crate) fn named_by_manifest(data: &Data<'_>, e: Error) -> Error {
+    let manifest = data.set.dir.join("manifest.json");
     match e {
-        Error::InvalidParameter { key, value, message } if key.starts_with("rig.") => Error::Measurement {
-            file: data.set.dir.join("manifest.json"),
-            line: None,
-            message: format!("`{key}` = {value}: {message}"),
-        },
+        Error::InvalidParameter { key, value, message } if key.starts_with("rig.") => {
+            Error::Measurement { file: manifest, line: None, message: format!("`{key}` = {value}: {message}") }
+        }
+        Error::InvalidParameter { key, value, message } if key.starts_with("friction.") => {
+            let read = match (data.measured_law.is_some(), data.derived.friction) {
+                (true, true) => {
+                    "the friction derived from the displacement through the equation of motion with the rig's \
+                     mass, natural frequency and damping ratio"
+                }
+                (true, false) => "the recorded friction and normal forces",
+                (false, _) => "the response at the rig's mass, natural frequency and damping ratio",
+            };
+            Error::Measurement {
+                file: manifest,
+                line: None,
+                message: format!(
+                    "calibrating the baseline to these records took `{key}` to {value}, and {message}. It was \
+                     read from {read}, so the records and the manifest disagree: check `rig` (mass_kg, natural_frequency_hz, \
+                     damping_ratio) and each run's normal_force_n and excitation against the rig that made the \
+                     records"
+                ),
+            }
+        }
         other => other,
     }
 }

@@ -393,7 +393,7 @@ pub fn diagnose_set(
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));
     progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
-    let (baseline, baseline_scores, slope) = calibrate::calibrate_and_score(
+    let (baseline, mut baseline_scores, slope) = calibrate::calibrate_and_score(
         &calibrate::initial_baseline(&data)?,
         &data,
         settings,
@@ -401,8 +401,11 @@ pub fn diagnose_set(
         None,
         0,
         Scope::All,
-    )?;
-    let (baseline, mut baseline_scores) = calibrate::converge_law(baseline, baseline_scores, &data, settings, engine)?;
+    )
+    .and_then(|(baseline, scores, slope)| {
+        calibrate::converge_law(baseline, scores, &data, settings, engine).map(|(b, s)| (b, s, slope))
+    })
+    .map_err(|e| calibrate::named_by_manifest(&data, e))?;
     notes.extend(calibrate::assumed_normal_force_noise_note(&data, &baseline));
     for (note, line) in frame::check_phases(&mut data, &baseline_scores) {
         progress(line);

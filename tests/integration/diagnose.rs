@@ -634,5 +634,23 @@ fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
     let scores = std::fs::read_to_string(root.join("out-alone/scores.csv")).unwrap();
     assert!(scores.contains("friction_mu_mean") && scores.contains("stick_fraction"), "{scores}");
     assert!((a[1] - a[0]).abs() < 0.02 && (a[1] - 0.427).abs() < 0.02, "a: full {} alone {}", a[0], a[1]);
+    // The same records under a rig ten times stiffer: the friction derived
+    // through its equation of motion is far out of range, and the refusal
+    // names the manifest and what to check in it, not a model parameter
+    // the user never wrote.
+    let stiff = root.join("stiff");
+    std::fs::create_dir_all(&stiff).unwrap();
+    std::fs::copy(alone.join(name), stiff.join(name)).unwrap();
+    let manifest = std::fs::read_to_string(alone.join("manifest.json")).unwrap();
+    let mut manifest: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    manifest["rig"]["natural_frequency_hz"] = serde_json::json!(100.5);
+    std::fs::write(stiff.join("manifest.json"), manifest.to_string()).unwrap();
+    let out = root.join("out-stiff");
+    let (ok, _, err) =
+        stickslip(&["-q", "diagnose", stiff.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+    assert!(!ok, "a rig ten times stiffer than the records' was diagnosed");
+    assert!(err.contains("stiff/manifest.json") && err.contains("natural_frequency_hz"), "{err}");
+    assert!(err.contains("derived from the displacement") && err.contains("disagree"), "{err}");
+    assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
     std::fs::remove_dir_all(&root).unwrap();
 }
