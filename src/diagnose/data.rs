@@ -603,6 +603,14 @@ impl<'a> Data<'a> {
         self.units.iter().any(|u| u.heldout)
     }
 
+    /// The set's normal-force levels (nominal, N), fitting and held-out
+    /// units alike, ascending. A load dependence is what differs between
+    /// them: on a set of one load it is the baseline's law, and it is
+    /// neither searched nor tested for power there.
+    pub(crate) fn loads(&self) -> Vec<f64> {
+        levels(self.units.iter().map(|u| u.condition.normal_force_n))
+    }
+
     /// The condition a unit is simulated at under `model`: N0 such that the
     /// simulated record's mean normal force equals the measured mean (where
     /// recorded), allowing for the model's drift over warm-up and record and

@@ -234,6 +234,11 @@ pub(crate) fn straightened(
 
 /// The forms of a load-dependent friction searched, started where the data point.
 pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
+    // At one load every form is a shift of the friction level, which the
+    // calibration owns: nothing tells a load dependence apart there.
+    if ctx.data.loads().len() < 2 {
+        return Vec::new();
+    }
     let mean_n0 = ctx.mean_load();
     // The slope of the sliding friction level against N0 (1/N) from the
     // force channels; where too few samples slip for that, the slope of

@@ -494,4 +494,27 @@ mod tests {
         }
         assert!(forms > 30, "{forms} forms");
     }
+
+    /// At one load every load-dependence form is a shift of the friction
+    /// level (the adhesion form's A/N0 most plainly), which the calibration
+    /// owns: the family is searched only where the set holds two loads or
+    /// more, held-out ones included.
+    #[test]
+    fn a_load_dependence_is_searched_only_across_loads() {
+        let model = Model::paper_rig(&[]).expect("the paper rig");
+        let shape = SetShape { runs_per_condition: 2, duration_s: 5.0, sample_rate_hz: 600.0 };
+        let engine = Engine::cpu("test");
+        let settings = DiagnoseSettings { replicates: 4, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let forms_at = |loads: &[f64]| -> usize {
+            let conditions: Vec<Condition> =
+                loads.iter().map(|&n| Condition { excitation_frequency_hz: 7.0, normal_force_n: n }).collect();
+            let set = set_at(&model, &conditions, shape, 17);
+            let data = Data::new(&set, Default::default()).expect("data");
+            let scores = score(&engine, &model, &data, &settings, Scope::Fitting).expect("scores");
+            let ctx = Context::new(&data, &model, &scores, settings.warmup_cycles);
+            variants(Effect::LoadDependentFriction, &ctx).len()
+        };
+        assert_eq!(forms_at(&[14.0]), 0, "searched at one load");
+        assert!(forms_at(&[10.0, 14.0]) >= 3, "not searched across two loads");
+    }
 }

@@ -43,7 +43,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::diagnose::data::{Data, levels};
+use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::search::cv::{NullLoss, loss};
@@ -159,7 +159,7 @@ fn reference(
     settings: &DiagnoseSettings,
 ) -> Option<(Model, String)> {
     let mut m = baseline.clone();
-    let loads = levels(data.units.iter().map(|u| u.condition.normal_force_n));
+    let loads = data.loads();
     let words = match effect {
         Effect::NormalForceHarmonics => {
             m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
