@@ -101,7 +101,8 @@ fn position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
 /// displacement) that the friction derived from the motion suggests where
 /// no record measures N: that friction is μ(v) N/N0 times the nominal load,
 /// so a load N0 (1 + α r + β r²) (r = x/U0) multiplies the law by the same
-/// polynomial. Every fitting record's slipping samples' μ is fitted at once
+/// polynomial. Every fitting record's slipping samples' μ
+/// ([`crate::diagnose::law::slipping_indices`]) is fitted at once
 /// by least squares to the law's own terms at the current model's Stribeck
 /// rate c (1, 1/(1 + c|v|), v²), a memory's (r sgn v: a friction that
 /// depends on the slip since the last reversal), and r and r²; α and β are
@@ -124,14 +125,15 @@ fn derived_position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
             let (Some(v), Some(f), u0) = (&run.v_m_per_s, &run.friction_force, run.excitation_amplitude_m) else {
                 continue;
             };
-            if u0 <= 0.0 || run.normal_force_n <= 0.0 {
+            if u0 <= 0.0 {
                 continue;
             }
-            let slipping = reading.motion(run).slipping(v);
+            let n = crate::diagnose::features::load_of(run);
             samples.extend(
-                (0..v.len().min(f.len()).min(run.x_m.len()))
-                    .filter(|&i| slipping[i] && f[i] * v[i] < 0.0)
-                    .map(|i| (v[i], run.x_m[i] / u0, f[i].abs() / run.normal_force_n)),
+                crate::diagnose::law::slipping_indices(run, reading.motion(run))
+                    .into_iter()
+                    .filter(|&i| i < run.x_m.len())
+                    .map(|i| (v[i], run.x_m[i] / u0, f[i].abs() / n[i])),
             );
         }
     }

@@ -166,35 +166,43 @@ impl Reading<'_> {
     }
 }
 
-/// The samples of one run that count as slipping: speed |v| (m/s) and
-/// μ = |F|/N, where |v| is above 5% of the run's largest and above
-/// [`crate::diagnose::features::SLIP_SPEED_NOISE_SDS`] standard deviations
-/// of the velocity's white noise (m/s; the data's estimate, which the
-/// simulated records carry too, so both sides pick alike;
-/// [`MotionReading::slipping`]), the friction opposes the motion and N is
-/// at least a tenth of its median
-/// ([`crate::diagnose::features::normal_force_floor`]; the nominal load
-/// without a normal-force channel, [`crate::diagnose::features::load_of`]).
-/// Every such sample, a derived force's blurred ones too: the slowest
-/// slips, at a stick's ends, are what pin μ(0) = a + b, and read clear of
-/// the blur a few records leave the law's curve free to wander, while the
-/// indirect inference reads the replicates' blur alike. Empty without
-/// velocity and friction channels.
-fn slipping_samples(run: &Run, reading: &Reading<'_>) -> (Vec<f64>, Vec<f64>) {
-    let (mut speed, mut mu) = (Vec::new(), Vec::new());
+/// The indices of `run`'s samples that count as slipping as `motion` reads
+/// them ([`MotionReading::slipping`]): |v| above 5% of the run's largest
+/// and above [`crate::diagnose::features::SLIP_SPEED_NOISE_SDS`] standard
+/// deviations of the velocity's white noise (so at every sample within the
+/// blur's reach), the friction opposing the motion, and N at least a tenth
+/// of its median ([`crate::diagnose::features::normal_force_floor`]; the
+/// nominal load without a normal-force channel,
+/// [`crate::diagnose::features::load_of`]). Empty without velocity and
+/// friction channels. The one selection of slipping samples that the law's
+/// fit and the position estimate of a load
+/// ([`crate::diagnose::candidates`]) read μ = |F|/N at.
+pub(crate) fn slipping_indices(run: &Run, motion: MotionReading) -> Vec<usize> {
     let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
-        return (speed, mu);
+        return Vec::new();
     };
-    let n = &crate::diagnose::features::load_of(run);
-    let moving = MotionReading { v_noise_m_per_s: reading.v_noise_m_per_s, blur_samples: 0 }.slipping(v);
-    let floor = crate::diagnose::features::normal_force_floor(n);
-    for i in 0..v.len().min(f.len()).min(n.len()) {
-        if moving[i] && f[i] * v[i] < 0.0 && n[i] >= floor {
-            speed.push(v[i].abs());
-            mu.push(f[i].abs() / n[i]);
-        }
-    }
-    (speed, mu)
+    let n = crate::diagnose::features::load_of(run);
+    let moving = motion.slipping(v);
+    let floor = crate::diagnose::features::normal_force_floor(&n);
+    (0..v.len().min(f.len()).min(n.len())).filter(|&i| moving[i] && f[i] * v[i] < 0.0 && n[i] >= floor).collect()
+}
+
+/// The slipping samples of one run the law is fitted to
+/// ([`slipping_indices`]): speed |v| (m/s) and μ = |F|/N. Every such
+/// sample, a derived force's blurred ones too: the slowest slips, at a
+/// stick's ends, are what pin μ(0) = a + b, and read clear of the blur a
+/// few records leave the law's curve free to wander, while the indirect
+/// inference reads the replicates' blur alike. The velocity's noise is the
+/// data's estimate, which the simulated records carry too, so both sides
+/// pick alike.
+fn slipping_samples(run: &Run, reading: &Reading<'_>) -> (Vec<f64>, Vec<f64>) {
+    let motion = MotionReading { v_noise_m_per_s: reading.v_noise_m_per_s, blur_samples: 0 };
+    let indices = slipping_indices(run, motion);
+    let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
+        return (Vec::new(), Vec::new());
+    };
+    let n = crate::diagnose::features::load_of(run);
+    indices.iter().map(|&i| (v[i].abs(), f[i].abs() / n[i])).unzip()
 }
 
 impl SlipSamples {
