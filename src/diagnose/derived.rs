@@ -129,6 +129,16 @@ pub fn with_derived_channels(set: &MeasurementSet) -> (Option<MeasurementSet>, D
 /// its displacement (`rig`: the rig's mass, natural frequency and damping),
 /// and drops its normal force where the load is the nominal one.
 pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
+    derive_on(run, derived, rig, None);
+}
+
+/// [`derive`], with the base's `(cos Ωt, sin Ωt)` at every sample of `run`
+/// given where known (its [`crate::diagnose::features::SampleGrid`]'s: the
+/// replicate records of a unit share one grid, and this trigonometry, made
+/// for every record, was a tenth of a diagnosis of `x` alone). The same
+/// numbers bit for bit as computing them here.
+pub(crate) fn derive_on(run: &mut Run, derived: DerivedChannels, rig: &RigInfo, base: Option<&[(f64, f64)]>) {
+    let base = base.filter(|b| b.len() == run.len());
     if derived.nominal_load {
         run.normal_force = None;
     }
@@ -142,9 +152,11 @@ pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
         let u0 = run.excitation_amplitude_m;
         // The rig's side is k u + F: F is what k u leaves of it.
         let phase =
-            if derived.base_from_record { base_phase(run, &rig_side, &v, rig.stiffness_n_per_m()) } else { 0.0 };
-        let mut force: Vec<f64> =
-            (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect();
+            if derived.base_from_record { base_phase(run, &rig_side, &v, rig.stiffness_n_per_m(), base) } else { 0.0 };
+        let mut force: Vec<f64> = match base.filter(|_| phase == 0.0) {
+            Some(b) => (0..run.len()).map(|i| rig_side[i] - k * u0 * b[i].0).collect(),
+            None => (0..run.len()).map(|i| rig_side[i] - k * u0 * (drive * run.t_s[i] + phase).cos()).collect(),
+        };
         // About its record's mean: a displacement sensor's zero off by δ
         // would put k δ into every sample (0.8 N for 0.1 mm on the
         // benchmark's rigs), pushing one direction's friction up and the
@@ -174,9 +186,14 @@ pub fn derive(run: &mut Run, derived: DerivedChannels, rig: &RigInfo) {
 /// in a known frame this reads φ to within about 0.01 rad (the test
 /// below); the replicate records read theirs the same way. A record whose
 /// block never slips carries no trace of φ, and gives a phase as arbitrary
-/// as its replicates'. 0 where the fit is singular.
-fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64) -> f64 {
+/// as its replicates'. 0 where the fit is singular. `base`: (cos Ωt, sin Ωt)
+/// at every sample, where known.
+fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64, base: Option<&[(f64, f64)]>) -> f64 {
     let drive = 2.0 * std::f64::consts::PI * run.excitation_frequency_hz;
+    let sin_cos = |i: usize| match base {
+        Some(b) => (b[i].1, b[i].0),
+        None => (drive * run.t_s[i]).sin_cos(),
+    };
     let vmax = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let moving: Vec<bool> = v.iter().map(|v| v.abs() > 0.05 * vmax).collect();
     let reach = blur_samples(run);
@@ -187,7 +204,7 @@ fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64) -> f64
         4,
         |j, row| {
             let i = slipping[j];
-            let (s, c) = (drive * run.t_s[i]).sin_cos();
+            let (s, c) = sin_cos(i);
             row.copy_from_slice(&[c, s, v[i].signum(), 1.0]);
         },
         |j| rig_side[slipping[j]],
@@ -198,7 +215,7 @@ fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64) -> f64
     // v's fundamental over the same samples, as a unit phasor w.
     let (mut q0, mut q1) = (0.0, 0.0);
     for &i in &slipping {
-        let (s, c) = (drive * run.t_s[i]).sin_cos();
+        let (s, c) = sin_cos(i);
         q0 += v[i] * c;
         q1 += v[i] * s;
     }
@@ -229,7 +246,7 @@ fn base_phase(run: &Run, rig_side: &[f64], v: &[f64], rig_stiffness: f64) -> f64
 #[cfg(test)]
 pub(crate) fn base_phase_of(run: &Run, rig: &RigInfo) -> f64 {
     let (v, rig_side) = slope_and_rig_side(run, rig);
-    base_phase(run, &rig_side, &v, rig.stiffness_n_per_m())
+    base_phase(run, &rig_side, &v, rig.stiffness_n_per_m(), None)
 }
 
 /// `run`'s velocity derived from its displacement (m/s), and the rig's
@@ -525,6 +542,21 @@ mod tests {
         for run in &set.runs {
             let phase = base_phase_of(run, &set.rig);
             assert!(phase.abs() < 0.01, "{} Hz, {} N: {phase} rad", run.excitation_frequency_hz, run.normal_force_n);
+        }
+        // The base's trigonometry from the records' grid, as the replicates
+        // take it, gives the same channels bit for bit, in a known frame and
+        // with the phase read from the record.
+        let all = DerivedChannels { v: true, friction: true, nominal_load: true, base_from_record: false };
+        for derived in [all, DerivedChannels { base_from_record: true, ..all }] {
+            for run in &set.runs {
+                let grid = crate::diagnose::features::SampleGrid::of(run);
+                let (mut alone, mut on_grid) = (run.clone(), run.clone());
+                derive(&mut alone, derived, &set.rig);
+                derive_on(&mut on_grid, derived, &set.rig, Some(grid.base()));
+                let bits =
+                    |r: &Run| r.friction_force.as_ref().map(|f| f.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+                assert!(bits(&alone).is_some() && bits(&alone) == bits(&on_grid), "{derived:?}");
+            }
         }
     }
 }

@@ -87,7 +87,10 @@ pub(crate) fn replicates(
                 model.excitation.amplitude_m,
                 conditions[p].normal_force_n,
             );
-            derived::derive(&mut run, data.derived, &data.set.rig);
+            // The unit's grid, which its records are read on too, serves the
+            // base's trigonometry the friction force needs.
+            let grid = data.derived.friction.then(|| data.caches.grids.of(units[p], &run));
+            derived::derive_on(&mut run, data.derived, &data.set.rig, grid.as_deref().map(SampleGrid::base));
             run
         })
         .collect();

@@ -316,6 +316,12 @@ impl SampleGrid {
         SampleGrid { t_s: run.t_s.clone(), excitation_frequency_hz: run.excitation_frequency_hz, base, normal_force }
     }
 
+    /// The base's `(cos Ωt, sin Ωt)` at every sample, Ω the excitation's
+    /// angular frequency (rad/s) and t the grid's times (s).
+    pub(crate) fn base(&self) -> &[(f64, f64)] {
+        &self.base
+    }
+
     /// Whether `run` was sampled on this grid (bit for bit the same times and frequency).
     pub(crate) fn serves(&self, run: &Run) -> bool {
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
