@@ -361,14 +361,15 @@ fn slope_and_curvature(x: &[f64], dt: f64, half: usize) -> (Vec<f64>, Vec<f64>) 
     let half = half.min((n.saturating_sub(1)) / 2).max(1);
     let h = half as f64;
     let w = Weights::of(half);
-    let (sum_k2, sum_p2, p) = (w.sum_k2, w.sum_p2, |k: f64| w.p(k));
+    let (sum_k2, sum_p2) = (w.sum_k2, w.sum_p2);
+    // The window's weights, k and P(k), made once for every sample.
+    let ks: Vec<f64> = (0..=2 * half).map(|j| j as f64 - h).collect();
+    let ps: Vec<f64> = ks.iter().map(|&k| w.p(k)).collect();
     let fit_at = |centre: usize| -> (f64, f64) {
         let (mut s1, mut s2) = (0.0, 0.0);
-        for j in 0..=2 * half {
-            let k = j as f64 - h;
-            let xi = x[centre + j - half];
+        for ((&k, &pk), &xi) in ks.iter().zip(&ps).zip(&x[centre - half..=centre + half]) {
             s1 += k * xi;
-            s2 += p(k) * xi;
+            s2 += pk * xi;
         }
         (s1 / sum_k2, s2 / sum_p2)
     };
