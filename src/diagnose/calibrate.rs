@@ -778,9 +778,9 @@ pub(crate) fn named_by_manifest(data: &Data<'_>, e: Error) -> Error {
                 line: None,
                 message: format!(
                     "calibrating the baseline to these records took `{key}` to {value}, and {message}. It was \
-                     read from {read}, so the records and the manifest disagree: check `rig` (mass_kg, natural_frequency_hz, \
-                     damping_ratio) and each run's normal_force_n and excitation against the rig that made the \
-                     records"
+                     read from {read}, so the records and the manifest disagree: check `rig` (mass_kg, \
+                     natural_frequency_hz, damping_ratio) and each run's normal_force_n and excitation against \
+                     the rig that made the records"
                 ),
             }
         }

@@ -130,7 +130,7 @@ fn derived_position_estimate(ctx: &Context<'_>) -> Option<(f64, f64)> {
             }
             let n = crate::diagnose::features::load_of(run);
             samples.extend(
-                crate::diagnose::law::slipping_indices(run, reading.motion(run))
+                crate::diagnose::law::slipping_indices(run, &n, reading.motion(run))
                     .into_iter()
                     .filter(|&i| i < run.x_m.len())
                     .map(|i| (v[i], run.x_m[i] / u0, f[i].abs() / n[i])),

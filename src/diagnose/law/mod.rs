@@ -170,20 +170,19 @@ impl Reading<'_> {
 /// them ([`MotionReading::slipping`]): |v| above 5% of the run's largest
 /// and above [`crate::diagnose::features::SLIP_SPEED_NOISE_SDS`] standard
 /// deviations of the velocity's white noise (so at every sample within the
-/// blur's reach), the friction opposing the motion, and N at least a tenth
-/// of its median ([`crate::diagnose::features::normal_force_floor`]; the
-/// nominal load without a normal-force channel,
-/// [`crate::diagnose::features::load_of`]). Empty without velocity and
-/// friction channels. The one selection of slipping samples that the law's
-/// fit and the position estimate of a load
+/// blur's reach), the friction opposing the motion, and the normal force
+/// `n` (N, the run's [`crate::diagnose::features::load_of`]: the nominal
+/// load without a normal-force channel) at least a tenth of its median
+/// ([`crate::diagnose::features::normal_force_floor`]). Empty without
+/// velocity and friction channels. The one selection of slipping samples
+/// that the law's fit and the position estimate of a load
 /// ([`crate::diagnose::candidates`]) read μ = |F|/N at.
-pub(crate) fn slipping_indices(run: &Run, motion: MotionReading) -> Vec<usize> {
+pub(crate) fn slipping_indices(run: &Run, n: &[f64], motion: MotionReading) -> Vec<usize> {
     let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
         return Vec::new();
     };
-    let n = crate::diagnose::features::load_of(run);
     let moving = motion.slipping(v);
-    let floor = crate::diagnose::features::normal_force_floor(&n);
+    let floor = crate::diagnose::features::normal_force_floor(n);
     (0..v.len().min(f.len()).min(n.len())).filter(|&i| moving[i] && f[i] * v[i] < 0.0 && n[i] >= floor).collect()
 }
 
@@ -196,13 +195,12 @@ pub(crate) fn slipping_indices(run: &Run, motion: MotionReading) -> Vec<usize> {
 /// data's estimate, which the simulated records carry too, so both sides
 /// pick alike.
 fn slipping_samples(run: &Run, reading: &Reading<'_>) -> (Vec<f64>, Vec<f64>) {
-    let motion = MotionReading { v_noise_m_per_s: reading.v_noise_m_per_s, blur_samples: 0 };
-    let indices = slipping_indices(run, motion);
     let (Some(v), Some(f)) = (&run.v_m_per_s, &run.friction_force) else {
         return (Vec::new(), Vec::new());
     };
     let n = crate::diagnose::features::load_of(run);
-    indices.iter().map(|&i| (v[i].abs(), f[i].abs() / n[i])).unzip()
+    let motion = MotionReading { v_noise_m_per_s: reading.v_noise_m_per_s, blur_samples: 0 };
+    slipping_indices(run, &n, motion).into_iter().map(|i| (v[i].abs(), f[i].abs() / n[i])).unzip()
 }
 
 impl SlipSamples {
