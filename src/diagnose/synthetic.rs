@@ -300,7 +300,12 @@ pub(crate) fn set_at(
     shape: SetShape,
     seed: u64,
 ) -> crate::measure::MeasurementSet {
-    let dir = std::env::temp_dir().join(format!("stickslip-set-at-{}-{seed}", std::process::id()));
+    // One directory per call: tests run side by side in one process, and
+    // two that asked for the same seed would otherwise share (and remove)
+    // each other's.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("stickslip-set-at-{}-{seed}-{call}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     write_set(&dir, truth, conditions, shape, seed).expect("set");
     let set = crate::measure::read_measurement_set(&dir).expect("read");
