@@ -679,7 +679,7 @@ fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
 /// paper's rate from the data's curve, not from those terms: before, it
 /// kept them at the model's rate, a friction far above the data's at
 /// every speed the block slides at, and the null set was called stiction
-/// with hysteresis.
+/// with hysteresis (with a free time origin, hysteresis).
 #[test]
 fn a_coarsely_sampled_condition_of_x_alone_keeps_the_data_s_friction() {
     let root = scratch("x-alone-300hz");
@@ -699,20 +699,35 @@ fn a_coarsely_sampled_condition_of_x_alone_keeps_the_data_s_friction() {
     assert!(ok, "{err}");
     let alone = root.join("alone");
     x_alone(&full, &alone);
-    let out = root.join("out");
-    let (ok, _, err) =
-        stickslip(&["-q", "diagnose", alone.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
-    assert!(ok, "{err}");
-    let [a, b, c, d] = baseline_law(&out);
-    let mu = |v: f64| a + b / (1.0 + c * v) + d * v * v;
-    // The truth: a 0.427, b 0.1, c 20 s/m, d 0. Over the speeds the block
-    // slides at (up to 0.2 m/s) the law is within 0.03 of it, and so is
-    // the friction at rest.
-    for v in [0.0, 0.05, 0.1, 0.15, 0.2] {
-        let truth = 0.427 + 0.1 / (1.0 + 20.0 * v);
-        assert!((mu(v) - truth).abs() < 0.03, "mu({v}) = {} against {truth}: a {a} b {b} c {c} d {d}", mu(v));
+    // The same records declared with a free time origin: the base's phase
+    // is read from each record, and the law the same way.
+    let free = root.join("free");
+    x_alone(&full, &free);
+    let manifest = std::fs::read_to_string(free.join("manifest.json")).unwrap();
+    let mut manifest: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    manifest["time_origin"] = serde_json::json!("free");
+    std::fs::write(free.join("manifest.json"), manifest.to_string()).unwrap();
+    for set in [&alone, &free] {
+        let out = set.with_extension("out");
+        let (ok, _, err) =
+            stickslip(&["-q", "diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+        assert!(ok, "{err}");
+        let [a, b, c, d] = baseline_law(&out);
+        let mu = |v: f64| a + b / (1.0 + c * v) + d * v * v;
+        // The truth: a 0.427, b 0.1, c 20 s/m, d 0. Over the speeds the
+        // block slides at (up to 0.2 m/s) the law is within 0.03 of it, and
+        // so is the friction at rest.
+        for v in [0.0, 0.05, 0.1, 0.15, 0.2] {
+            let truth = 0.427 + 0.1 / (1.0 + 20.0 * v);
+            assert!(
+                (mu(v) - truth).abs() < 0.03,
+                "{}: mu({v}) = {} against {truth}: a {a} b {b} c {c} d {d}",
+                set.display(),
+                mu(v)
+            );
+        }
+        let (report, _) = report_in(&out);
+        assert_eq!(report["verdict"]["effect"].as_str(), Some("none"), "{}: {}", set.display(), report["verdict"]);
     }
-    let (report, _) = report_in(&out);
-    assert_eq!(report["verdict"]["effect"].as_str(), Some("none"), "{}", report["verdict"]);
     std::fs::remove_dir_all(&root).unwrap();
 }
