@@ -712,33 +712,28 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     } else if !summary_vars.is_empty() {
         m.normal_force.sigma = mean(&summary_vars).sqrt();
     }
-    // The friction law from the force channels, where recorded.
+    // The friction law from the force channels, recorded or derived. The
+    // rate that fits a recorded force best is the rig's. Through a derived
+    // force's filter it is not (a stick's onset blurred over the window
+    // reads as a drop tens of times faster), and the rate the data's and
+    // the replicates' fits read does not follow the model's closely enough
+    // to be inferred from: the model keeps the paper's rate, and `a`, `b`
+    // and `d` are inferred at it, starting from the data's curve read at
+    // that rate. Not from the terms read at the data's own rate: where that
+    // rate is slow, a and b trade off along the near-constant 1/(1 + c |v|)
+    // (a 1.40, b −1.00 at c = 1 s/m for a curve near 0.45), a law far from
+    // the data's at the paper's rate.
     if let Some(measured) = data.measured_law {
-        // Through a derived force's filter the rate the data's fit reads is
-        // not the rig's (below), and the model keeps the paper's; its a, b
-        // and d start as the data's curve read at that rate, not as the
-        // terms read at another: where the data's rate is slow, a and b
-        // trade off along the near-constant 1/(1 + c |v|) (a 1.40, b −1.00
-        // at c = 1 s/m for a curve near 0.45), which at the model's rate
-        // would be a law far from the data's.
         let law = if data.derived.friction {
             law::fit_friction_law_at(&fit_runs, &data.reading(), m.friction.c).unwrap_or(measured)
         } else {
+            m.friction.c = measured.c;
             measured
         };
         m.friction.a = law.a.max(0.0);
         m.friction.b = law.b.max(-m.friction.a);
         m.friction.d = law.d;
         m.friction.sigma = law.sigma;
-        // The rate that fits a recorded force best is the rig's. Through a
-        // derived force's filter it is not (a stick's onset blurred over the
-        // window reads as a drop tens of times faster), and the rate the
-        // data's and the replicates' fits read does not follow the model's
-        // closely enough to be inferred from: the model keeps the paper's
-        // rate, and `a`, `b` and `d` are inferred at it.
-        if !data.derived.friction {
-            m.friction.c = measured.c;
-        }
     }
     m.validate().map_err(|e| named_by_manifest(data, e))?;
     // A rig the oscillator cannot integrate at some condition (one far
