@@ -167,11 +167,23 @@ pub struct RunFeatures {
 
 /// Statistics of the largest `x` in each excitation period.
 ///
-/// Periods are the windows `[t0 + kT, t0 + (k+1)T)`, `T = 1/f`, from the
-/// record's first sample `t0`; only complete windows count. The peak is the
-/// largest sample, not interpolated (for a sinusoid sampled `r` times per
-/// period this is low by at most `1 − cos(π/r)`, relative: 6.7e-4 at 7 Hz
-/// and 600 Hz).
+/// Periods are windows one excitation period `T = 1/f` long that start
+/// where the record's own fundamental (fitted over the whole record)
+/// crosses its mean rising: each holds one peak a quarter period from its
+/// start and one trough three quarters in, and its edges fall mid-slip,
+/// away from the stops at either turning point. Only complete windows
+/// count. Where a window starts is a property of the response, not of the
+/// record's time origin: a record that starts at another phase of the base
+/// (a free time origin, or one framed by a `base_x` column) gives the same
+/// statistics as one in the model's frame, and the replicates it is
+/// compared with window alike. (Windows that start at a fixed phase of the
+/// base cut through the peaks wherever the response is nearly in phase
+/// with the base, well below resonance: a window then holds the end of one
+/// peak and the start of the next, and its largest sample is sometimes
+/// neither.) The per-period phases below are read on the same windows.
+/// The peak is the largest sample, not
+/// interpolated (for a sinusoid sampled `r` times per period this is low by
+/// at most `1 − cos(π/r)`, relative: 6.7e-4 at 7 Hz and 600 Hz).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeakFeatures {
     /// Number of peaks (complete periods).

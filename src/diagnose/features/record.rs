@@ -18,8 +18,8 @@ pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatur
         return None;
     }
     let period_s = 1.0 / f;
-    let t0 = run.t_s[0];
-    let windows = (n as f64 * dt / period_s + 1e-9).floor();
+    let start = first_rising_crossing_s(run, base, n, period_s);
+    let windows = ((run.t_s[0] + n as f64 * dt - start) / period_s + 1e-9).floor();
     if windows.is_nan() || windows < 2.0 {
         return None;
     }
@@ -27,7 +27,7 @@ pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatur
     let mut peak = vec![f64::NEG_INFINITY; windows];
     let mut fundamental = vec![FundamentalSums::default(); windows];
     for ((&t, &x), &b) in run.t_s.iter().zip(&run.x_m).zip(base).take(n) {
-        let k = ((t - t0) / period_s).floor();
+        let k = ((t - start) / period_s).floor();
         if k >= 0.0 && (k as usize) < windows && x.is_finite() {
             let k = k as usize;
             peak[k] = peak[k].max(x);
@@ -57,6 +57,25 @@ pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatur
         phase_mean_deg: if phases.is_empty() { 0.0 } else { phase_mean.to_degrees() },
         phase_var_deg2: if phases.len() < 2 { 0.0 } else { phase_var.to_degrees().to_degrees() },
     })
+}
+
+/// The time (s) at or after `run`'s first sample where its fundamental
+/// first crosses its mean rising: where its period windows start
+/// ([`PeakFeatures`]). The fundamental `x ≈ c + A cos(Ωt − φ)` is fitted
+/// over the first `n` samples against the base's `(cos Ωt, sin Ωt)`
+/// (`base`, Ω = 2π/`period_s`); it crosses rising at Ωt = φ − π/2
+/// (mod 2π). The first sample's time where the fit fails (a record that
+/// does not move).
+fn first_rising_crossing_s(run: &Run, base: &[(f64, f64)], n: usize, period_s: f64) -> f64 {
+    let t0 = run.t_s[0];
+    let mut whole = FundamentalSums::default();
+    for (&x, &b) in run.x_m.iter().zip(base).take(n).filter(|(x, _)| x.is_finite()) {
+        whole.add(b, x);
+    }
+    let Some(phase) = whole.phase_rad() else { return t0 };
+    // Ωt0 and the crossing's phase, both in turns of the excitation.
+    let (now, crossing) = (t0 / period_s, (phase - std::f64::consts::FRAC_PI_2) / std::f64::consts::TAU);
+    t0 + (crossing - now).rem_euclid(1.0) * period_s
 }
 
 /// Sums of one window for the least-squares fit `x ≈ c0 + a cos θ + b sin θ`
