@@ -180,10 +180,10 @@ pub struct RunFeatures {
 /// base cut through the peaks wherever the response is nearly in phase
 /// with the base, well below resonance: a window then holds the end of one
 /// peak and the start of the next, and its largest sample is sometimes
-/// neither.) The per-period phases below are read on the same windows.
-/// The peak is the largest sample, not
-/// interpolated (for a sinusoid sampled `r` times per period this is low by
-/// at most `1 − cos(π/r)`, relative: 6.7e-4 at 7 Hz and 600 Hz).
+/// neither.) The per-period phases below are read on the same windows. The
+/// peak is the largest sample, not interpolated (for a sinusoid sampled `r`
+/// times per period this is low by at most `1 − cos(π/r)`, relative: 6.7e-4
+/// at 7 Hz and 600 Hz).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeakFeatures {
     /// Number of peaks (complete periods).
