@@ -3,7 +3,9 @@
 
 use std::f64::consts::TAU;
 
-use stickslip::diagnose::features::{MotionReading, RunFeatures, SampleGrid, run_features, run_features_on};
+use stickslip::diagnose::features::{
+    MotionReading, RunFeatures, SampleGrid, period_peaks, run_features, run_features_on,
+};
 use stickslip::engine::{Condition, Model};
 use stickslip::measure::Run;
 
@@ -129,7 +131,12 @@ fn peak_statistics_do_not_depend_on_where_the_record_starts() {
         let period = |t: f64| ((TAU * F_HZ * t - lag) / TAU + 0.5).floor() as usize;
         let x: Vec<f64> = t.iter().map(|&t| amplitudes[period(t)] * (TAU * F_HZ * t - lag).cos()).collect();
         let (first, last) = (period(t[0]), period(*t.last().unwrap()));
-        let peaks = run_features(&run_tx(t, x)).peaks.unwrap();
+        let run = run_tx(t, x);
+        let peaks = run_features(&run).peaks.unwrap();
+        // A plot of the record's peaks reads the same periods.
+        let each = period_peaks(&run);
+        assert_eq!(each.len(), peaks.count);
+        assert!((each.iter().sum::<f64>() / each.len() as f64 - peaks.mean_m).abs() < 1e-15);
         // The complete periods between the first sample and the last.
         let seen = &amplitudes[first + 1..last];
         let mean = seen.iter().sum::<f64>() / seen.len() as f64;

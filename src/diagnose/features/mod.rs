@@ -21,6 +21,7 @@
 
 mod friction;
 mod record;
+pub use record::period_peaks;
 mod stats;
 
 pub(crate) use friction::GAUSSIAN_TAIL_RATIO;
@@ -314,16 +315,7 @@ pub struct SampleGrid {
 impl SampleGrid {
     /// The grid of `run`'s sample times and excitation frequency.
     pub fn of(run: &Run) -> SampleGrid {
-        // The base's (cos Ωt, sin Ωt) at every sample, with the record's own t.
-        let omega = std::f64::consts::TAU * run.excitation_frequency_hz;
-        let base: Vec<(f64, f64)> = run
-            .t_s
-            .iter()
-            .map(|&t| {
-                let (s, c) = (omega * t).sin_cos();
-                (c, s)
-            })
-            .collect();
+        let base = base_of(&run.t_s, run.excitation_frequency_hz);
         let normal_force = run.normal_force.as_ref().and_then(|_| record::ForceDesign::of(run, &base, run.t_s.len()));
         SampleGrid { t_s: run.t_s.clone(), excitation_frequency_hz: run.excitation_frequency_hz, base, normal_force }
     }
@@ -352,6 +344,18 @@ pub fn load_of(run: &Run) -> Cow<'_, [f64]> {
         Some(n) => Cow::Borrowed(n),
         None => Cow::Owned(vec![run.normal_force_n; run.len()]),
     }
+}
+
+/// The base's `(cos Ωt, sin Ωt)` at each of the times `t_s` (s), Ω = 2π ×
+/// `frequency_hz`: the record's own clock.
+fn base_of(t_s: &[f64], frequency_hz: f64) -> Vec<(f64, f64)> {
+    let omega = std::f64::consts::TAU * frequency_hz;
+    t_s.iter()
+        .map(|&t| {
+            let (s, c) = (omega * t).sin_cos();
+            (c, s)
+        })
+        .collect()
 }
 
 /// Computes every feature of `run`, its channels read as they are (no

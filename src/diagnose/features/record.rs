@@ -11,25 +11,12 @@ use crate::measure::{self, Run};
 
 /// Per-period peaks (see [`PeakFeatures`]).
 pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatures> {
-    let f = run.excitation_frequency_hz;
-    let n = run.t_s.len().min(run.x_m.len());
-    let dt = run.sample_interval_s();
-    if !(f.is_finite() && f > 0.0) || n < 2 || dt <= 0.0 {
-        return None;
-    }
-    let period_s = 1.0 / f;
-    let start = first_rising_crossing_s(run, base, n, period_s);
-    let windows = ((run.t_s[0] + n as f64 * dt - start) / period_s + 1e-9).floor();
-    if windows.is_nan() || windows < 2.0 {
-        return None;
-    }
-    let windows = windows as usize;
-    let mut peak = vec![f64::NEG_INFINITY; windows];
-    let mut fundamental = vec![FundamentalSums::default(); windows];
-    for ((&t, &x), &b) in run.t_s.iter().zip(&run.x_m).zip(base).take(n) {
-        let k = ((t - start) / period_s).floor();
-        if k >= 0.0 && (k as usize) < windows && x.is_finite() {
-            let k = k as usize;
+    let periods = Periods::of(run, base)?;
+    let period_s = periods.period_s;
+    let mut peak = vec![f64::NEG_INFINITY; periods.count];
+    let mut fundamental = vec![FundamentalSums::default(); periods.count];
+    for ((&t, &x), &b) in run.t_s.iter().zip(&run.x_m).zip(base).take(periods.samples) {
+        if let (Some(k), true) = (periods.of_time(t), x.is_finite()) {
             peak[k] = peak[k].max(x);
             fundamental[k].add(b, x);
         }
@@ -59,23 +46,72 @@ pub(super) fn peak_features(run: &Run, base: &[(f64, f64)]) -> Option<PeakFeatur
     })
 }
 
-/// The time (s) at or after `run`'s first sample where its fundamental
-/// first crosses its mean rising: where its period windows start
-/// ([`PeakFeatures`]). The fundamental `x ≈ c + A cos(Ωt − φ)` is fitted
-/// over the first `n` samples against the base's `(cos Ωt, sin Ωt)`
-/// (`base`, Ω = 2π/`period_s`); it crosses rising at Ωt = φ − π/2
-/// (mod 2π). The first sample's time where the fit fails (a record that
-/// does not move).
-fn first_rising_crossing_s(run: &Run, base: &[(f64, f64)], n: usize, period_s: f64) -> f64 {
-    let t0 = run.t_s[0];
-    let mut whole = FundamentalSums::default();
-    for (&x, &b) in run.x_m.iter().zip(base).take(n).filter(|(x, _)| x.is_finite()) {
-        whole.add(b, x);
+/// The largest `x` in each period of `run` ([`PeakFeatures`] reads its
+/// statistics on the same windows), in time order, m; empty where the
+/// record is too short or does not move. For a plot of the record's peaks
+/// beside the features the diagnosis reads.
+pub fn period_peaks(run: &Run) -> Vec<f64> {
+    let base = super::base_of(&run.t_s, run.excitation_frequency_hz);
+    let Some(periods) = Periods::of(run, &base) else { return Vec::new() };
+    let mut peak = vec![f64::NEG_INFINITY; periods.count];
+    for (&t, &x) in run.t_s.iter().zip(&run.x_m).take(periods.samples) {
+        if let (Some(k), true) = (periods.of_time(t), x.is_finite()) {
+            peak[k] = peak[k].max(x);
+        }
     }
-    let Some(phase) = whole.phase_rad() else { return t0 };
-    // Ωt0 and the crossing's phase, both in turns of the excitation.
-    let (now, crossing) = (t0 / period_s, (phase - std::f64::consts::FRAC_PI_2) / std::f64::consts::TAU);
-    t0 + (crossing - now).rem_euclid(1.0) * period_s
+    peak.retain(|p| p.is_finite());
+    peak
+}
+
+/// A record's periods: windows one excitation period long that start where
+/// its fundamental (fitted over the whole record against the base's
+/// `(cos Ωt, sin Ωt)`) first crosses its mean rising, at or after the first
+/// sample ([`PeakFeatures`]), and end within the record.
+struct Periods {
+    /// Where the first window starts, s.
+    start_s: f64,
+    /// The excitation period, s.
+    period_s: f64,
+    /// Complete windows (at least 2).
+    count: usize,
+    /// Samples of the record read (those with both `t` and `x`).
+    samples: usize,
+}
+
+impl Periods {
+    /// `run`'s periods, `base` the base's `(cos Ωt, sin Ωt)` at its samples;
+    /// `None` without a positive frequency and sample interval or with
+    /// fewer than two complete windows. Where the fundamental cannot be
+    /// fitted (a record that does not move) the windows start at the first
+    /// sample.
+    fn of(run: &Run, base: &[(f64, f64)]) -> Option<Periods> {
+        let f = run.excitation_frequency_hz;
+        let samples = run.t_s.len().min(run.x_m.len());
+        let dt = run.sample_interval_s();
+        if !(f.is_finite() && f > 0.0) || samples < 2 || dt <= 0.0 {
+            return None;
+        }
+        let period_s = 1.0 / f;
+        let t0 = run.t_s[0];
+        let mut whole = FundamentalSums::default();
+        for (&x, &b) in run.x_m.iter().zip(base).take(samples).filter(|(x, _)| x.is_finite()) {
+            whole.add(b, x);
+        }
+        // x ≈ c + A cos(Ωt − φ) crosses its mean rising at Ωt = φ − π/2;
+        // Ωt0 and that phase in turns of the excitation.
+        let start_s = whole.phase_rad().map_or(t0, |phase| {
+            let (now, crossing) = (t0 / period_s, (phase - std::f64::consts::FRAC_PI_2) / std::f64::consts::TAU);
+            t0 + (crossing - now).rem_euclid(1.0) * period_s
+        });
+        let count = ((t0 + samples as f64 * dt - start_s) / period_s + 1e-9).floor();
+        (count >= 2.0).then_some(Periods { start_s, period_s, count: count as usize, samples })
+    }
+
+    /// The window that time `t` (s) falls in, if any.
+    fn of_time(&self, t: f64) -> Option<usize> {
+        let k = ((t - self.start_s) / self.period_s).floor();
+        (k >= 0.0 && k < self.count as f64).then_some(k as usize)
+    }
 }
 
 /// Sums of one window for the least-squares fit `x ≈ c0 + a cos θ + b sin θ`

@@ -3,6 +3,7 @@
 //! simulated curve each is set against ([`pair`]).
 
 use super::same_load;
+use crate::diagnose::features::period_peaks;
 use crate::engine::Condition;
 use crate::measure::MeasurementSet;
 
@@ -42,29 +43,10 @@ impl MeasuredPoint {
     }
 }
 
-/// The largest displacement in each whole excitation period of a record.
-fn period_peaks(t_s: &[f64], x_m: &[f64], frequency_hz: f64) -> Vec<f64> {
-    let (Some(&t0), true) = (t_s.first(), frequency_hz > 0.0) else { return Vec::new() };
-    let mut peaks = Vec::new();
-    let mut current: Option<(i64, f64)> = None;
-    for (&t, &x) in t_s.iter().zip(x_m) {
-        let k = ((t - t0) * frequency_hz).floor() as i64;
-        match current {
-            Some((ck, m)) if ck == k => current = Some((k, m.max(x))),
-            Some((_, m)) => {
-                peaks.push(m);
-                current = Some((k, x));
-            }
-            None => current = Some((k, x)),
-        }
-    }
-    // The last period may be cut short: left out.
-    peaks
-}
-
 /// A measurement set's statistics per condition: its summary rows, and the
 /// per-period peaks of its records (which give the statistics of a
-/// condition without a summary row).
+/// condition without a summary row), read on the periods a diagnosis reads
+/// ([`period_peaks`]).
 pub fn measured_points(set: &MeasurementSet) -> Vec<MeasuredPoint> {
     let mut points: Vec<MeasuredPoint> = set
         .summary
@@ -82,7 +64,7 @@ pub fn measured_points(set: &MeasurementSet) -> Vec<MeasuredPoint> {
         })
         .collect();
     for run in &set.runs {
-        let peaks = period_peaks(&run.t_s, &run.x_m, run.excitation_frequency_hz);
+        let peaks = period_peaks(run);
         let cond =
             Condition { excitation_frequency_hz: run.excitation_frequency_hz, normal_force_n: run.normal_force_n };
         match points.iter_mut().find(|p| p.matches(&cond)) {
@@ -153,15 +135,5 @@ mod tests {
         assert_eq!(pair(&forces, &point(7.519)), Some(Pairing { curve: 1, force_n: 8.0, same_load: false }));
         assert_eq!(pair(&forces, &point(15.3)).map(|p| p.force_n), Some(16.39));
         assert_eq!(pair(&[], &point(1.0)), None);
-    }
-
-    #[test]
-    fn plot_period_peaks_of_a_sampled_sine() {
-        let f = 7.0;
-        let t: Vec<f64> = (0..6000).map(|i| f64::from(i) / 600.0).collect();
-        let x: Vec<f64> = t.iter().map(|t| 0.004 * (std::f64::consts::TAU * f * t).sin()).collect();
-        let peaks = period_peaks(&t, &x, f);
-        assert_eq!(peaks.len(), 69);
-        assert!(peaks.iter().all(|p| (p - 0.004).abs() < 0.004 * 1e-3), "{peaks:?}");
     }
 }
