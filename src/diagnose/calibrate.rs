@@ -653,7 +653,7 @@ pub(crate) fn law_step(
 /// rate c (linear least squares, so the step is continuous and cannot
 /// wander off along the directions in which a, b, c and d trade off; c
 /// itself is the model's: the measured records' fit, or for a force
-/// derived from `x` the paper's, [`initial_baseline`]).
+/// derived from `x` the one [`calibrate_baseline`] chose).
 /// `response`: how far the simulated residual variance moves per unit of
 /// σ_μ² (1 with recorded channels; a derived friction force, read through
 /// a smoothing filter, passes a fraction of the noise, [`crate::diagnose::derived`]).
@@ -685,9 +685,80 @@ const SIGMA_STEP_MIN_SHARE: f64 = 0.5;
 /// assumes: a step is then at most ten times the variance gap.
 const MIN_SIGMA_RESPONSE: f64 = 0.1;
 
-pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
+/// A calibrated model, its scores and the friction level's slope (see
+/// [`calibrate_and_score`]).
+type Calibrated = (Model, Vec<Score>, f64);
+
+/// The baseline calibrated to the data, its scores at every unit and the
+/// friction level's slope ([`calibrate_and_score`], then [`converge_law`]).
+///
+/// A friction force derived from `x` does not pin the Stribeck rate `c`
+/// (see [`initial_baseline`]), yet the rate sets the law's friction at
+/// rest, `a + b`, which the law's fit only extrapolates to: the slowest
+/// slips it reads are blurred, and a block held throughout reads none.
+/// Held at a rate far from the rig's, a law that matches the sliding
+/// friction can break away at a tenth less than the rig does, and its
+/// replicates then slide at a load where the data's block never moves
+/// (peak means hundreds of noise units apart). The data as a whole do pin
+/// it: the baseline is calibrated at each rate of
+/// [`DERIVED_RATE_GRID_S_PER_M`], then a quarter-decade either side of the
+/// best, and the rate whose calibrated baseline fits the fitting units best
+/// is kept. With a recorded force the rate is the data's, and one
+/// calibration is made.
+pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, engine: &Engine) -> Result<Calibrated> {
+    let converged = |(baseline, scores, slope): Calibrated| -> Result<Calibrated> {
+        let (baseline, scores) = converge_law(baseline, scores, data, settings, engine)?;
+        Ok((baseline, scores, slope))
+    };
+    if !(data.derived.friction && data.measured_law.is_some()) {
+        let start = initial_baseline(data, None)?;
+        return converged(calibrate_and_score(&start, data, settings, engine, None, 0, Scope::All)?);
+    }
+    // (fitting gap, rate in s/m, the baseline calibrated at it)
+    let at = |rate: f64| -> Result<(f64, f64, Calibrated)> {
+        let start = initial_baseline(data, Some(rate))?;
+        let calibrated = calibrate_and_score(&start, data, settings, engine, None, 0, Scope::Fitting)?;
+        let gap = gap_of(&calibrated.1, false);
+        if crate::diagnose::tracing() {
+            eprintln!("baseline at Stribeck rate {rate:.3} s/m: fitting gap {gap:.4}");
+        }
+        Ok((gap, rate, calibrated))
+    };
+    let better = |best: Option<(f64, f64, Calibrated)>, next: (f64, f64, Calibrated)| {
+        Some(best.filter(|b| b.0 <= next.0).unwrap_or(next))
+    };
+    let mut best = None;
+    for rate in DERIVED_RATE_GRID_S_PER_M {
+        best = better(best, at(rate)?);
+    }
+    let around = best.as_ref().map_or(DERIVED_RATE_GRID_S_PER_M[2], |b| b.1);
+    let half_step = (DERIVED_RATE_GRID_S_PER_M[1] / DERIVED_RATE_GRID_S_PER_M[0]).sqrt();
+    for rate in [around / half_step, around * half_step] {
+        best = better(best, at(rate)?);
+    }
+    converged(best.expect("the rate grid is not empty").2)
+}
+
+/// The Stribeck rates (s/m) a baseline with a friction force derived from
+/// `x` is calibrated at first ([`calibrate_baseline`]): half-decade steps
+/// through the paper's 20 s/m. With the refinement about the best, the
+/// rates reach from 1.1 to 112 s/m.
+pub(crate) const DERIVED_RATE_GRID_S_PER_M: [f64; 4] = [2.0, 6.32, 20.0, 63.2];
+
+/// How many rates [`calibrate_baseline`] calibrates a baseline at: the
+/// grid's and the two about its best.
+pub(crate) const DERIVED_RATES_TRIED: usize = DERIVED_RATE_GRID_S_PER_M.len() + 2;
+
+/// The baseline before calibration: the rig and excitation from the
+/// manifest, σ_N from the data, and the friction law read from the force
+/// channels; where the force is derived from `x`, at the Stribeck rate
+/// `rate` (s/m; `None`: the paper's).
+fn initial_baseline(data: &Data<'_>, rate: Option<f64>) -> Result<Model> {
     let set = data.set;
     let mut m = Model::default();
+    if let Some(c) = rate {
+        m.friction.c = c;
+    }
     m.rig.mass_kg = set.rig.mass_kg;
     m.rig.natural_frequency_hz = set.rig.natural_frequency_hz;
     m.rig.damping_ratio = set.rig.damping_ratio;
@@ -717,12 +788,13 @@ pub(crate) fn initial_baseline(data: &Data<'_>) -> Result<Model> {
     // force's filter it is not (a stick's onset blurred over the window
     // reads as a drop tens of times faster), and the rate the data's and
     // the replicates' fits read does not follow the model's closely enough
-    // to be inferred from: the model keeps the paper's rate, and `a`, `b`
-    // and `d` are inferred at it, starting from the data's curve read at
-    // that rate. Not from the terms read at the data's own rate: where that
-    // rate is slow, a and b trade off along the near-constant 1/(1 + c |v|)
-    // (a 1.40, b −1.00 at c = 1 s/m for a curve near 0.45), a law far from
-    // the data's at the paper's rate.
+    // to be inferred from: the model takes a given rate (the paper's, or
+    // one of [`calibrate_baseline`]'s grid), and `a`, `b` and `d` are
+    // inferred at it, starting from the data's curve read at that rate. Not
+    // from the terms read at the data's own rate: where that rate is slow,
+    // a and b trade off along the near-constant 1/(1 + c |v|) (a 1.40,
+    // b −1.00 at c = 1 s/m for a curve near 0.45), a law far from the
+    // data's at the model's rate.
     if let Some(measured) = data.measured_law {
         let law = if data.derived.friction {
             law::fit_friction_law_at(&fit_runs, &data.reading(), m.friction.c).unwrap_or(measured)

@@ -76,8 +76,8 @@ impl DerivedChannels {
             "; the friction observables read a derived force only where the filter's whole window lies within \
              one slip (nearer a stop, a reversal or a brief slip it blends the spring's force at rest into the \
              friction); the filter blurs how fast friction drops from rest, so the law's \
-             Stribeck rate c is not read from a derived force: the model keeps the paper's, and the law's other \
-             terms are inferred at it"
+             Stribeck rate c is not read from a derived force: the law's other terms are inferred at each rate \
+             of a grid, and the rate whose baseline fits the data best is kept"
         } else {
             ""
         };

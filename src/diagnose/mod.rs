@@ -50,7 +50,7 @@ use crate::error::{Error, Result};
 use crate::measure::{MeasurementSet, read_measurement_set};
 use data::{Data, Folds, condition_key};
 use observable::Observable;
-use score::{Scope, Score};
+use score::Score;
 
 pub use misfit::{Misfit, MisfitObservable};
 
@@ -392,20 +392,14 @@ pub fn diagnose_set(
     }
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));
-    progress(&format!("calibrating the baseline (folds: {})", data.folds.describe()));
-    let (baseline, mut baseline_scores, slope) = calibrate::calibrate_and_score(
-        &calibrate::initial_baseline(&data)?,
-        &data,
-        settings,
-        engine,
-        None,
-        0,
-        Scope::All,
-    )
-    .and_then(|(baseline, scores, slope)| {
-        calibrate::converge_law(baseline, scores, &data, settings, engine).map(|(b, s)| (b, s, slope))
-    })
-    .map_err(|e| calibrate::named_by_manifest(&data, e))?;
+    let rates = if data.derived.friction && data.measured_law.is_some() {
+        format!(" at {} Stribeck rates (a force derived from x does not give it)", calibrate::DERIVED_RATES_TRIED)
+    } else {
+        String::new()
+    };
+    progress(&format!("calibrating the baseline{rates} (folds: {})", data.folds.describe()));
+    let (baseline, mut baseline_scores, slope) =
+        calibrate::calibrate_baseline(&data, settings, engine).map_err(|e| calibrate::named_by_manifest(&data, e))?;
     notes.extend(calibrate::assumed_normal_force_noise_note(&data, &baseline));
     for (note, line) in frame::check_phases(&mut data, &baseline_scores) {
         progress(line);
