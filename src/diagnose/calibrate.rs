@@ -724,19 +724,18 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
         }
         Ok((gap, rate, calibrated))
     };
-    let better = |best: Option<(f64, f64, Calibrated)>, next: (f64, f64, Calibrated)| {
-        Some(best.filter(|b| b.0 <= next.0).unwrap_or(next))
+    // The index of the best fit so far (a gap that is NaN sorts last).
+    let best = |tried: &[(f64, f64, Calibrated)]| {
+        (0..tried.len()).min_by(|&i, &j| tried[i].0.total_cmp(&tried[j].0)).expect("the rate grid is not empty")
     };
-    let mut best = None;
-    for rate in DERIVED_RATE_GRID_S_PER_M {
-        best = better(best, at(rate)?);
-    }
-    let around = best.as_ref().map_or(DERIVED_RATE_GRID_S_PER_M[2], |b| b.1);
+    let mut tried = DERIVED_RATE_GRID_S_PER_M.iter().map(|&rate| at(rate)).collect::<Result<Vec<_>>>()?;
+    let around = tried[best(&tried)].1;
     let half_step = (DERIVED_RATE_GRID_S_PER_M[1] / DERIVED_RATE_GRID_S_PER_M[0]).sqrt();
     for rate in [around / half_step, around * half_step] {
-        best = better(best, at(rate)?);
+        tried.push(at(rate)?);
     }
-    converged(best.expect("the rate grid is not empty").2)
+    let kept = best(&tried);
+    converged(tried.swap_remove(kept).2)
 }
 
 /// The Stribeck rates (s/m) a baseline with a friction force derived from
