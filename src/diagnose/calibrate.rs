@@ -710,7 +710,7 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
         let (baseline, scores) = converge_law(baseline, scores, data, settings, engine)?;
         Ok((baseline, scores, slope))
     };
-    if !(data.derived.friction && data.measured_law.is_some()) {
+    if !searches_rate(data) {
         let start = initial_baseline(data, None)?;
         return converged(calibrate_and_score(&start, data, settings, engine, None, 0, Scope::All)?);
     }
@@ -736,6 +736,12 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
     }
     let kept = best(&tried);
     converged(tried.swap_remove(kept).2)
+}
+
+/// Whether [`calibrate_baseline`] searches the Stribeck rate: where the
+/// friction force is derived from `x` and gives a law.
+pub(crate) fn searches_rate(data: &Data<'_>) -> bool {
+    data.derived.friction && data.measured_law.is_some()
 }
 
 /// The Stribeck rates (s/m) a baseline with a friction force derived from

@@ -392,7 +392,7 @@ pub fn diagnose_set(
     }
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));
-    let rates = if data.derived.friction && data.measured_law.is_some() {
+    let rates = if calibrate::searches_rate(&data) {
         format!(" at {} Stribeck rates (a force derived from x does not give it)", calibrate::DERIVED_RATES_TRIED)
     } else {
         String::new()

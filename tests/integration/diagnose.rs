@@ -704,8 +704,8 @@ fn a_set_of_x_alone_is_diagnosed_on_derived_channels() {
 /// at rest; held at the paper's rate, the baseline's law broke away at
 /// 0.38 where the rig's does at 0.53, its replicates slid at 24 N where
 /// the data's block never moved, and the set was called stiction at 0.96.
-/// The baseline now takes the rate whose calibration fits the response
-/// best: its friction at rest and while sliding are the rig's, and the
+/// The baseline now takes the rate whose calibration fits the data best:
+/// its friction at rest and while sliding are the rig's, and the
 /// set is kept.
 #[test]
 fn a_law_that_falls_slowly_from_rest_is_read_from_x_alone() {
