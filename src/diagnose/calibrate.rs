@@ -14,13 +14,14 @@ use crate::diagnose::features::run_features;
 use crate::diagnose::law::{self, FrictionLaw, variance_gap};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
-use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fitting_records};
+use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fits_per_task, fitting_records};
 use crate::diagnose::{DiagnoseSettings, mean};
 use crate::engine::oscillator::Oscillator;
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
 use crate::error::{Error, Result};
 use crate::measure::Run;
+use rayon::prelude::*;
 
 /// What pins the baseline where the data have no friction channels: the
 /// response statistic the friction level is solved on (the mean peak where
@@ -703,8 +704,10 @@ type Calibrated = (Model, Vec<Score>, f64);
 /// it: the baseline is calibrated at each rate of
 /// [`DERIVED_RATE_GRID_S_PER_M`], then a quarter-decade either side of the
 /// best, and the rate whose calibrated baseline fits the fitting units best
-/// is kept. With a recorded force the rate is the data's, and one
-/// calibration is made.
+/// is kept. The rates are compared as a search compares its trials, on
+/// half the replicates ([`DiagnoseSettings::for_search`]); the kept one is
+/// then stepped on all of them. With a recorded force the rate is the
+/// data's, and one calibration is made.
 pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, engine: &Engine) -> Result<Calibrated> {
     let converged = |(baseline, scores, slope): Calibrated| -> Result<Calibrated> {
         let (baseline, scores) = converge_law(baseline, scores, data, settings, engine)?;
@@ -714,10 +717,14 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
         let start = initial_baseline(data, None)?;
         return converged(calibrate_and_score(&start, data, settings, engine, None, 0, Scope::All)?);
     }
-    // (fitting gap, rate in s/m, the baseline calibrated at it)
+    // (fitting gap, rate in s/m, the baseline calibrated at it on the
+    // search's replicates)
+    let search = settings.for_search();
+    // The filter's response to σ_μ is measured once, on every replicate.
+    sigma_response(engine, &initial_baseline(data, Some(DERIVED_RATE_GRID_S_PER_M[0]))?, data, settings)?;
     let at = |rate: f64| -> Result<(f64, f64, Calibrated)> {
         let start = initial_baseline(data, Some(rate))?;
-        let calibrated = calibrate_and_score(&start, data, settings, engine, None, 0, Scope::Fitting)?;
+        let calibrated = calibrate_and_score(&start, data, &search, engine, None, 0, Scope::Fitting)?;
         let gap = gap_of(&calibrated.1, false);
         if crate::diagnose::tracing() {
             eprintln!("baseline at Stribeck rate {rate:.3} s/m: fitting gap {gap:.4}");
@@ -728,14 +735,19 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
     let best = |tried: &[(f64, f64, Calibrated)]| {
         (0..tried.len()).min_by(|&i, &j| tried[i].0.total_cmp(&tried[j].0)).expect("the rate grid is not empty")
     };
-    let mut tried = DERIVED_RATE_GRID_S_PER_M.iter().map(|&rate| at(rate)).collect::<Result<Vec<_>>>()?;
+    // Each rate's calibration is independent of the others': side by side
+    // ([`fits_per_task`]). (Trace lines interleave.)
+    let at_each = |rates: &[f64]| -> Result<Vec<(f64, f64, Calibrated)>> {
+        rates.par_iter().with_min_len(fits_per_task(engine)).map(|&rate| at(rate)).collect()
+    };
+    let mut tried = at_each(&DERIVED_RATE_GRID_S_PER_M)?;
     let around = tried[best(&tried)].1;
     let half_step = (DERIVED_RATE_GRID_S_PER_M[1] / DERIVED_RATE_GRID_S_PER_M[0]).sqrt();
-    for rate in [around / half_step, around * half_step] {
-        tried.push(at(rate)?);
-    }
-    let kept = best(&tried);
-    converged(tried.swap_remove(kept).2)
+    tried.extend(at_each(&[around / half_step, around * half_step])?);
+    let kept = tried.swap_remove(best(&tried)).2.0;
+    // On every replicate: one more step of its law, then on while the steps
+    // lower the fitting gap.
+    converged(calibrate_and_score(&kept, data, settings, engine, None, 1, Scope::Fitting)?)
 }
 
 /// Whether [`calibrate_baseline`] searches the Stribeck rate: where the

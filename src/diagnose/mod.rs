@@ -113,6 +113,26 @@ impl DiagnoseSettings {
     }
 }
 
+impl DiagnoseSettings {
+    /// These settings as a search uses them: half the replicates per
+    /// condition (at least 4, at most all), and half the realisations of
+    /// the ensembles that score summary rows (at least 16). Trials are
+    /// compared with each other on the same noise paths, so halving the
+    /// replicates moves a search's choices little while halving its cost,
+    /// the bulk of a diagnosis. Every model the cross-validation compares is
+    /// scored on these replicates too, so no model's z-scores are measured
+    /// with a different yardstick; a named effect's model, and the
+    /// baseline at the Stribeck rate its search keeps, are then calibrated
+    /// on all of them.
+    pub(crate) fn for_search(&self) -> DiagnoseSettings {
+        DiagnoseSettings {
+            replicates: (self.replicates / 2).max(4).min(self.replicates),
+            ensemble_realisations: (self.ensemble_realisations / 2).max(16).min(self.ensemble_realisations),
+            ..*self
+        }
+    }
+}
+
 impl Default for DiagnoseSettings {
     fn default() -> Self {
         DiagnoseSettings {

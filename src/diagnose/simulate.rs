@@ -244,6 +244,20 @@ pub(crate) fn fitting_records(
     Ok(FittingRecords { units, features, law, spreads })
 }
 
+/// How many independent fits (a search round's coarse fits, full searches
+/// and refits without each fold; the baseline's Stribeck rates) one rayon
+/// task takes, for
+/// `with_min_len`: one, so all run side by side, where a trial's records
+/// are a job per frequency read where it ran (a few MB each, on the CPU
+/// reference); all of them, one after another, where a trial's records
+/// are one job (a GPU that samples them), which holds every record of the
+/// trial in host memory at once (some 90 MB for 18 runs on search
+/// replicates, nine times that for 162): side by side on every thread,
+/// that would multiply by the threads.
+pub(crate) fn fits_per_task(engine: &Engine) -> usize {
+    if engine.records_side_by_side() { 1 } else { usize::MAX }
+}
+
 /// One realisation's statistics over its measured periods.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PathStats {

@@ -31,41 +31,6 @@ pub(crate) struct Trial {
     pub(crate) carry: Model,
 }
 
-/// Replicates per condition while a form's parameters are searched: half
-/// of the diagnosis's (at least 4, at most all). Trials are compared with
-/// each other on the same noise paths, so halving the replicates moves the
-/// search's choices little while halving its cost, the bulk of a
-/// diagnosis. Every model the cross-validation compares is scored on these
-/// replicates too, so no model's z-scores are measured with a different
-/// yardstick; a named effect's model is then polished on all of them.
-pub(crate) fn search_replicates(replicates: u32) -> u32 {
-    (replicates / 2).max(4).min(replicates)
-}
-
-/// The diagnosis's settings with [`search_replicates`], and half the
-/// realisations of the ensembles that score summary rows (at least 16): the
-/// same trade of noise for speed, for summary tables.
-pub(crate) fn search_settings(settings: &DiagnoseSettings) -> DiagnoseSettings {
-    DiagnoseSettings {
-        replicates: search_replicates(settings.replicates),
-        ensemble_realisations: (settings.ensemble_realisations / 2).max(16).min(settings.ensemble_realisations),
-        ..*settings
-    }
-}
-
-/// How many of a round's independent fits (coarse fits, full searches,
-/// refits without each fold) one rayon task takes, for
-/// `with_min_len`: one, so all run side by side, where a trial's records
-/// are a job per frequency read where it ran (a few MB each, on the CPU
-/// reference); all of them, one after another, where a trial's records
-/// are one job (a GPU that samples them), which holds every record of the
-/// trial in host memory at once (some 90 MB for 18 runs on search
-/// replicates, nine times that for 162): side by side on every thread,
-/// that would multiply by the threads.
-pub(crate) fn fits_per_task(engine: &Engine) -> usize {
-    if engine.records_side_by_side() { 1 } else { usize::MAX }
-}
-
 /// A model with its scores.
 #[derive(Clone, Debug)]
 pub(crate) struct Fitted {

@@ -53,6 +53,7 @@ use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
 use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
+use crate::diagnose::simulate::fits_per_task;
 use crate::diagnose::tracing;
 use crate::diagnose::{Candidate, DiagnoseSettings, Refusal, RefusalReason, Unexplained};
 use crate::engine::{Effect, Engine, Model};
@@ -63,7 +64,7 @@ use cv::{
 };
 use family::{Family, round};
 pub(crate) use fit::Fitted;
-use fit::{fits_per_task, polish, search_settings};
+use fit::polish;
 use rayon::prelude::*;
 use refit::refit_folds;
 
@@ -294,7 +295,7 @@ pub(crate) fn select(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Selection> {
-    let search = search_settings(settings);
+    let search = settings.for_search();
     let units = held_units(&data.folds);
     progress(&format!("refitting the baseline without each fold ({} folds)", data.folds.folds.len()));
     let mut levels = FoldSet::new(data.clone(), baseline, slope, &search, engine)?;

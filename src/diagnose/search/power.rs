@@ -47,7 +47,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, score};
 use crate::diagnose::search::cv::{NullLoss, loss};
-use crate::diagnose::search::fit::fits_per_task;
+use crate::diagnose::simulate::fits_per_task;
 use crate::diagnose::{DiagnoseSettings, mean, records_window_s};
 use crate::engine::effects::{
     ColourForm, ColouredFrictionNoise, DriftForm, FrictionHysteresis, HarmonicForm, HysteresisForm,

@@ -5,12 +5,13 @@ use rayon::prelude::*;
 
 use super::FoldSet;
 use super::family::{Family, fold_variant};
-use super::fit::{Fitted, Trial, coordinate_search, evaluate, fits_per_task, law_can_stay};
+use super::fit::{Fitted, Trial, coordinate_search, evaluate, law_can_stay};
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::calibrate::converge_law;
 use crate::diagnose::candidates::Context;
 use crate::diagnose::data::Data;
 use crate::diagnose::score::gap_of;
+use crate::diagnose::simulate::fits_per_task;
 use crate::diagnose::tracing;
 use crate::engine::Engine;
 use crate::error::Result;
