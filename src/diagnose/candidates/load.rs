@@ -338,7 +338,6 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
     }
     let rate = ctx
         .excess(Observable::NormalForceDriftPerS)
-        .or_else(|| drift_rate_from_peaks(ctx))
         .or_else(|| ctx.excess(Observable::PeakTrendPerS).map(|t| -t))
         .filter(|r| r.abs() > 1e-6)
         .unwrap_or(0.002);
@@ -404,47 +403,6 @@ pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Varia
             }),
         },
     ]
-}
-
-/// The drift rate (per s) the records' peaks point to where no normal
-/// force is recorded: a drift of r per second moves ln N0 by r each
-/// second, and so a unit's relative peak trend by S r, S the current
-/// model's load sensitivity there, d ln(peak mean) / d ln N0 between the
-/// neighbouring loads of the unit's frequency (its simulated peak means).
-/// The rate is the least-squares fit of the fitting units' excess trends
-/// (measured − simulated) by S r, each weighted by its trend's noise.
-/// Where the friction is weak against the springs the peaks barely feel
-/// the load (S a few hundredths), and the trend read as a drift one for one
-/// would start the search tens of times too small. `None` where no
-/// frequency has two loads, or the peaks feel none.
-fn drift_rate_from_peaks(ctx: &Context<'_>) -> Option<f64> {
-    let fitting = |o: Observable| ctx.scores.iter().filter(move |s| !s.heldout && s.observable == o);
-    let peak_mean = |f: f64, n: f64| {
-        fitting(Observable::PeakMeanM)
-            .find(|s| s.excitation_frequency_hz == f && s.normal_force_n == n)
-            .map(|s| s.simulated)
-            .filter(|p| *p > 0.0)
-    };
-    let (mut num, mut den) = (0.0, 0.0);
-    for trend in fitting(Observable::PeakTrendPerS) {
-        let f = trend.excitation_frequency_hz;
-        let mut loads: Vec<f64> = fitting(Observable::PeakMeanM)
-            .filter(|s| s.excitation_frequency_hz == f)
-            .map(|s| s.normal_force_n)
-            .collect();
-        loads.sort_by(f64::total_cmp);
-        let Some(k) = loads.iter().position(|&n| n == trend.normal_force_n) else { continue };
-        let (lo, hi) = (loads[k.saturating_sub(1)], loads[(k + 1).min(loads.len() - 1)]);
-        let (Some(p_lo), Some(p_hi)) = (peak_mean(f, lo), peak_mean(f, hi)) else { continue };
-        if hi <= lo || lo <= 0.0 || trend.scale.is_nan() || trend.scale <= 0.0 {
-            continue;
-        }
-        let sensitivity = (p_hi / p_lo).ln() / (hi / lo).ln();
-        let w = trend.scale.powi(-2);
-        num += w * sensitivity * (trend.measured - trend.simulated);
-        den += w * sensitivity * sensitivity;
-    }
-    (den > 0.0).then(|| num / den).filter(|r| r.is_finite())
 }
 
 #[cfg(test)]
@@ -526,51 +484,5 @@ mod tests {
         let erratic: Vec<PhaseUnit> =
             tables(0.0015, linear).into_iter().filter(|u| u.excitation_frequency_hz == 11.0).collect();
         assert_eq!(phase_implied_slope(erratic, 50.0, mu_bar), None);
-    }
-
-    /// From `x` alone, the drift the peaks point to is the truth's within a
-    /// factor of 1.5 where the friction barely loads the springs (the
-    /// peaks feel a tenth of the load's change, or less), and a small
-    /// fraction of it where nothing drifts; the trend read one for one
-    /// starts tens of times too small.
-    #[test]
-    fn a_drift_is_read_from_the_peaks_through_their_load_sensitivity() {
-        use crate::diagnose::DiagnoseSettings;
-        use crate::diagnose::derived::with_derived_channels;
-        use crate::diagnose::score::{Scope, score};
-        use crate::diagnose::synthetic::{SetShape, displacement_only_set_at};
-        use crate::engine::{Condition, Engine};
-        // Light loads against the paper rig's springs (k U0 = 7.9 N): the
-        // block slides throughout.
-        let baseline = Model::paper_rig(&[]).expect("the paper rig");
-        let conditions: Vec<Condition> = [(8.0, 2.0), (8.0, 4.0), (8.0, 6.0), (12.0, 2.0), (12.0, 4.0), (12.0, 6.0)]
-            .map(|(f, n)| Condition { excitation_frequency_hz: f, normal_force_n: n })
-            .to_vec();
-        let shape = SetShape { runs_per_condition: 1, duration_s: 30.0, sample_rate_hz: 600.0 };
-        let engine = Engine::cpu("test");
-        let settings = DiagnoseSettings { replicates: 4, warmup_cycles: 20, ..DiagnoseSettings::default() };
-        let read = |rate_per_s: f64| {
-            let mut truth = baseline.clone();
-            truth.effects.normal_force_drift = Some(NormalForceDrift {
-                form: DriftForm::Linear,
-                rate_per_s,
-                curvature_per_s2: 0.0,
-                mean_over_s: None,
-            });
-            let set = displacement_only_set_at(&truth, &conditions, shape, 29);
-            let (derived_set, derived) = with_derived_channels(&set);
-            let set = derived_set.expect("derived channels");
-            let data = Data::new(&set, derived).expect("data");
-            let scores = score(&engine, &baseline, &data, &settings, Scope::Fitting).expect("scores");
-            let ctx = Context::new(&data, &baseline, &scores, settings.warmup_cycles);
-            (drift_rate_from_peaks(&ctx).expect("a rate"), -ctx.excess(Observable::PeakTrendPerS).expect("a trend"))
-        };
-        let (rate, one_for_one) = read(0.005);
-        // It reads high by a third: the peaks' response to the load bends,
-        // and the outer loads' sensitivities are chords.
-        assert!((rate / 0.005).ln().abs() < 1.5f64.ln(), "{rate} /s against 0.005 /s");
-        assert!(one_for_one.abs() < 0.005 / 5.0, "the trend one for one: {one_for_one} /s");
-        let (still, _) = read(0.0);
-        assert!(still.abs() < 0.005 / 5.0, "{still} /s without a drift");
     }
 }
