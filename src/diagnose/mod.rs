@@ -111,9 +111,7 @@ impl DiagnoseSettings {
             None => Ok(()),
         }
     }
-}
 
-impl DiagnoseSettings {
     /// These settings as a search uses them: half the replicates per
     /// condition (at least 4, at most all), and half the realisations of
     /// the ensembles that score summary rows (at least 16). Trials are

@@ -246,8 +246,7 @@ pub(crate) fn fitting_records(
 
 /// How many independent fits (a search round's coarse fits, full searches
 /// and refits without each fold; the baseline's Stribeck rates) one rayon
-/// task takes, for
-/// `with_min_len`: one, so all run side by side, where a trial's records
+/// task takes, for `with_min_len`: one, so all run side by side, where a trial's records
 /// are a job per frequency read where it ran (a few MB each, on the CPU
 /// reference); all of them, one after another, where a trial's records
 /// are one job (a GPU that samples them), which holds every record of the
