@@ -717,11 +717,11 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
         let start = initial_baseline(data, None)?;
         return converged(calibrate_and_score(&start, data, settings, engine, None, 0, Scope::All)?);
     }
-    // (fitting gap, rate in s/m, the baseline calibrated at it on the
-    // search's replicates)
     let search = settings.for_search();
     // The filter's response to σ_μ is measured once, on every replicate.
     sigma_response(engine, &initial_baseline(data, Some(DERIVED_RATE_GRID_S_PER_M[0]))?, data, settings)?;
+    // (fitting gap, rate in s/m, the baseline calibrated at it on the
+    // search's replicates)
     let at = |rate: f64| -> Result<(f64, f64, Calibrated)> {
         let start = initial_baseline(data, Some(rate))?;
         let calibrated = calibrate_and_score(&start, data, &search, engine, None, 0, Scope::Fitting)?;
