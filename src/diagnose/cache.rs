@@ -5,12 +5,13 @@
 //! simulated once per diagnosis.
 
 use std::collections::{BTreeMap, HashMap, VecDeque};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::features::{RunFeatures, SampleGrid};
-use crate::diagnose::law::LawMoments;
+use crate::diagnose::law::{LawMoments, Spread};
 use crate::engine::Model;
+use crate::engine::effects::ColouredFrictionNoise;
 use crate::measure::Run;
 
 /// Simulation caches of a diagnosis, shared by every view of its data.
@@ -26,9 +27,57 @@ pub(crate) struct Caches {
     /// Each unit's simulated records' sample grid, made once.
     pub(crate) grids: UnitGrids,
     /// How far the replicates' friction residual variance moves per unit
-    /// of σ_μ² through a derived force's filter (–), measured once
-    /// ([`crate::diagnose::calibrate`]).
-    pub(crate) sigma_response: OnceLock<f64>,
+    /// of σ_μ² through a derived force's filter (–), by the friction
+    /// noise's colour ([`crate::diagnose::calibrate`]).
+    pub(crate) sigma_response: SigmaResponses,
+}
+
+/// The filter's response to σ_μ² (–) of a noise that is wholly one part
+/// (`None`: white; [`crate::diagnose::calibrate`]), each measured once, on
+/// one model: the first asked for a response (the initial baseline), with
+/// the part put on it. A coloured noise passes a derived force's smoothing
+/// filter more than a white one of the same variance, so one response for
+/// every model steps σ_μ too far wherever part of the noise is coloured.
+#[derive(Default)]
+pub(crate) struct SigmaResponses(Mutex<ResponsesKept>);
+
+/// The model a σ_μ response is measured on, the settings it is simulated
+/// under, and per unit its data's friction spread about their law.
+pub(crate) type MeasuredOn = (Model, DiagnoseSettings, Vec<Option<Spread>>);
+
+/// The model every response is measured on, the settings it is simulated
+/// under and its data's friction spread about their law per unit, and the
+/// responses measured so far.
+#[derive(Default)]
+struct ResponsesKept {
+    on: Option<MeasuredOn>,
+    by_colour: Vec<(Option<ColouredFrictionNoise>, f64)>,
+}
+
+impl SigmaResponses {
+    /// The response kept for the noise part `colour`, if any.
+    pub(crate) fn get(&self, colour: &Option<ColouredFrictionNoise>) -> Option<f64> {
+        let kept = self.0.lock().expect("sigma responses lock");
+        kept.by_colour.iter().find(|(c, _)| c == colour).map(|&(_, r)| r)
+    }
+
+    /// What the responses are measured on ([`MeasuredOn`]): what `first`
+    /// gives, if nothing was yet.
+    pub(crate) fn measured_on(&self, first: impl FnOnce() -> MeasuredOn) -> MeasuredOn {
+        let mut kept = self.0.lock().expect("sigma responses lock");
+        kept.on.get_or_insert_with(first).clone()
+    }
+
+    /// Keeps `response` for `colour` unless one was kept already (measured
+    /// on the same model, so the same number); the one kept.
+    pub(crate) fn insert(&self, colour: &Option<ColouredFrictionNoise>, response: f64) -> f64 {
+        let mut kept = self.0.lock().expect("sigma responses lock");
+        if let Some(&(_, r)) = kept.by_colour.iter().find(|(c, _)| c == colour) {
+            return r;
+        }
+        kept.by_colour.push((colour.clone(), response));
+        response
+    }
 }
 
 /// Standard Gaussian pairs (for `x`, `v`) per sample of a simulated record,

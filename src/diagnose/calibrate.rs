@@ -11,11 +11,12 @@
 
 use crate::diagnose::data::Data;
 use crate::diagnose::features::run_features;
-use crate::diagnose::law::{self, FrictionLaw, variance_gap};
+use crate::diagnose::law::{self, FrictionLaw, Spread, variance_gap};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::score::{Scope, Score, add_heldout, gap_of, score};
 use crate::diagnose::simulate::{PathStats, ensemble_path_stats, fits_per_task, fitting_records};
 use crate::diagnose::{DiagnoseSettings, mean};
+use crate::engine::effects::{ColourForm, ColouredFrictionNoise};
 use crate::engine::oscillator::Oscillator;
 use crate::engine::reduce::{circular_mean_var, wrap_angle};
 use crate::engine::{Condition, Engine, Model};
@@ -577,35 +578,97 @@ fn simulated_law(
 /// How far the replicates' friction residual variance moves per unit of
 /// σ_μ² (–), which a σ step divides the variance gap by: one for one with
 /// a recorded friction force; through a derived one's filter
-/// ([`crate::diagnose::derived`]) a fraction, measured once per diagnosis
-/// on `model` (the first asked for it: the initial baseline) as the gap's
-/// fall when σ_μ alone is raised by a quarter, the replicates' noise the
-/// same. Read between successive steps instead, it also carried what the
-/// law's move between them did to the residual, and came out at either
-/// bound of its clamp: a step ten times too long, or σ left short.
+/// ([`crate::diagnose::derived`]) a fraction, which depends on the noise's
+/// spectrum: a white noise held for one interval is mostly smoothed away,
+/// a noise correlated over many intervals mostly passes. The noise is a
+/// sum of independent parts ([`noise_parts`]), whose variances add through
+/// the filter, so the response is their responses weighted by their shares
+/// of σ_μ². Each part's is measured once ([`part_response`]). One white
+/// response for every model stepped a half-coloured noise's σ_μ about
+/// twice too far, and its law steps swung about the σ_μ the data imply
+/// instead of reaching it.
 fn sigma_response(engine: &Engine, model: &Model, data: &Data<'_>, settings: &DiagnoseSettings) -> Result<f64> {
     if !data.derived.friction {
         return Ok(1.0);
     }
-    if let Some(&r) = data.caches.sigma_response.get() {
+    let mut response = 0.0;
+    for (share, part) in noise_parts(&model.effects.coloured_friction_noise).into_iter().filter(|p| p.0 > 0.0) {
+        response += share * part_response(engine, model, &part, data, settings)?;
+    }
+    Ok(response)
+}
+
+/// The independent parts of a friction noise of colour `colour` (`None`:
+/// white), each with its share of the noise's variance (–): `None` for a
+/// white part, else a whole-variance `ar1` at its correlation time, or a
+/// `hold`. The parts of every form are those of its simulation
+/// ([`crate::engine::effects::ColouredFrictionNoise`]).
+fn noise_parts(colour: &Option<ColouredFrictionNoise>) -> Vec<(f64, Option<ColouredFrictionNoise>)> {
+    let Some(c) = colour.as_ref().filter(|c| c.correlation_time_s > 0.0) else { return vec![(1.0, None)] };
+    let ar1 = |tau_s: f64| {
+        Some(ColouredFrictionNoise { form: ColourForm::Ar1, correlation_time_s: tau_s, coloured_share: 1.0 })
+    };
+    let tau = c.correlation_time_s;
+    let share = c.coloured_share.clamp(0.0, 1.0);
+    match c.form {
+        ColourForm::Ar1 => vec![(1.0 - share, None), (share, ar1(tau))],
+        ColourForm::Hold => vec![(1.0, colour.clone())],
+        ColourForm::TwoScale => vec![(0.5, None), (0.5, ar1(tau))],
+        ColourForm::MultiScale => [0.25, 1.0, 4.0].iter().map(|f| (1.0 / 3.0, ar1(f * tau))).collect(),
+        ColourForm::FastSlow => vec![(1.0 - share, ar1(tau)), (share, ar1(10.0 * tau))],
+    }
+}
+
+/// The response to σ_μ² (–) of a noise that is wholly `part` (`None`:
+/// white; see [`noise_parts`]), measured once per diagnosis on one model:
+/// the first asked for a response (the initial baseline), with `part` put
+/// on it and every unit fitted, as the gap's fall when σ_μ alone is raised
+/// by a quarter, the replicates' noise the same. Read between successive
+/// steps instead, it also carried what the law's move between them did to
+/// the residual, and came out at either bound of its clamp: a step ten
+/// times too long, or σ left short.
+fn part_response(
+    engine: &Engine,
+    model: &Model,
+    part: &Option<ColouredFrictionNoise>,
+    data: &Data<'_>,
+    settings: &DiagnoseSettings,
+) -> Result<f64> {
+    let responses = &data.caches.sigma_response;
+    if let Some(r) = responses.get(part) {
         return Ok(r);
     }
-    let mut raised = model.clone();
-    raised.friction.sigma = 1.25 * model.friction.sigma.max(1e-3);
-    let (Some((_, before)), Some((_, after))) =
-        (simulated_law(engine, model, data, settings)?, simulated_law(engine, &raised, data, settings)?)
-    else {
+    let every_unit = data.view(None);
+    let (on, on_settings, measured) = responses.measured_on(|| {
+        let units: Vec<usize> = (0..every_unit.units.len()).collect();
+        (model.clone(), *settings, every_unit.measured_spreads(&units))
+    });
+    let mut base = on;
+    base.effects.coloured_friction_noise = part.clone();
+    let mut raised = base.clone();
+    raised.friction.sigma = 1.25 * base.friction.sigma.max(1e-3);
+    // The gap to the spreads kept with that model: its data's, whichever
+    // view asks. Where no condition has a spread on both sides, the pooled
+    // laws' σ² apart (the data's own σ² cancels in the fall).
+    let gap = |m: &Model| -> Result<Option<f64>> {
+        let records = fitting_records(engine, m, &every_unit, &on_settings)?;
+        let at: Vec<Option<Spread>> = records.units.iter().map(|&u| measured[u]).collect();
+        Ok(records.law.map(|law| variance_gap(&at, &records.spreads).unwrap_or(-law.sigma.powi(2))))
+    };
+    let (Some(before), Some(after)) = (gap(&base)?, gap(&raised)?) else {
         return Ok(1.0);
     };
-    let base_variance = model.friction.sigma.powi(2);
+    let base_variance = base.friction.sigma.powi(2);
     let response = ((before - after) / (raised.friction.sigma.powi(2) - base_variance)).clamp(MIN_SIGMA_RESPONSE, 1.5);
     if crate::diagnose::tracing() {
         eprintln!(
-            "sigma response {response:.3} (gap {before:.3e} at sigma {:.4}, {after:.3e} at {:.4})",
-            model.friction.sigma, raised.friction.sigma
+            "sigma response {response:.3} for {} (gap {before:.3e} at sigma {:.4}, {after:.3e} at {:.4})",
+            part.as_ref().map_or("a white noise".to_string(), |c| format!("{:?} {} s", c.form, c.correlation_time_s)),
+            base.friction.sigma,
+            raised.friction.sigma
         );
     }
-    Ok(*data.caches.sigma_response.get_or_init(|| response))
+    Ok(responses.insert(part, response))
 }
 
 /// `model` with its friction law moved one step towards the data from what
@@ -718,7 +781,8 @@ pub(crate) fn calibrate_baseline(data: &Data<'_>, settings: &DiagnoseSettings, e
         return converged(calibrate_and_score(&start, data, settings, engine, None, 0, Scope::All)?);
     }
     let search = settings.for_search();
-    // The filter's response to σ_μ is measured once, on every replicate.
+    // The filter's response to σ_μ is measured on this model, on every
+    // replicate (each colour of the noise a model later carries too).
     sigma_response(engine, &initial_baseline(data, Some(DERIVED_RATE_GRID_S_PER_M[0]))?, data, settings)?;
     // (fitting gap, rate in s/m, the baseline calibrated at it on the
     // search's replicates)
@@ -1025,6 +1089,37 @@ mod derived_tests {
         start.friction.sigma *= 1.5;
         let response = sigma_response(&engine, &start, &data, &settings).expect("response");
         assert!(response > MIN_SIGMA_RESPONSE && response < 0.8, "a fraction, not a bound: {response}");
+        let (m, _, _) =
+            calibrate_and_score(&start, &data, &settings, &engine, None, 0, Scope::Fitting).expect("calibrated");
+        let off = m.friction.sigma / truth.friction.sigma - 1.0;
+        assert!(off.abs() < 0.15, "sigma {} against the truth's {}", m.friction.sigma, truth.friction.sigma);
+    }
+
+    /// A noise correlated over many hold intervals passes the filter more
+    /// than a white one of the same variance: its response is measured on
+    /// its own (on the model the white one was measured on), and σ_μ of a
+    /// truth whose noise is mostly coloured comes back from half as much
+    /// again in the baseline's three steps, as a white one's does.
+    #[test]
+    fn a_coloured_noise_has_its_own_response_through_a_derived_force() {
+        let mut truth = Model::paper_rig(&[]).expect("the paper rig");
+        let white = truth.clone();
+        truth.effects.coloured_friction_noise =
+            Some(ColouredFrictionNoise { form: ColourForm::Ar1, correlation_time_s: 0.05, coloured_share: 0.8 });
+        let set = crate::diagnose::synthetic::displacement_only_set(&truth, 6);
+        let (derived_set, derived) = with_derived_channels(&set);
+        let set = derived_set.expect("derived");
+        let data = Data::new(&set, derived).expect("data");
+        let engine = Engine::cpu("test");
+        let settings = DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let white_response = sigma_response(&engine, &white, &data, &settings).expect("white response");
+        let coloured_response = sigma_response(&engine, &truth, &data, &settings).expect("coloured response");
+        assert!(
+            coloured_response > 1.5 * white_response,
+            "coloured {coloured_response} against white {white_response}"
+        );
+        let mut start = truth.clone();
+        start.friction.sigma *= 1.5;
         let (m, _, _) =
             calibrate_and_score(&start, &data, &settings, &engine, None, 0, Scope::Fitting).expect("calibrated");
         let off = m.friction.sigma / truth.friction.sigma - 1.0;
