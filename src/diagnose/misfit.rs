@@ -64,9 +64,11 @@ fn misfit_hint(o: Observable) -> &'static str {
         O::NormalForceHarmonic1N | O::NormalForceHarmonic2N | O::NormalForceHarmonic3N | O::NormalForceHarmonic4N => {
             "a normal force that varies with the excitation (normal_force_harmonics)"
         }
-        O::NormalForceDriftNPerS | O::NormalForceDriftPerS | O::NormalForceCurvaturePerS2 | O::PeakTrendPerS => {
-            "a slow change over the record (normal_force_drift, or wear)"
-        }
+        O::NormalForceDriftNPerS
+        | O::NormalForceDriftPerS
+        | O::NormalForceCurvaturePerS2
+        | O::PeakTrendPerS
+        | O::FrictionTrendPerS => "a slow change over the record (normal_force_drift, or wear)",
         O::NormalForceWander => {
             "a normal force that wanders slowly over the record (normal_force_drift random_walk, or wear)"
         }

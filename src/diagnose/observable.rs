@@ -33,6 +33,7 @@ pub enum Observable {
     FrictionResidualTailWeight,
     FrictionResidualAutocorrLag1,
     FrictionResidualAutocorrLag10,
+    FrictionTrendPerS,
     FrictionHysteresis,
     FrictionBreakawayMean,
     FrictionLowSpeedMuMean,
@@ -136,7 +137,7 @@ impl Observable {
     }
 
     /// Every observable, in the order of a record's features.
-    pub const ALL: [Observable; 30] = [
+    pub const ALL: [Observable; 31] = [
         Observable::PeakCount,
         Observable::PeakMeanM,
         Observable::PeakVarM2,
@@ -162,6 +163,7 @@ impl Observable {
         Observable::FrictionResidualTailWeight,
         Observable::FrictionResidualAutocorrLag1,
         Observable::FrictionResidualAutocorrLag10,
+        Observable::FrictionTrendPerS,
         Observable::FrictionHysteresis,
         Observable::FrictionBreakawayMean,
         Observable::FrictionLowSpeedMuMean,
@@ -197,6 +199,7 @@ impl Observable {
             Observable::FrictionResidualTailWeight => "friction_residual_tail_weight",
             Observable::FrictionResidualAutocorrLag1 => "friction_residual_autocorr_lag1",
             Observable::FrictionResidualAutocorrLag10 => "friction_residual_autocorr_lag10",
+            Observable::FrictionTrendPerS => "friction_trend_per_s",
             Observable::FrictionHysteresis => "friction_hysteresis",
             Observable::FrictionBreakawayMean => "friction_breakaway_mean",
             Observable::FrictionLowSpeedMuMean => "friction_low_speed_mu_mean",
@@ -220,7 +223,7 @@ impl Observable {
             | O::NormalForceHarmonic4N => Unit::Newton,
             O::NormalForceVarN2 | O::NormalForceResidualVarN2 => Unit::SquareNewton,
             O::NormalForceDriftNPerS => Unit::NewtonPerSecond,
-            O::NormalForceDriftPerS | O::PeakTrendPerS => Unit::PerSecond,
+            O::NormalForceDriftPerS | O::PeakTrendPerS | O::FrictionTrendPerS => Unit::PerSecond,
             O::NormalForceCurvaturePerS2 => Unit::PerSecondSquared,
             O::NormalForceWander => Unit::Dimensionless,
             O::PeakCount | O::FrictionSlipSamples => Unit::Count,
@@ -268,6 +271,7 @@ impl Observable {
             O::FrictionResidualTailWeight => "tail weight of the friction's random part",
             O::FrictionResidualAutocorrLag1 => "friction noise's correlation over one sample",
             O::FrictionResidualAutocorrLag10 => "friction noise's correlation over ten samples",
+            O::FrictionTrendPerS => "trend of the friction over the record",
             O::FrictionHysteresis => "friction speeding up less slowing down",
             O::FrictionBreakawayMean => "friction coefficient at breakaway",
             O::FrictionLowSpeedMuMean => "friction coefficient at low sliding speed",
@@ -340,7 +344,8 @@ impl Observable {
             | Observable::FrictionResidualSkewness
             | Observable::FrictionResidualTailWeight
             | Observable::FrictionResidualAutocorrLag1
-            | Observable::FrictionResidualAutocorrLag10 => MotionPhase::SlipNoise,
+            | Observable::FrictionResidualAutocorrLag10
+            | Observable::FrictionTrendPerS => MotionPhase::SlipNoise,
         }
     }
 }

@@ -271,6 +271,25 @@ fn friction_residual_shape() {
 }
 
 #[test]
+fn friction_trend_is_the_relative_change_per_second() {
+    // μ = 0.4 (1 + r t) over a 50 s record (a load drifting by r per
+    // second, read against its nominal value), with white noise of 0.03:
+    // the trend comes back as r within about four of its standard errors
+    // (0.03 / 0.4 / √(30 000 · 50² / 12) ≈ 3e-5 /s); without the drift it
+    // is zero within them.
+    let t = times(0.0, 50.0);
+    for r in [0.002, 0.0] {
+        let mut rng = Rng(29);
+        let noise: Vec<f64> = t.iter().map(|t| 0.4 * r * t + 0.03 * rng.gaussian()).collect();
+        let fr = run_features(&friction_run(&noise)).friction.unwrap();
+        let trend = fr.trend_per_s.expect("a trend");
+        let relative = r / (1.0 + r * 25.0);
+        assert!((trend - relative).abs() < 1.2e-4, "r {r}: {fr:?}");
+        assert_eq!(value(&run_features(&friction_run(&noise)), "friction_trend_per_s"), Some(trend));
+    }
+}
+
+#[test]
 fn friction_residual_correlation() {
     let rho: f64 = 0.9;
     let mut rng = Rng(19);

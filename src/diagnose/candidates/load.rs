@@ -331,13 +331,20 @@ pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<
 
 /// The forms of a normal-force drift searched, started where the data point.
 pub(super) fn normal_force_drift(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
-    // A drift shows only over time: in a record's normal force or
-    // its peaks' trend, never in a summary row's statistics.
-    if !(ctx.has(Observable::NormalForceDriftPerS) || ctx.has(Observable::PeakTrendPerS)) {
+    // A drift shows only over time: in a record's normal force, its
+    // friction's trend or its peaks' trend, never in a summary row's
+    // statistics.
+    let over_time = [Observable::NormalForceDriftPerS, Observable::FrictionTrendPerS, Observable::PeakTrendPerS];
+    if !over_time.iter().any(|&o| ctx.has(o)) {
         return Vec::new();
     }
+    // The drift's rate read one for one: from the normal force where it is
+    // recorded; else from the friction's trend (μ read against the nominal
+    // load moves as the load does); else from the peaks' (which move
+    // against the load, by less).
     let rate = ctx
         .excess(Observable::NormalForceDriftPerS)
+        .or_else(|| ctx.excess(Observable::FrictionTrendPerS))
         .or_else(|| ctx.excess(Observable::PeakTrendPerS).map(|t| -t))
         .filter(|r| r.abs() > 1e-6)
         .unwrap_or(0.002);

@@ -246,6 +246,7 @@ pub(crate) fn signature(effect: Effect) -> &'static [Observable] {
         Effect::LoadDependentFriction => &[Observable::FrictionMuMean, Observable::PeakMeanM, Observable::PhaseMeanDeg],
         Effect::NormalForceDrift => &[
             Observable::NormalForceDriftPerS,
+            Observable::FrictionTrendPerS,
             Observable::NormalForceCurvaturePerS2,
             Observable::NormalForceWander,
             Observable::PeakTrendPerS,

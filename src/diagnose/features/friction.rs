@@ -1,6 +1,6 @@
 //! Features of the friction coefficient while slipping: its random part's
-//! spread, shape and memory, the accelerating against decelerating branch,
-//! and breakaway against low-speed friction.
+//! spread, shape, memory and trend over the record, the accelerating
+//! against decelerating branch, and breakaway against low-speed friction.
 
 use super::stats::{moments, negligible, solve_normal};
 use super::{
@@ -20,13 +20,14 @@ crate::vector::widest_vectors! {
 /// Friction-coefficient features (see [`FrictionFeatures`]), with the
 /// widest vectors there are (the Stribeck rates' sums side by side).
 pub(super) fn friction_features(
+    t: &[f64],
     v: &[f64],
     force: &[f64],
     normal: &[f64],
     motion: MotionReading,
 ) -> Option<FrictionFeatures> {
-    let n = v.len().min(force.len()).min(normal.len());
-    let (v, force, normal) = (&v[..n], &force[..n], &normal[..n]);
+    let n = t.len().min(v.len()).min(force.len()).min(normal.len());
+    let (t, v, force, normal) = (&t[..n], &v[..n], &force[..n], &normal[..n]);
     let v_max = v.iter().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()));
     if v_max <= 0.0 {
         return None;
@@ -135,6 +136,20 @@ pub(super) fn friction_features(
         (pairs >= MIN_PAIRS).then(|| sum / pairs as f64 / r2)
     };
 
+    // Trend: the residual's least-squares slope against time, over the
+    // mean μ (the law's fit has a constant, so the residual's own mean is
+    // about zero and leaves the slope alone).
+    let trend_per_s = {
+        let t_mean = idx.iter().map(|&i| t[i]).sum::<f64>() / m as f64;
+        let (mut sty, mut stt) = (0.0, 0.0);
+        for (j, &i) in idx.iter().enumerate() {
+            let dt = t[i] - t_mean;
+            sty += dt * (residual[j] - r_mean);
+            stt += dt * dt;
+        }
+        (stt > 0.0 && mu_mean > 0.0 && !negligible(r2, mu_mean)).then(|| sty / stt / mu_mean)
+    };
+
     // Hysteresis: accelerating minus decelerating residual within |v| bins.
     let mut bins = [(0.0, 0usize, 0.0, 0usize); HYSTERESIS_BINS];
     for (j, &i) in idx.iter().enumerate() {
@@ -200,6 +215,7 @@ pub(super) fn friction_features(
         residual_tail_weight,
         residual_autocorr_lag1: autocorr(1),
         residual_autocorr_lag10: autocorr(10),
+        trend_per_s,
         hysteresis,
         breakaway_mean,
         low_speed_mu_mean,

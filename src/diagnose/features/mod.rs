@@ -280,6 +280,12 @@ pub struct FrictionFeatures {
     pub residual_autocorr_lag1: Option<f64>,
     /// The same at a lag of 10 samples (both within one slip phase).
     pub residual_autocorr_lag10: Option<f64>,
+    /// The residuals' least-squares slope against time over the record,
+    /// over the mean μ, 1/s: a friction (or, read against the nominal
+    /// load, a normal force) that changes over the record changes μ by
+    /// this share per second. `None` when the residuals do not vary or the
+    /// slipping samples span no time.
+    pub trend_per_s: Option<f64>,
     /// Mean residual on accelerating samples (`v · dv/dt > 0`, central
     /// differences) minus that on decelerating samples, compared within
     /// [`HYSTERESIS_BINS`] equal `|v|` bins and averaged with weights
@@ -385,7 +391,7 @@ fn features_on_grid(run: &Run, grid: &SampleGrid, motion: MotionReading) -> RunF
             .as_deref()
             .and_then(|n| record::normal_force_features(run, n, base, grid.normal_force.as_ref())),
         friction: match (&run.v_m_per_s, &run.friction_force) {
-            (Some(v), Some(f)) => friction::friction_features(v, f, &load_of(run), motion),
+            (Some(v), Some(f)) => friction::friction_features(&run.t_s, v, f, &load_of(run), motion),
             _ => None,
         },
         stick_fraction: record::stick_fraction(run),
@@ -426,6 +432,7 @@ impl RunFeatures {
             (Observable::FrictionResidualTailWeight, f.map(|f| f.residual_tail_weight)),
             (Observable::FrictionResidualAutocorrLag1, f.and_then(|f| f.residual_autocorr_lag1)),
             (Observable::FrictionResidualAutocorrLag10, f.and_then(|f| f.residual_autocorr_lag10)),
+            (Observable::FrictionTrendPerS, f.and_then(|f| f.trend_per_s)),
             (Observable::FrictionHysteresis, f.and_then(|f| f.hysteresis)),
             (Observable::FrictionBreakawayMean, f.and_then(|f| f.breakaway_mean)),
             (Observable::FrictionLowSpeedMuMean, f.and_then(|f| f.low_speed_mu_mean)),
