@@ -190,6 +190,30 @@ const MIN_SIGMA_RESPONSE: f64 = 0.1;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::effects::Form;
+
+    /// Every form's parts carry the whole variance, each part is white or a
+    /// whole-variance `ar1` (a `hold` is its own), and a noise that is not
+    /// coloured is one white part.
+    #[test]
+    fn a_noise_s_parts_share_its_whole_variance() {
+        for &form in ColourForm::ALL {
+            for share in [0.0, 0.3, 1.0] {
+                let colour = Some(ColouredFrictionNoise { form, correlation_time_s: 0.02, coloured_share: share });
+                let parts = noise_parts(&colour);
+                let total: f64 = parts.iter().map(|p| p.0).sum();
+                assert!((total - 1.0).abs() < 1e-12, "{form:?} at {share}: {parts:?}");
+                for (_, part) in &parts {
+                    if let Some(p) = part.as_ref().filter(|p| p.form != ColourForm::Hold) {
+                        assert!(p.form == ColourForm::Ar1 && p.coloured_share == 1.0, "{form:?}: {parts:?}");
+                    }
+                }
+            }
+        }
+        assert_eq!(noise_parts(&None), vec![(1.0, None)]);
+        let white = Some(ColouredFrictionNoise { form: ColourForm::Ar1, correlation_time_s: 0.0, coloured_share: 1.0 });
+        assert_eq!(noise_parts(&white), vec![(1.0, None)]);
+    }
 
     #[test]
     fn a_law_step_at_most_halves_sigma_and_otherwise_takes_the_newton_step() {
