@@ -246,8 +246,22 @@ mod tests {
 mod derived_tests {
     use super::*;
     use crate::diagnose::calibrate::calibrate_and_score;
+    use crate::diagnose::derived::DerivedChannels;
     use crate::diagnose::derived::with_derived_channels;
     use crate::diagnose::score::Scope;
+    use crate::measure::MeasurementSet;
+
+    /// Records of `truth` (noise from `seed`) with the displacement alone,
+    /// their other channels derived from it.
+    fn x_alone(truth: &Model, seed: u64) -> (MeasurementSet, DerivedChannels) {
+        let (derived_set, derived) =
+            with_derived_channels(&crate::diagnose::synthetic::displacement_only_set(truth, seed));
+        (derived_set.expect("derived"), derived)
+    }
+
+    fn settings() -> DiagnoseSettings {
+        DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() }
+    }
 
     /// Through a derived friction force's filter the replicates' residual
     /// variance moves by a fraction of σ_μ² (measured once, with the law
@@ -256,12 +270,9 @@ mod derived_tests {
     #[test]
     fn sigma_through_a_derived_force_is_stepped_by_the_filters_measured_response() {
         let truth = Model::paper_rig(&[]).expect("the paper rig");
-        let set = crate::diagnose::synthetic::displacement_only_set(&truth, 5);
-        let (derived_set, derived) = with_derived_channels(&set);
-        let set = derived_set.expect("derived");
+        let (set, derived) = x_alone(&truth, 5);
         let data = Data::new(&set, derived).expect("data");
-        let engine = Engine::cpu("test");
-        let settings = DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let (engine, settings) = (Engine::cpu("test"), settings());
         let mut start = truth.clone();
         start.friction.sigma *= 1.5;
         let response = sigma_response(&engine, &start, &data, &settings).expect("response");
@@ -283,12 +294,9 @@ mod derived_tests {
         let white = truth.clone();
         truth.effects.coloured_friction_noise =
             Some(ColouredFrictionNoise { form: ColourForm::Ar1, correlation_time_s: 0.05, coloured_share: 0.8 });
-        let set = crate::diagnose::synthetic::displacement_only_set(&truth, 6);
-        let (derived_set, derived) = with_derived_channels(&set);
-        let set = derived_set.expect("derived");
+        let (set, derived) = x_alone(&truth, 6);
         let data = Data::new(&set, derived).expect("data");
-        let engine = Engine::cpu("test");
-        let settings = DiagnoseSettings { replicates: 8, warmup_cycles: 5, ..DiagnoseSettings::default() };
+        let (engine, settings) = (Engine::cpu("test"), settings());
         let white_response = sigma_response(&engine, &white, &data, &settings).expect("white response");
         let coloured_response = sigma_response(&engine, &truth, &data, &settings).expect("coloured response");
         assert!(
