@@ -45,9 +45,8 @@ pub(crate) struct SigmaResponses(Mutex<ResponsesKept>);
 /// under, and per unit its data's friction spread about their law.
 pub(crate) type MeasuredOn = (Model, DiagnoseSettings, Vec<Option<Spread>>);
 
-/// The model every response is measured on, the settings it is simulated
-/// under and its data's friction spread about their law per unit, and the
-/// responses measured so far.
+/// What every response is measured on ([`MeasuredOn`]), and the responses
+/// measured so far, by noise part.
 #[derive(Default)]
 struct ResponsesKept {
     on: Option<MeasuredOn>,
