@@ -129,6 +129,9 @@ pub(crate) enum OriginArg {
     Mixed,
 }
 
+/// Characters of each report note shown on the terminal.
+const NOTE_CHARS: usize = 160;
+
 pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     // The flags, the set and --out are checked before any computation; bad
     // input writes nothing.
@@ -153,6 +156,13 @@ pub(crate) fn run_diagnose(args: DiagnoseArgs) -> Result<()> {
     let started = Instant::now();
     let progress = Progress::steps("diagnose");
     let diagnosis = diagnose_set(&set, &settings, &engine, &mut |step| progress.step(step))?;
+    // What the report says about the records and how they were read (an
+    // offset, a dead channel, phases set aside), so that a user who reads
+    // only the terminal sees it is there: the start of each, in full in
+    // the report.
+    for note in &diagnosis.notes {
+        progress.println(&format!("note: {}", crate::text::excerpt(note, NOTE_CHARS)));
+    }
     progress.finish();
     let elapsed = started.elapsed().as_secs_f64();
     let run = RunInfo { seed: Some(args.seed), backend: Some(engine.description().to_string()) };

@@ -1,6 +1,6 @@
 //! The frame of the records: which runs give absolute phases, a check that
 //! the ones that claim to really do, and whether their displacement swings
-//! about zero.
+//! about zero, and whether any of their channels never moves.
 //!
 //! A response phase (the lag of the response's fundamental behind the base)
 //! and the normal force's harmonic phases are read against the base's
@@ -55,6 +55,46 @@ pub(crate) fn frame_notes(data: &Data<'_>) -> Vec<String> {
                 String::new()
             }
         ));
+    }
+    notes
+}
+
+/// Notes for the report on recorded channels that hold one value at every
+/// sample: a sensor that recorded nothing (unplugged, saturated, or a
+/// column of zeros written by the export), or a block held so still that
+/// its sensor shows no noise. No real record of a moving rig is constant,
+/// and its features read a block at rest throughout, which the model with
+/// any friction misfits: the note puts that misfit on the record. Derived
+/// channels are not checked (a constant `x` is, and is what they follow).
+pub(crate) fn still_channel_notes(data: &Data<'_>) -> Vec<String> {
+    let derived = data.derived;
+    let mut notes = Vec::new();
+    for (i, run) in data.set.runs.iter().enumerate() {
+        let recorded: [(&str, &str, Option<&[f64]>); 4] = [
+            ("x", "m", Some(&run.x_m)),
+            ("v", "m/s", run.v_m_per_s.as_deref().filter(|_| !derived.v)),
+            ("friction_force", "N", run.friction_force.as_deref().filter(|_| !derived.friction)),
+            ("normal_force", "N", run.normal_force.as_deref()),
+        ];
+        let still: Vec<String> = recorded
+            .iter()
+            .filter_map(|&(name, unit, values)| {
+                let values = values?;
+                let first = *values.first()?;
+                (values.len() > 1 && values.iter().all(|v| v.to_bits() == first.to_bits()))
+                    .then(|| format!("`{name}` is {first} {unit}"))
+            })
+            .collect();
+        if !still.is_empty() {
+            notes.push(format!(
+                "{}: {} at every one of its {} samples: a sensor that recorded nothing, or a block held so still \
+                 that its sensor shows no noise; the run is read as it is (a block at rest throughout), so the \
+                 misfit there is most likely the record's, not the model's",
+                run.file.file_name().map_or_else(|| format!("run {i}"), |f| f.to_string_lossy().into_owned()),
+                still.join(" and "),
+                run.len()
+            ));
+        }
     }
     notes
 }
@@ -303,6 +343,22 @@ mod tests {
 
     fn phase(unit: usize, measured: f64, simulated: f64) -> Score {
         Score { measured, simulated, ..test_score(unit, Observable::PhaseMeanDeg, 200.0, false) }
+    }
+
+    /// A run whose `x` holds one value throughout is noted by its name; a
+    /// record of a moving block, with its sensor's noise, is not.
+    #[test]
+    fn a_channel_that_never_moves_is_noted_and_a_live_one_is_not() {
+        let truth = crate::engine::Model::paper_rig(&[]).expect("the paper rig");
+        let mut set = crate::diagnose::synthetic::displacement_only_set(&truth, 5);
+        let live = Data::new(&set, Default::default()).expect("data");
+        assert!(still_channel_notes(&live).is_empty());
+        set.runs[1].x_m.iter_mut().for_each(|x| *x = 0.0);
+        let dead = Data::new(&set, Default::default()).expect("data");
+        let notes = still_channel_notes(&dead);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        let name = set.runs[1].file.file_name().expect("a run file").to_string_lossy();
+        assert!(notes[0].starts_with(&format!("{name}: `x` is 0 m at every one of its")), "{}", notes[0]);
     }
 
     #[test]

@@ -408,6 +408,7 @@ pub fn diagnose_set(
             set.runs.len()
         ));
     }
+    notes.extend(frame::still_channel_notes(&data));
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));
     let rates = if calibrate::searches_rate(&data) {
