@@ -12,7 +12,7 @@ use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
 use crate::diagnose::derived;
 use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
-use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES, Spread};
+use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES, Spread, variance_gap};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::circular_mean_var;
@@ -132,6 +132,20 @@ pub(crate) struct FittingRecords {
     /// Per unit of `units`, its replicates' spread about `law`
     /// ([`Spread::about`]; `None` without a law or with too few samples).
     pub(crate) spreads: Vec<Option<Spread>>,
+}
+
+impl FittingRecords {
+    /// How much more the friction's residual variance is in the data than
+    /// in these records, –²: condition by condition ([`variance_gap`]), the
+    /// data's spreads `measured` given per unit of [`FittingRecords::units`],
+    /// where any condition has a spread on both sides; else the data's
+    /// pooled σ_μ², `pooled_variance`, less the records' law's (0 where the
+    /// caller reads only a difference of two gaps, in which it cancels).
+    /// `None` without a simulated law.
+    pub(crate) fn variance_gap(&self, measured: &[Option<Spread>], pooled_variance: f64) -> Option<f64> {
+        let law = self.law?;
+        Some(variance_gap(measured, &self.spreads).unwrap_or(pooled_variance - law.sigma.powi(2)))
+    }
 }
 
 /// The readings of `model`'s replicates `0..settings.replicates` of the

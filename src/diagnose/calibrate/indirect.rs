@@ -4,7 +4,7 @@
 
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::data::Data;
-use crate::diagnose::law::{FrictionLaw, Spread, variance_gap};
+use crate::diagnose::law::{FrictionLaw, Spread};
 use crate::diagnose::simulate::fitting_records;
 use crate::engine::effects::{ColourForm, ColouredFrictionNoise};
 use crate::engine::{Engine, Model};
@@ -26,8 +26,8 @@ use crate::error::Result;
 ///
 /// With it, how much more the friction's residual variance is in the data
 /// than in the replicates, –²: condition by condition where any condition
-/// has slipping samples on both sides ([`crate::diagnose::law::variance_gap`]),
-/// else the pooled laws' σ² apart.
+/// has slipping samples on both sides, else the pooled laws' σ² apart
+/// ([`crate::diagnose::simulate::FittingRecords::variance_gap`]).
 pub(super) fn simulated_law(
     engine: &Engine,
     model: &Model,
@@ -36,9 +36,7 @@ pub(super) fn simulated_law(
 ) -> Result<Option<(FrictionLaw, f64)>> {
     let records = fitting_records(engine, model, data, settings)?;
     let (Some(simulated), Some(measured)) = (records.law, data.measured_law) else { return Ok(None) };
-    let gap = variance_gap(&data.measured_spreads(&records.units), &records.spreads)
-        .unwrap_or(measured.sigma.powi(2) - simulated.sigma.powi(2));
-    Ok(Some((simulated, gap)))
+    Ok(records.variance_gap(&data.measured_spreads(&records.units), measured.sigma.powi(2)).map(|gap| (simulated, gap)))
 }
 
 /// How far the replicates' friction residual variance moves per unit of
@@ -119,12 +117,11 @@ fn part_response(
     let mut raised = base.clone();
     raised.friction.sigma = 1.25 * base.friction.sigma.max(1e-3);
     // The gap to the spreads kept with that model: its data's, whichever
-    // view asks. Where no condition has a spread on both sides, the pooled
-    // laws' σ² apart (the data's own σ² cancels in the fall).
+    // view asks (the data's own pooled σ² cancels in the fall).
     let gap = |m: &Model| -> Result<Option<f64>> {
         let records = fitting_records(engine, m, &every_unit, &on_settings)?;
         let at: Vec<Option<Spread>> = records.units.iter().map(|&u| measured[u]).collect();
-        Ok(records.law.map(|law| variance_gap(&at, &records.spreads).unwrap_or(-law.sigma.powi(2))))
+        Ok(records.variance_gap(&at, 0.0))
     };
     let (Some(before), Some(after)) = (gap(&base)?, gap(&raised)?) else {
         return Ok(1.0);
