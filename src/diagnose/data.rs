@@ -386,13 +386,31 @@ fn one_sample_interval(runs: &[Run]) -> Result<f64> {
             line: None,
             message: format!(
                 "sampled at {} Hz, while {} is sampled at {} Hz: a diagnosis simulates every record at one rate \
-                 (the baseline's noise is held over one sample interval), so the runs of a set must share one; \
-                 resample them to a common rate",
+                 (the baseline's noise is held over one sample interval), so the runs of a set must share one; {}",
                 fmt_rate_hz(sample_rate_hz(other)),
                 shown(&first.file),
-                fmt_rate_hz(sample_rate_hz(first))
+                fmt_rate_hz(sample_rate_hz(first)),
+                common_rate_hint(runs)
             ),
         }),
+    }
+}
+
+/// How runs sampled at different rates can be brought to one: where the
+/// slowest rate divides every other (each an integer multiple of it),
+/// thinning the faster runs to it (`--sample-rate`) does it in place;
+/// otherwise they must be resampled.
+fn common_rate_hint(runs: &[Run]) -> String {
+    let slowest = runs.iter().map(sample_rate_hz).fold(f64::INFINITY, f64::min);
+    let divides = runs.iter().all(|r| {
+        let ratio = sample_rate_hz(r) / slowest;
+        (ratio - ratio.round()).abs() <= SAMPLING_TOLERANCE * ratio
+    });
+    if divides {
+        let rate = fmt_rate_hz(slowest);
+        format!("{rate} Hz divides every run's rate, so `--sample-rate {rate}` thins the faster runs to it")
+    } else {
+        "no run's rate divides all the others, so resample them to a common rate".to_string()
     }
 }
 

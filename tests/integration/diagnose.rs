@@ -485,12 +485,13 @@ fn a_none_is_only_as_sure_as_the_records_could_show_each_family() {
 /// over one sample interval. Read as they were, a run at 1 kHz among runs
 /// at 600 Hz was scored against replicates sampled at 600 Hz, its friction
 /// noise's lag-1 autocorrelation 55 standard errors off for that alone.
+/// Where the slower rate divides the faster, the refusal says which
+/// `--sample-rate` thins them to one; otherwise that they need resampling.
 #[test]
 fn runs_sampled_at_different_rates_are_refused_naming_both() {
     let root = scratch("two-rates");
-    let set = root.join("set");
-    for (dir, rate) in [("a", "600"), ("b", "1000")] {
-        let out = root.join(dir);
+    for rate in ["600", "1000", "300"] {
+        let out = root.join(rate);
         let (ok, _, err) = stickslip(&[
             "-q",
             "simulate",
@@ -504,34 +505,47 @@ fn runs_sampled_at_different_rates_are_refused_naming_both() {
             out.to_str().unwrap(),
         ]);
         assert!(ok, "{err}");
-        std::fs::create_dir_all(&set).unwrap();
-        std::fs::copy(out.join("run-7.000hz-16.390n-r000.csv"), set.join(format!("run-{dir}.csv"))).unwrap();
     }
-    let run = |file: &str| {
-        format!(
-            r#"{{"file": "{file}", "excitation_frequency_hz": 7.0, "excitation_amplitude_m": 0.0025, "normal_force_n": 16.39}}"#
+    // A set of the 600 Hz record and the one at `rate`, diagnosed: the error.
+    let refusal = |rate: &str| -> String {
+        let set = root.join(format!("set-{rate}"));
+        std::fs::create_dir_all(&set).unwrap();
+        for (file, from) in [("run-a.csv", "600"), ("run-b.csv", rate)] {
+            std::fs::copy(root.join(from).join("run-7.000hz-16.390n-r000.csv"), set.join(file)).unwrap();
+        }
+        let run = |file: &str| {
+            format!(
+                r#"{{"file": "{file}", "excitation_frequency_hz": 7.0, "excitation_amplitude_m": 0.0025, "normal_force_n": 16.39}}"#
+            )
+        };
+        std::fs::write(
+            set.join("manifest.json"),
+            format!(
+                r#"{{"format": "stickslip-measurements/1", "rig": {{"mass_kg": 1.028, "natural_frequency_hz": 10.05, "damping_ratio": 0.00225}}, "runs": [{}, {}]}}"#,
+                run("run-a.csv"),
+                run("run-b.csv")
+            ),
         )
+        .unwrap();
+        let out = root.join(format!("out-{rate}"));
+        let (ok, _, err) =
+            stickslip(&["diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+        assert!(!ok, "a set sampled at 600 and {rate} Hz was diagnosed");
+        assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
+        err
     };
-    std::fs::write(
-        set.join("manifest.json"),
-        format!(
-            r#"{{"format": "stickslip-measurements/1", "rig": {{"mass_kg": 1.028, "natural_frequency_hz": 10.05, "damping_ratio": 0.00225}}, "runs": [{}, {}]}}"#,
-            run("run-a.csv"),
-            run("run-b.csv")
-        ),
-    )
-    .unwrap();
-    let out = root.join("out");
-    let (ok, _, err) =
-        stickslip(&["diagnose", set.to_str().unwrap(), "--out", out.to_str().unwrap(), "--backend", "cpu"]);
+    let err = refusal("1000");
     assert!(
-        !ok && err.contains("run-b.csv")
+        err.contains("run-b.csv")
             && err.contains("1000 Hz")
             && err.contains("run-a.csv")
-            && err.contains("600 Hz"),
+            && err.contains("600 Hz")
+            && err.contains("resample")
+            && !err.contains("--sample-rate"),
         "{err}"
     );
-    assert!(!out.exists(), "a refused diagnosis wrote {}", out.display());
+    let err = refusal("300");
+    assert!(err.contains("run-b.csv") && err.contains("300 Hz") && err.contains("`--sample-rate 300`"), "{err}");
     std::fs::remove_dir_all(&root).unwrap();
 }
 
