@@ -411,6 +411,7 @@ pub fn diagnose_set(
     notes.extend(frame::still_channel_notes(&data));
     notes.extend(frame::displacement_offset_note(&data));
     notes.extend(frame::friction_offset_note(&data));
+    notes.extend(law::implausible_law_note(data.measured_law.as_ref()));
     let rates = if calibrate::searches_rate(&data) {
         format!(" at {} Stribeck rates (a force derived from x does not give it)", calibrate::DERIVED_RATES_TRIED)
     } else {

@@ -71,7 +71,7 @@ impl FrictionLaw {
     /// drop and a v² term within an order of magnitude of any published
     /// steel-on-steel law. Beyond these the four terms only trade off
     /// against each other within the noise.
-    fn plausible(&self) -> bool {
+    pub(crate) fn plausible(&self) -> bool {
         let top = self.anchors_m_per_s[9].max(0.05);
         self.a >= 0.0
             && self.a + self.b >= 0.0
@@ -289,6 +289,20 @@ impl SlipSamples {
         let refined = self.fit_at((0.5 * (lo + hi)).exp()).filter(keep);
         Some(refined.filter(|r| r.sigma <= law.sigma).unwrap_or(law))
     }
+}
+
+/// The report's note where the records' law (`measured`) is no law a rig
+/// could have at any rate ([`SlipSamples::fit`] keeps it regardless).
+pub(crate) fn implausible_law_note(measured: Option<&FrictionLaw>) -> Option<String> {
+    let law = measured.filter(|l| !l.plausible())?;
+    Some(format!(
+        "no friction law a rig could have fits the friction read from the records at any Stribeck rate: the \
+         closest, μ = {:.3} + {:.3}/(1 + {:.1}|v|) + {:.3} v², falls below zero at rest or within twice the \
+         fastest slip, or has terms beyond any published steel-on-steel law; it is used as the records' \
+         curve. A normal force that changes over each cycle (following the block's position through a leaf \
+         spring, say) read at the nominal load looks so",
+        law.a, law.b, law.c, law.d
+    ))
 }
 
 /// How far the friction level of `runs` stands from `law`: the mean of
@@ -590,6 +604,10 @@ mod tests {
         let worst =
             (1..=20).map(|i| 0.02 * f64::from(i)).map(|v| (mu(&law, v) - mu(&truth, v)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.005 && (law.sigma / truth.sigma - 1.0).abs() < 0.05, "{law:?}: the curve is {worst} off");
+        // The report says so; of a rig's law it says nothing.
+        assert!(implausible_law_note(Some(&law)).is_some_and(|n| n.contains("no friction law a rig could have")));
+        let rig = fit_friction_law(&[&record(0.25, 0.1, 20.0, 0.04, 1)], &Reading::default());
+        assert!(rig.is_some() && implausible_law_note(rig.as_ref()).is_none());
     }
 
     /// A block its load holds still, recorded as `x` alone: its derived
