@@ -101,6 +101,8 @@ struct GridPoint {
     steps_per_period: u32,
     // Added to params.realisation_offset for this point's realisation numbers.
     realisation_offset: u32,
+    // Where a normal-force drift's clock starts, s from the run's start (the end of the warm-up).
+    drift_start_s: f32,
 }
 
 struct PathState {

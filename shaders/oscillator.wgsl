@@ -156,11 +156,13 @@ fn draw_noise() {
     }
     path.friction_noise = params.friction_sigma * xi_mu;
     let t_s = f32(path.interval) * effects.noise_interval_s;
-    if (effects.drift_form == DRIFT_FORM_RANDOM_WALK && path.interval != 0u) {
+    // The drift's time, s from the end of the warm-up (where its clock starts).
+    let drift_t_s = max(t_s - point.drift_start_s, 0.0);
+    if (effects.drift_form == DRIFT_FORM_RANDOM_WALK && path.interval != 0u && t_s > point.drift_start_s) {
         let step = pair_a(noise_block(key, realisation, STREAM_DRIFT, path.interval)).x;
         path.drift_walk += sqrt(effects.drift_rate_per_s * effects.noise_interval_s) * step;
     }
-    let mean_n = point.normal_force_mean_n * (drift_factor(t_s) + path.drift_walk);
+    let mean_n = point.normal_force_mean_n * (drift_factor(drift_t_s) + path.drift_walk);
     let harmonic_part_n = harmonics_n(path.interval_phase, path.x_m / params.base_amplitude_m);
     path.normal_force_n = max(mean_n + params.normal_force_sigma_n * xi_n + harmonic_part_n, 0.0);
     path.stiction_excess = effects.stiction_excess;

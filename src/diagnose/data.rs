@@ -631,21 +631,19 @@ impl<'a> Data<'a> {
 
     /// The condition a unit is simulated at under `model`: N0 such that the
     /// simulated record's mean normal force equals the measured mean (where
-    /// recorded), allowing for the model's drift over warm-up and record and
-    /// for a load that follows the position (its N0 is the load at x = 0,
-    /// read from the measured mean with the measured displacement's
-    /// moments).
-    pub(crate) fn simulated_condition(&self, u: &Unit, model: &Model, warmup_cycles: u32) -> Condition {
+    /// recorded), allowing for the model's drift over the record (its clock
+    /// starts where the record does) and for a load that follows the
+    /// position (its N0 is the load at x = 0, read from the measured mean
+    /// with the measured displacement's moments).
+    pub(crate) fn simulated_condition(&self, u: &Unit, model: &Model) -> Condition {
         let Some(&load) = self.measured_load.get(&condition_key(u.condition)) else { return u.condition };
-        let start = f64::from(warmup_cycles) / u.condition.excitation_frequency_hz;
-        let length = self.longest_record_s;
         // The engine scales N0 by the drift's nominal scale (where the model
         // says over which window N0 is the mean force), then by the drift.
         let factor = model
             .effects
             .normal_force_drift
             .as_ref()
-            .map_or(1.0, |d| d.mean_factor(start, start + length) * d.nominal_scale());
+            .map_or(1.0, |d| d.mean_factor(0.0, self.longest_record_s) * d.nominal_scale());
         // A load that follows the position adds N0 (α r + β r²) to N, whose
         // mean over the measured record is N0 (α r̄ + β r²̄).
         let position = match &model.effects.normal_force_harmonics {

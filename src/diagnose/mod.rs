@@ -346,14 +346,12 @@ impl Diagnosis {
     }
 }
 
-/// Where the simulated replicates' records lie in each run, s from its
-/// start: after the warm-up (its cycles at the data's mean frequency), for
-/// the longest record's length. What a drift's nominal force is the mean
-/// over, in a fitted model and in the power's reference.
-pub(crate) fn records_window_s(data: &Data<'_>, settings: &DiagnoseSettings) -> [f64; 2] {
-    let frequency = mean(&data.units.iter().map(|u| u.condition.excitation_frequency_hz).collect::<Vec<_>>());
-    let start = f64::from(settings.warmup_cycles) / frequency.max(1e-9);
-    [start, start + data.longest_record_s.max(1e-3)]
+/// Where the simulated replicates' records lie on a drift's clock, s: from
+/// the end of the warm-up, where the clock starts, for the longest record's
+/// length. What a drift's nominal force is the mean over, in a fitted
+/// model and in the power's reference.
+pub(crate) fn records_window_s(data: &Data<'_>) -> [f64; 2] {
+    [0.0, data.longest_record_s.max(1e-3)]
 }
 
 /// Whether tracing is on (`STICKSLIP_DEBUG` set): every trial, decision
@@ -476,7 +474,7 @@ pub fn diagnose_set(
     // the records' window (the replicates' warm-up at the data's mean
     // frequency, then the records' length), and a sweep at it gives it.
     if let Some(d) = fitted.effects.normal_force_drift.as_mut() {
-        d.mean_over_s = Some(records_window_s(&data, settings));
+        d.mean_over_s = Some(records_window_s(&data));
     }
     let fitted_folds = selection.fitted_folds();
     let fold_gaps: Vec<FoldGap> = (0..data.folds.folds.len())

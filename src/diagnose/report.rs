@@ -498,7 +498,7 @@ pub fn write_diagnosis_with(
         if let Some([start, end]) = diagnosis.fitted.effects.normal_force_drift.as_ref().and_then(|d| d.mean_over_s) {
             writeln!(
                 w,
-                "# normal_force_drift: a sweep's normal force is the drifting force's mean over {start:.3} s to {end:.3} s of each run\n# (normal_force_drift.mean_over_s), as the measured records' nominal force was their mean.\n"
+                "# normal_force_drift: a sweep's normal force is the drifting force's mean over {start:.3} s to {end:.3} s after each\n# run's warm-up (normal_force_drift.mean_over_s), as the measured records' nominal force was their mean.\n"
             )?;
         }
         if diagnosis

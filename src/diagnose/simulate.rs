@@ -54,8 +54,7 @@ pub(crate) fn replicates(
     debug_assert!(units.iter().all(|&u| data.record_s[u].to_bits() == duration_s.to_bits()));
     let mut model = model.clone();
     model.solver.steps_per_period = model.solver.steps_per_period.min(REPLICATE_STEPS_PER_PERIOD);
-    let conditions: Vec<Condition> =
-        units.iter().map(|&u| data.simulated_condition(&data.units[u], &model, settings.warmup_cycles)).collect();
+    let conditions: Vec<Condition> = units.iter().map(|&u| data.simulated_condition(&data.units[u], &model)).collect();
     // Each replicate's noise is keyed by its realisation number alone, so a
     // replicate is the same record whichever others are simulated with it;
     // unit `u`'s numbers start at `u × REPLICATE_STRIDE`.

@@ -86,9 +86,17 @@ impl Job<'_> {
         self.first_realisation + self.points[point].realisation_offset + r
     }
 
-    /// The derived constants of every point.
+    /// The derived constants of every point, a drift's clock started at the
+    /// end of the warm-up ([`Oscillator::drift_start_s`]).
     pub fn oscillators(&self) -> Result<Vec<Oscillator>> {
-        self.points.iter().map(|p| Oscillator::new(self.model, p.condition)).collect()
+        self.points
+            .iter()
+            .map(|p| {
+                let mut o = Oscillator::new(self.model, p.condition)?;
+                o.drift_start_s = f64::from(self.plan.warmup_cycles) * o.period_s;
+                Ok(o)
+            })
+            .collect()
     }
 
     /// Most grid points in one job: the host keeps each point's sums and

@@ -172,6 +172,13 @@ pub struct Oscillator {
     /// Noise hold interval in excitation periods, as 32.32 fixed point:
     /// boundary `j` lies at `j * noise_interval_fixed / 2^32` periods.
     pub noise_interval_fixed: u64,
+    /// Where a normal-force drift's clock starts, s from the run's start:
+    /// the end of the job's warm-up ([`crate::engine::Job::oscillators`];
+    /// 0 for an oscillator made alone). The force holds its starting value
+    /// until then, so what is measured sees the same drift whatever the
+    /// warm-up (a number of periods: seconds that differ with the
+    /// frequency).
+    pub drift_start_s: f64,
 }
 
 impl Oscillator {
@@ -223,6 +230,7 @@ impl Oscillator {
             effects,
             // Without noise there is nothing to hold: no boundaries split the steps.
             noise_interval_fixed: if noiseless { Self::NOISELESS_INTERVAL } else { noise_interval_fixed as u64 },
+            drift_start_s: 0.0,
         })
     }
 

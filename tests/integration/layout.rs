@@ -103,6 +103,7 @@ fn rust_structs() -> Vec<(RustStruct, &'static str)> {
                 friction_scale,
                 steps_per_period,
                 realisation_offset,
+                drift_start_s,
             }),
             "ensemble.wgsl",
         ),

@@ -69,10 +69,9 @@ struct FittingTargets {
 }
 
 impl FittingTargets {
-    fn of(model: &Model, data: &Data<'_>, settings: &DiagnoseSettings, observable: Observable) -> FittingTargets {
+    fn of(model: &Model, data: &Data<'_>, observable: Observable) -> FittingTargets {
         let fit: Vec<usize> = (0..data.units.len()).filter(|&i| !data.units[i].heldout).collect();
-        let conditions =
-            fit.iter().map(|&i| data.simulated_condition(&data.units[i], model, settings.warmup_cycles)).collect();
+        let conditions = fit.iter().map(|&i| data.simulated_condition(&data.units[i], model)).collect();
         let measured = fit.iter().map(|&i| data.measured[i].get(&observable).copied().unwrap_or(f64::NAN)).collect();
         // The same window as the data: the records' (or summaries') length.
         let cycles = fit
@@ -131,7 +130,7 @@ pub(super) fn solve_friction_level(
     slope: Option<f64>,
 ) -> Result<(Model, f64)> {
     let slope_given = slope.is_some();
-    let fitting = FittingTargets::of(model, data, settings, targets.level);
+    let fitting = FittingTargets::of(model, data, targets.level);
     let level_at = |a: f64| -> Result<Level> {
         let mut m = model.clone();
         m.friction.a = a;
@@ -352,7 +351,7 @@ pub(super) fn scale_noise(
     engine: &Engine,
     spread: Observable,
 ) -> Result<Model> {
-    let fitting = FittingTargets::of(model, data, settings, spread);
+    let fitting = FittingTargets::of(model, data, spread);
     let simulate = |m: &Model| -> Result<Vec<f64>> {
         let stats = fitting.simulate(engine, m, settings, 0x5CA1)?;
         Ok(stats.iter().map(|s| mean(&s.iter().filter_map(|p| p.get(spread)).collect::<Vec<_>>())).collect())

@@ -51,7 +51,7 @@ fn harmonic_estimates(ctx: &Context<'_>) -> Vec<(f64, [(f64, f64); 4])> {
             let phase = circular_mean_var(&phases).0 + (k + 1) as f64 * omega * interval / 2.0;
             *slot = ((amplitude * amplitude - floor.simulated * floor.simulated).max(0.0).sqrt(), phase);
         }
-        out.push((data.simulated_condition(u, ctx.model, 0).normal_force_n, per));
+        out.push((data.simulated_condition(u, ctx.model).normal_force_n, per));
     }
     out
 }

@@ -32,7 +32,7 @@ impl Context<'_> {
             .filter(|s| !s.heldout && s.observable == Observable::PhaseMeanDeg)
             .map(|s| PhaseUnit {
                 excitation_frequency_hz: s.excitation_frequency_hz,
-                normal_force_n: self.data.simulated_condition(&self.data.units[s.unit], self.model, 0).normal_force_n,
+                normal_force_n: self.data.simulated_condition(&self.data.units[s.unit], self.model).normal_force_n,
                 simulated_deg: s.simulated,
                 measured_deg: s.measured,
                 spread_deg: s.scale,
@@ -63,7 +63,7 @@ impl Context<'_> {
             .filter_map(|u| {
                 let runs: Vec<&Run> = u.runs.iter().map(|&r| &self.data.set.runs[r]).collect();
                 let (level, count) = law::level_against(&runs, &self.data.reading(), &law)?;
-                let n0 = self.data.simulated_condition(u, self.model, 0).normal_force_n;
+                let n0 = self.data.simulated_condition(u, self.model).normal_force_n;
                 Some((n0, level, count as f64))
             })
             .collect();

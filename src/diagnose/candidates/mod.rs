@@ -357,7 +357,7 @@ impl<'a> Context<'a> {
                             && s.normal_force_n == u.condition.normal_force_n
                     })?
                     .simulated;
-                Some((self.data.simulated_condition(u, self.model, 0).normal_force_n, measured, simulated))
+                Some((self.data.simulated_condition(u, self.model).normal_force_n, measured, simulated))
             })
             .collect()
     }
@@ -369,7 +369,7 @@ impl<'a> Context<'a> {
                 .data
                 .units
                 .iter()
-                .map(|u| self.data.simulated_condition(u, self.model, 0).normal_force_n)
+                .map(|u| self.data.simulated_condition(u, self.model).normal_force_n)
                 .collect::<Vec<_>>(),
         )
         .max(1e-3)

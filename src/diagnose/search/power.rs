@@ -100,7 +100,7 @@ pub(crate) fn powers(
     let references: Vec<(Effect, Model, String)> = Effect::ALL
         .iter()
         .filter(|&&e| !baseline.effects.has(e))
-        .filter_map(|&e| reference(e, baseline, data, settings).map(|(m, words)| (e, m, words)))
+        .filter_map(|&e| reference(e, baseline, data).map(|(m, words)| (e, m, words)))
         .collect();
     let by_key: HashMap<(usize, Observable), &Score> =
         baseline_scores.iter().map(|s| ((s.unit, s.observable), s)).collect();
@@ -152,12 +152,7 @@ fn gaussian_quantiles() -> Vec<f64> {
 
 /// The baseline with `effect`'s reference (see the module), and its words;
 /// `None` where the data cannot tell that family from the baseline.
-fn reference(
-    effect: Effect,
-    baseline: &Model,
-    data: &Data<'_>,
-    settings: &DiagnoseSettings,
-) -> Option<(Model, String)> {
+fn reference(effect: Effect, baseline: &Model, data: &Data<'_>) -> Option<(Model, String)> {
     let mut m = baseline.clone();
     let loads = data.loads();
     let words = match effect {
@@ -225,7 +220,7 @@ fn reference(
                 form: DriftForm::Linear,
                 rate_per_s: 0.05 / data.longest_record_s,
                 curvature_per_s2: 0.0,
-                mean_over_s: Some(records_window_s(data, settings)),
+                mean_over_s: Some(records_window_s(data)),
             });
             "a normal force moving 5% over the longest record".to_string()
         }

@@ -420,17 +420,18 @@ pub struct NormalForceDrift {
     #[serde(default)]
     pub curvature_per_s2: f64,
     /// Where the nominal normal force is the drifting force's mean: a window
-    /// `[start, end]` of each run, s from its start (warm-up included). With
+    /// `[start, end]` of each run, s from the end of its warm-up (where a
+    /// record starts, and the drift's clock: [`drift_factor`]). With
     /// it, N0 is divided by the drift factor's mean over the window, so a
     /// sweep at a nominal force gives that mean force there (a model fitted
     /// to records whose nominal force is their measured mean means what the
-    /// records meant); without it, N0 is the force at the run's start.
+    /// records meant); without it, N0 is the force at the warm-up's end.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_over_s: Option<[f64; 2]>,
 }
 
 impl NormalForceDrift {
-    /// The drift factor's mean over `[start, end]` (s from the run's start),
+    /// The drift factor's mean over `[start, end]` (s of the drift's clock),
     /// by the midpoint rule on 64 intervals.
     pub fn mean_factor(&self, start_s: f64, end_s: f64) -> f64 {
         let n = 64;
@@ -456,7 +457,10 @@ impl NormalForceDrift {
     }
 }
 
-/// Drift factor of N0 at time `t` (s) from the run's start, initial
+/// Drift factor of N0 at time `t` (s) of the drift's clock, which starts
+/// at the end of a run's warm-up (the force holds its starting value
+/// through the warm-up: what is measured sees the same drift whatever the
+/// warm-up's length, a number of periods), initial
 /// relative rate `rate` (1/s), relative curvature `curvature` (1/s², the
 /// quadratic form's). The kernel's `drift_factor` (`effects.wgsl`) is the
 /// same in f32; it is here, not with the other effects' arithmetic in

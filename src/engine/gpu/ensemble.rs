@@ -47,6 +47,8 @@ fn validate(job: &Job<'_>, plan: RunPlan, oscillators: &[Oscillator]) -> Result<
             // Per point too: a friction memory raises them by frequency.
             steps_per_period: 0,
             noise_interval_fixed: 0,
+            // Per point too: the warm-up's periods last longer at lower frequencies.
+            drift_start_s: 0.0,
             effects,
             ..o.clone()
         }

@@ -223,6 +223,9 @@ pub struct GridPoint {
     /// Added to `Params::realisation_offset` for this point's realisation
     /// numbers (`Point::realisation_offset`).
     pub realisation_offset: u32,
+    /// Where a normal-force drift's clock starts, s from the run's start
+    /// (`Oscillator::drift_start_s`).
+    pub drift_start_s: f32,
 }
 
 /// Per-invocation state kept between dispatches (struct `PathState`).
@@ -332,6 +335,7 @@ impl GridPoint {
             friction_scale: o.effects.friction_scale as f32,
             steps_per_period: o.steps_per_period,
             realisation_offset: point.realisation_offset,
+            drift_start_s: o.drift_start_s as f32,
         }
     }
 }

@@ -462,12 +462,15 @@ impl<'a> Path<'a> {
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
-        if e.drift_form == DriftForm::RandomWalk && !first {
+        // The drift's time, s from the end of the warm-up (where its clock
+        // starts: [`Oscillator::drift_start_s`]).
+        let drift_t_s = (t_s - o.drift_start_s).max(0.0);
+        if e.drift_form == DriftForm::RandomWalk && !first && t_s > o.drift_start_s {
             let step = rng::pair_a(rng::noise_block(self.key, self.realisation, rng::STREAM_DRIFT, self.interval)).0;
             self.drift_walk += (e.drift_rate_per_s * o.noise_interval_s).sqrt() * step;
         }
         let mean_n = o.normal_force_mean_n
-            * (drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, t_s) + self.drift_walk);
+            * (drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, drift_t_s) + self.drift_walk);
         let harmonics_n = harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m);
         self.normal_force_n = (mean_n + o.normal_force_sigma_n * xi_n + harmonics_n).max(0.0);
         self.stiction_excess = match e.stiction_form {
