@@ -471,8 +471,8 @@ pub fn diagnose_set(
     };
     // A drift fitted to records whose nominal force is their measured mean
     // means the same in the model file: the nominal force is the mean over
-    // the records' window (the replicates' warm-up at the data's mean
-    // frequency, then the records' length), and a sweep at it gives it.
+    // the records' window (from the end of the warm-up, where the drift's
+    // clock starts, for the records' length), and a sweep at it gives it.
     if let Some(d) = fitted.effects.normal_force_drift.as_mut() {
         d.mean_over_s = Some(records_window_s(&data));
     }

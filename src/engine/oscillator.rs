@@ -234,6 +234,12 @@ impl Oscillator {
         })
     }
 
+    /// A drift's time at `t_s` (s from the run's start), s: from
+    /// [`Oscillator::drift_start_s`], 0 before it.
+    pub fn drift_time_s(&self, t_s: f64) -> f64 {
+        (t_s - self.drift_start_s).max(0.0)
+    }
+
     /// The noise interval of a noiseless model: 2^31 − 1 periods, longer
     /// than any run, so no boundary ever splits a step.
     pub const NOISELESS_INTERVAL: u64 = ((1 << 31) - 1) << 32;

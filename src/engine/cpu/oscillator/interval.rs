@@ -79,7 +79,7 @@ impl Path<'_> {
     fn interval_load(&self) -> (f64, f64) {
         let o = self.osc;
         let e = &o.effects;
-        let drift_t_s = (self.interval as f64 * o.noise_interval_s - o.drift_start_s).max(0.0);
+        let drift_t_s = o.drift_time_s(self.interval as f64 * o.noise_interval_s);
         let mean_n =
             o.normal_force_mean_n * drift_factor(e.drift_form, e.drift_rate_per_s, e.drift_curvature_per_s2, drift_t_s);
         (mean_n, harmonics_n(e, self.interval_phase, self.x_m / o.base_amplitude_m))

@@ -462,9 +462,7 @@ impl<'a> Path<'a> {
         };
         self.friction_noise = o.friction_sigma * xi_mu;
         let t_s = self.interval as f64 * o.noise_interval_s;
-        // The drift's time, s from the end of the warm-up (where its clock
-        // starts: [`Oscillator::drift_start_s`]).
-        let drift_t_s = (t_s - o.drift_start_s).max(0.0);
+        let drift_t_s = o.drift_time_s(t_s);
         if e.drift_form == DriftForm::RandomWalk && !first && t_s > o.drift_start_s {
             let step = rng::pair_a(rng::noise_block(self.key, self.realisation, rng::STREAM_DRIFT, self.interval)).0;
             self.drift_walk += (e.drift_rate_per_s * o.noise_interval_s).sqrt() * step;
