@@ -262,9 +262,10 @@ impl SlipSamples {
                 .min_by(|x, y| x.1.sigma.total_cmp(&y.1.sigma))
         };
         let any: fn(&FrictionLaw) -> bool = |l| l.sigma.is_finite();
-        let keep: fn(&FrictionLaw) -> bool =
-            if best_of(FrictionLaw::plausible).is_some() { FrictionLaw::plausible } else { any };
-        let (best, law) = best_of(keep)?;
+        let (keep, (best, law)): (fn(&FrictionLaw) -> bool, _) = match best_of(FrictionLaw::plausible) {
+            Some(found) => (FrictionLaw::plausible, found),
+            None => (any, best_of(any)?),
+        };
         if best == 0 {
             return Some(law);
         }
