@@ -438,6 +438,7 @@ pub(crate) fn select(
         rounds.push(verdict::Round {
             current: current_losses,
             entrants: predictions.iter().map(|(l, r, _)| (l.clone(), r.clone())).collect(),
+            effects: families.iter().map(|f| f.effect).collect(),
             leader: top,
             refitted,
             refitted_levels,

@@ -52,6 +52,7 @@
 //! sure, and one whose rival explains nearly as much is not sure at all.
 
 use crate::diagnose::search::cv::{Entrant, MOST, NullLoss, UnitLosses, Weights, resamples};
+use crate::engine::Effect;
 
 /// One round of the selection as the verdict reads it.
 pub(crate) struct Round {
@@ -61,6 +62,8 @@ pub(crate) struct Round {
     /// Every family's out-of-sample losses and the current model's in the
     /// same yardsticks.
     pub(crate) entrants: Vec<(UnitLosses, UnitLosses)>,
+    /// Each entrant's effect.
+    pub(crate) effects: Vec<Effect>,
     /// Which entrant led.
     pub(crate) leader: usize,
     /// The models before and after the leader, refitted without each fold
@@ -288,16 +291,24 @@ fn rise_noise(after: &UnitLosses, weights: &Weights<'_>, n: f64, local: bool) ->
 /// margin is the part of the gap that speaks for this family rather than
 /// another: two families with other shapes that each explain some of a
 /// gap are told apart only by what one explains and the other does not.
+/// A family the verdict names too is no rival: where two effects each
+/// explain part of the gap, the first round's runner-up is the second
+/// round's leader, and a verdict that names both is not made less sure
+/// by either one's share of the other's.
 pub(crate) fn form_factor(rounds: &[Round], n: usize, weights: &Weights<'_>) -> f64 {
     if n == 0 {
         return 1.0;
     }
     let joint = &rounds[n - 1].joint;
     let mut factor = weights.share(&joint.1, &joint.0).0;
+    let named: Vec<Effect> = rounds[..n].iter().map(|r| r.effects[r.leader]).collect();
     for r in &rounds[..n] {
         let shares: Vec<f64> =
             r.entrants.iter().map(|(losses, reference)| weights.share(losses, reference).0).collect();
-        let rival = (0..shares.len()).filter(|&i| i != r.leader).map(|i| shares[i]).fold(0.0, f64::max);
+        let rival = (0..shares.len())
+            .filter(|&i| i != r.leader && !named.contains(&r.effects[i]))
+            .map(|i| shares[i])
+            .fold(0.0, f64::max);
         factor = factor.min(shares[r.leader] - rival);
     }
     (factor / MOST).clamp(0.0, 1.0)
@@ -306,7 +317,10 @@ pub(crate) fn form_factor(rounds: &[Round], n: usize, weights: &Weights<'_>) -> 
 /// The verdict over `rounds`: how many leaders are named without
 /// resampling, the share of resamples (from `seed`) that name exactly as
 /// many, and for each round the share that name its leader at least, each
-/// share scaled by the [`form_factor`] of the leaders it names.
+/// share scaled by the [`form_factor`] of the leaders it names: of the
+/// verdict's, where it is among them (an effect is as sure as the verdict
+/// that names it allows, and the other named effects are no rivals of it),
+/// else of the leaders up to it.
 pub(crate) fn judge(
     rounds: &[Round],
     folds: &[Vec<usize>],
@@ -330,7 +344,8 @@ pub(crate) fn judge(
         }
     }
     let share = |k: usize| k as f64 / draws.len() as f64;
-    let each = at_least.into_iter().enumerate().map(|(i, k)| share(k) * form_factor(rounds, i + 1, &unweighted));
+    let each =
+        at_least.into_iter().enumerate().map(|(i, k)| share(k) * form_factor(rounds, point.max(i + 1), &unweighted));
     (point, share(same) * form_factor(rounds, point, &unweighted), each.collect())
 }
 
@@ -353,6 +368,7 @@ mod tests {
         Round {
             current: at(&vec![before; n]),
             entrants: vec![(at(&vec![after; n]), at(&vec![before; n])), (at(&vec![rival; n]), at(&vec![before; n]))],
+            effects: vec![Effect::LoadDependentFriction, Effect::ColouredFrictionNoise],
             leader: 0,
             refitted: (at(&vec![before; n]), at(&vec![after; n])),
             refitted_levels: (at(&vec![before; n]), at(&vec![after; n])),
@@ -447,6 +463,35 @@ mod tests {
         second.refitted_levels.1 = second.refitted.1.clone();
         let rounds = [round(10.0, 6.0, 7.0, 10.0), second];
         assert_eq!(judge(&rounds, &halves(), &units, NULL, 1).0, 1);
+    }
+
+    /// Two effects that each explain part of the gap: the first round's
+    /// runner-up (z 10 → 6.5 beside the leader's 10 → 6) leads the second.
+    /// A verdict that names both is not made unsure by either one's share
+    /// of the other's; one that names the first alone still is, and so is
+    /// one whose runner-up is another family than the second leader.
+    #[test]
+    fn a_family_the_verdict_names_too_is_no_rival() {
+        let units: Vec<usize> = (0..12).collect();
+        let mut first = round(10.0, 6.0, 6.5, 10.0);
+        first.effects = vec![Effect::ColouredFrictionNoise, Effect::LoadDependentFriction];
+        let mut second = round(6.0, 1.5, 5.9, 10.0);
+        second.effects = vec![Effect::LoadDependentFriction, Effect::Stiction];
+        second.joint.1 = second.refitted.1.clone();
+        let both = [first, second];
+        let (n, confidence, each) = judge(&both, &halves(), &units, NULL, 1);
+        assert_eq!(n, 2);
+        assert!(confidence > 0.5, "{confidence} {each:?}");
+        // Each named effect is as sure as the verdict allows; the first
+        // alone, named only as surely as its margin over the second.
+        assert!(each.iter().all(|&c| c > 0.5), "{each:?}");
+        assert!(judge(&both[..1], &halves(), &units, NULL, 1).1 < 0.15);
+        // The same shares with a runner-up the verdict does not name.
+        let [mut first, second] = both;
+        first.effects = vec![Effect::ColouredFrictionNoise, Effect::FrictionHysteresis];
+        let (n, confidence, _) = judge(&[first, second], &halves(), &units, NULL, 1);
+        assert_eq!(n, 2);
+        assert!(confidence < 0.15, "{confidence}");
     }
 
     /// A fold predicted worse than the baseline predicts it, but no worse
