@@ -215,23 +215,6 @@ pub(crate) fn bent(effect: Effect, form: SearchedForm, values: &[f64], ctx: &Con
     })
 }
 
-/// The inverse of [`bent`]: the straight `linear` load dependence that the
-/// bent form fitted with `values` bends, at its slope, for a context that
-/// cannot bend a line (a fold that withholds one of three loads keeps two).
-pub(crate) fn straightened(
-    effect: Effect,
-    form: SearchedForm,
-    values: &[f64],
-    ctx: &Context<'_>,
-) -> Option<(Variant, Vec<f64>)> {
-    if effect != Effect::LoadDependentFriction || form != SearchedForm::Quadratic {
-        return None;
-    }
-    let straight = load_dependent_friction(effect, ctx).into_iter().find(|v| v.form == SearchedForm::Linear)?;
-    let slope = values.get(..straight.params.len())?.to_vec();
-    Some((straight, slope))
-}
-
 /// The forms of a load-dependent friction searched, started where the data point.
 pub(super) fn load_dependent_friction(effect: Effect, ctx: &Context<'_>) -> Vec<Variant> {
     // At one load every form is a shift of the friction level, which the

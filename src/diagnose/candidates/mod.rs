@@ -26,7 +26,7 @@ mod load;
 mod memory;
 mod noise;
 
-pub(crate) use load::{bent, straightened};
+pub(crate) use load::bent;
 
 use std::collections::BTreeMap;
 

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 
 use crate::diagnose::DiagnoseSettings;
-use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, straightened, variants};
+use crate::diagnose::candidates::{Context, SearchedForm, Variant, bent, variants};
 use crate::diagnose::data::{Data, Folds};
 use crate::diagnose::search::cv::{UnitLosses, fold_picks, pair_losses};
 use crate::diagnose::search::fit::{Fitted, Trial, coordinate_search, evaluate, law_can_stay};
@@ -25,6 +25,8 @@ const REFINED_FAMILIES: usize = 2;
 pub(super) struct Member {
     pub(super) form: SearchedForm,
     pub(super) values: Vec<f64>,
+    /// The trial's objective on the full data (comparable across forms).
+    pub(super) objective: f64,
     pub(super) losses: UnitLosses,
     pub(super) reference: UnitLosses,
 }
@@ -33,7 +35,7 @@ impl Member {
     /// A member made of a trial of `form` on top of `current`.
     fn of(form: SearchedForm, trial: &Trial, current: &Fitted, data: &Data<'_>) -> Member {
         let (reference, losses) = pair_losses(&current.scores, &trial.scores, data);
-        Member { form, values: trial.values.clone(), losses, reference }
+        Member { form, values: trial.values.clone(), objective: trial.objective, losses, reference }
     }
 }
 
@@ -64,30 +66,39 @@ impl Family {
         let named = fold_picks(&pool, folds, |i| self.pool[i].form == self.form);
         if named.is_empty() { fold_picks(&pool, folds, |_| true) } else { named }
     }
+
+    /// The member a fold that cannot build the named form (`buildable`:
+    /// the forms it can) is refitted from: the best full-data fit among
+    /// those forms. A fold that withholds one of three loads keeps two,
+    /// through which every one-parameter load dependence passes alike, so
+    /// the fold's own units cannot choose among them; what they predict at
+    /// the withheld load differs with their curvature, and the form whose
+    /// curvature the full data favour is the named form's closest stand-in
+    /// (a straight line through 4 and 16 N misses a convex load dependence
+    /// at 8 N by its chord's error, a power law far less).
+    pub(super) fn stand_in(&self, buildable: &[SearchedForm]) -> Option<usize> {
+        (0..self.pool.len())
+            .filter(|&i| buildable.contains(&self.pool[i].form))
+            .min_by(|&a, &b| self.pool[a].objective.total_cmp(&self.pool[b].objective))
+    }
 }
 
 /// The form `form` of `effect` at `values` as the context `ctx` of a fold
 /// builds it (the bent load dependence from the linear one), with the
-/// values it takes, if there is one. A fold that withholds one of three
-/// loads cannot bend a line through the other two: there the bent load
-/// dependence is refitted as the straight one it bends, from its slope
-/// ([`straightened`]).
-/// Refused instead, a family whose full-data fit happened to bend would
-/// end the search with nothing named and no reason given.
+/// values it takes, if it can build it: a fold that withholds one of three
+/// loads cannot bend a line through the other two
+/// ([`Family::stand_in`] is refitted there instead).
 pub(super) fn fold_variant(
     effect: Effect,
     form: SearchedForm,
     values: &[f64],
     ctx: &Context<'_>,
 ) -> Option<(Variant, Vec<f64>)> {
-    let built = variants(effect, ctx)
+    variants(effect, ctx)
         .into_iter()
         .find(|v| v.form == form)
-        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form));
-    match built {
-        Some(v) => Some((v, values.to_vec())),
-        None => straightened(effect, form, values, ctx),
-    }
+        .or_else(|| bent(effect, SearchedForm::Linear, values, ctx).filter(|v| v.form == form))
+        .map(|v| (v, values.to_vec()))
 }
 
 /// Every family's coarse fit on the full data (each form at the start the
@@ -319,7 +330,13 @@ mod tests {
     /// model's 5 at each).
     fn member(form: SearchedForm, losses: [f64; 3]) -> Member {
         let at = |l: &[f64]| l.iter().enumerate().map(|(u, &l)| (u, UnitLoss::whole(l, 1))).collect();
-        Member { form, values: vec![losses[0]], losses: at(&losses), reference: at(&[5.0; 3]) }
+        Member {
+            form,
+            values: vec![losses[0]],
+            objective: losses.iter().sum(),
+            losses: at(&losses),
+            reference: at(&[5.0; 3]),
+        }
     }
 
     fn family(form: SearchedForm, pool: Vec<Member>) -> Family {
@@ -342,5 +359,23 @@ mod tests {
         ];
         assert_eq!(family(SearchedForm::Power, pool.clone()).fold_starts(&folds), vec![2, 1, 1]);
         assert_eq!(family(SearchedForm::Linear, pool).fold_starts(&folds), vec![0, 0, 0]);
+    }
+
+    /// A fold that cannot build the named (bent) form is refitted from the
+    /// best full-data fit among the forms it can build, whatever fits the
+    /// fold's own units.
+    #[test]
+    fn a_fold_without_the_named_form_takes_its_closest_buildable_stand_in() {
+        let pool = vec![
+            member(SearchedForm::Quadratic, [0.0, 0.0, 0.0]),
+            member(SearchedForm::Linear, [1.0, 1.0, 3.0]),
+            member(SearchedForm::Power, [1.0, 2.0, 1.0]),
+            member(SearchedForm::Adhesion, [4.0, 0.0, 4.0]),
+        ];
+        let f = family(SearchedForm::Quadratic, pool);
+        let one_parameter = [SearchedForm::Linear, SearchedForm::Power, SearchedForm::Adhesion, SearchedForm::Scaled];
+        assert_eq!(f.stand_in(&one_parameter), Some(2));
+        assert_eq!(f.stand_in(&[SearchedForm::Linear, SearchedForm::Adhesion]), Some(1));
+        assert_eq!(f.stand_in(&[SearchedForm::Scaled]), None);
     }
 }

@@ -8,7 +8,7 @@ use super::family::{Family, fold_variant};
 use super::fit::{Fitted, Trial, coordinate_search, evaluate, law_can_stay};
 use crate::diagnose::DiagnoseSettings;
 use crate::diagnose::calibrate::converge_law;
-use crate::diagnose::candidates::Context;
+use crate::diagnose::candidates::{Context, SearchedForm, variants};
 use crate::diagnose::data::Data;
 use crate::diagnose::score::gap_of;
 use crate::diagnose::simulate::fits_per_task;
@@ -19,7 +19,9 @@ use crate::error::Result;
 /// The family refitted without each fold in the form it is named by (its
 /// best full-data fit's), from the member of that form its pool chose for
 /// the fold ([`Family::fold_starts`], chosen on the fold's other units
-/// alone): what the folds test is the model reported. With a few levels
+/// alone): what the folds test is the model reported. A fold too small to
+/// build that form is refitted in its closest stand-in
+/// ([`Family::stand_in`]). With a few levels
 /// every form fits the other levels about alike, and the one that happens
 /// to fit them best need not extrapolate as the named one does (a two-term
 /// adhesion law through two loads rises far more steeply below them than a
@@ -69,7 +71,12 @@ fn refit_fold(
     let member = &family.pool[member];
     let (view, base): (&Data<'_>, &Fitted) = (&folds.views[k], &folds.current[k]);
     let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
-    let Some((variant, values)) = fold_variant(family.effect, member.form, &member.values, &ctx) else {
+    let built = fold_variant(family.effect, member.form, &member.values, &ctx).or_else(|| {
+        let forms: Vec<SearchedForm> = variants(family.effect, &ctx).iter().map(|v| v.form).collect();
+        let stand_in = &family.pool[family.stand_in(&forms)?];
+        fold_variant(family.effect, stand_in.form, &stand_in.values, &ctx)
+    });
+    let Some((variant, values)) = built else {
         return Ok(None);
     };
     let Some(mut start) = evaluate(&variant, &values, &base.model, &base.scores, 1, slope, view, search, engine)?
