@@ -85,7 +85,9 @@ pub(crate) const MAX_EFFECTS: usize = 2;
 pub(crate) struct Step {
     /// Its full-data fit, polished on every replicate.
     pub(crate) candidate: Candidate,
-    /// The share of resamples it won, –.
+    /// The share of resamples that name it, discounted for the form misfit
+    /// of the verdict that names it ([`verdict::judge`]); the leading
+    /// step's is the verdict's own, –.
     pub(crate) confidence: f64,
     /// The share of what the model before it left of the out-of-sample gap
     /// that it closed, from its fold refits, –.
