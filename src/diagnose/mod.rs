@@ -465,8 +465,8 @@ pub fn diagnose_set(
             c.rise.own_fit.unwrap_or(f64::NAN)
         ));
     }
-    let (mut fitted, fitted_scores) = match selection.steps.last() {
-        Some(last) => (last.candidate.model.clone(), last.candidate.scores.clone()),
+    let (mut fitted, fitted_scores) = match &selection.named_model {
+        Some(named) => (named.full.model.clone(), named.full.scores.clone()),
         None => (baseline.clone(), baseline_scores.clone()),
     };
     // A drift fitted to records whose nominal force is their measured mean

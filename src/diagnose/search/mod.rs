@@ -47,6 +47,8 @@ mod family;
 pub(crate) mod fit;
 pub mod power;
 mod refit;
+#[cfg(test)]
+mod tests;
 pub(crate) mod verdict;
 
 use crate::diagnose::calibrate::{calibrate_and_score, converge_law};
@@ -107,9 +109,33 @@ pub(crate) struct FoldResult {
     pub(crate) gap_after: f64,
 }
 
+/// The model with every named effect: its full-data fit and its refits
+/// without each fold. Each round adds its effect to the model before it, so
+/// this is the last named round's model, whatever order the effects are
+/// reported in.
+#[derive(Clone, Debug)]
+pub(crate) struct NamedModel {
+    pub(crate) full: Fitted,
+    pub(crate) folds: Vec<Fitted>,
+}
+
+impl NamedModel {
+    /// The model of the last of `steps`, in the order they were named.
+    fn of_rounds(steps: &[Step]) -> Option<NamedModel> {
+        steps.last().map(|s| NamedModel {
+            full: Fitted { model: s.candidate.model.clone(), scores: s.candidate.scores.clone() },
+            folds: s.folds.iter().map(|f| f.after.clone()).collect(),
+        })
+    }
+}
+
 /// What the selection found.
 pub(crate) struct Selection {
+    /// The named effects, the one that shapes the response most first
+    /// ([`in_report_order`]): not the order they were named in.
     pub(crate) steps: Vec<Step>,
+    /// The model with every named effect; `None` where none was named.
+    pub(crate) named_model: Option<NamedModel>,
     /// The first leader not named, where one led.
     pub(crate) refused: Option<Refusal>,
     /// The withheld folds the model with the named effects predicts worse
@@ -147,10 +173,10 @@ pub(crate) struct Selection {
 }
 
 impl Selection {
-    /// The fold models of the last named effect (the baseline's where none).
+    /// The fold models with every named effect (the baseline's where none).
     pub(crate) fn fitted_folds(&self) -> Vec<Fitted> {
-        match self.steps.last() {
-            Some(s) => s.folds.iter().map(|f| f.after.clone()).collect(),
+        match &self.named_model {
+            Some(m) => m.folds.clone(),
             None => self.baseline_folds.clone(),
         }
     }
@@ -501,9 +527,8 @@ pub(crate) fn select(
     for (step, c) in steps.iter_mut().zip(&each) {
         step.confidence = *c;
     }
-    if count > 1 {
-        lead_by_response(&mut steps, data, &search, engine)?;
-    }
+    let weights = if count > 1 { response_weights(&steps, data, &search, engine)? } else { vec![0.0; count] };
+    let named_model = in_report_order(&mut steps, &weights);
     if count > 0 {
         // The verdict's confidence is that of naming exactly these.
         steps[0].confidence = confidence;
@@ -533,6 +558,7 @@ pub(crate) fn select(
     };
     Ok(Selection {
         steps,
+        named_model,
         refused,
         misfit_folds,
         first_round,
@@ -546,21 +572,22 @@ pub(crate) fn select(
     })
 }
 
-/// Orders the named effects by how much the fitted model's response (the
-/// peak's and the phase's mean and variance, at every unit) needs each: the
-/// rise of the response observables' mean loss when that effect alone is
-/// taken out of the fitted model, in the fitted model's yardstick. The
-/// effect that shapes the frequency response most leads; the gap counts
-/// every observable, and an effect seen plainly in another channel (a
-/// normal-force harmonic in the normal force) can close the largest share
-/// of it while a friction memory beside it is what moves the peaks. A
-/// removal the model cannot run leaves that effect where it was.
-fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettings, engine: &Engine) -> Result<()> {
-    let Some(last) = steps.last() else { return Ok(()) };
+/// How much the fitted model's response (the peak's and the phase's mean
+/// and variance, at every unit) needs each named effect (`steps` in the
+/// order they were named): the rise of the response observables' mean loss
+/// when that effect alone is taken out of the fitted model, in the fitted
+/// model's yardstick, –. The effect that shapes the frequency response most
+/// leads ([`in_report_order`]); the gap counts every observable, and an
+/// effect seen plainly in another channel (a normal-force harmonic in the
+/// normal force) can close the largest share of it while a friction memory
+/// beside it is what moves the peaks. A removal the model cannot run
+/// weighs −∞.
+fn response_weights(steps: &[Step], data: &Data<'_>, search: &DiagnoseSettings, engine: &Engine) -> Result<Vec<f64>> {
+    let Some(last) = steps.last() else { return Ok(Vec::new()) };
     let fitted = last.candidate.model.clone();
     let fitted_scores = score(engine, &fitted, data, search, Scope::All)?;
     let mut weights = Vec::new();
-    for step in steps.iter() {
+    for step in steps {
         let mut without = fitted.clone();
         without.effects.remove(step.candidate.effect);
         let weight = match score(engine, &without, data, search, Scope::All) {
@@ -579,11 +606,21 @@ fn lead_by_response(steps: &mut [Step], data: &Data<'_>, search: &DiagnoseSettin
         }
         weights.push(weight);
     }
+    Ok(weights)
+}
+
+/// Puts the named effects (`steps`, in the order they were named) in the
+/// order of their response `weights`, heaviest first (ties keep the order
+/// they were named in), and returns the model with them all: the last
+/// round's, taken before the order changes. Only the report's order
+/// changes.
+fn in_report_order(steps: &mut [Step], weights: &[f64]) -> Option<NamedModel> {
+    let named = NamedModel::of_rounds(steps);
     let mut order: Vec<usize> = (0..steps.len()).collect();
     order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]));
     let reordered: Vec<Step> = order.iter().map(|&i| steps[i].clone()).collect();
     steps.clone_from_slice(&reordered);
-    Ok(())
+    named
 }
 
 /// How many noise thresholds (`noise`, –) a model's `gap` (–) stands above
