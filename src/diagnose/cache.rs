@@ -121,13 +121,11 @@ impl UnitGrids {
 
 /// What the diagnosis reads from one replicate record: its features, and
 /// the moments of its slipping samples for the friction law's fit at the
-/// measured law's Stribeck rate (where there is a measured law), and at the
-/// model's own rate where that differs (a force derived from `x`).
+/// measured law's Stribeck rate (where there is a measured law).
 #[derive(Clone, Debug)]
 pub(crate) struct RecordReading {
     pub(crate) features: RunFeatures,
     pub(crate) moments: Option<LawMoments>,
-    pub(crate) moments_at_model_rate: Option<LawMoments>,
 }
 
 /// How many models' readings a diagnosis keeps.

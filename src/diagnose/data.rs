@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::diagnose::cache::Caches;
 use crate::diagnose::derived::DerivedChannels;
 use crate::diagnose::features::{RunFeatures, run_features_read, white_noise_sd};
-use crate::diagnose::law::{self, FrictionLaw, LawMoments, RecordSlips, Spread};
+use crate::diagnose::law::{self, FrictionLaw, LawMoments, Spread};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{Model, mean};
 use crate::engine::Condition;
@@ -63,10 +63,6 @@ pub(crate) struct Data<'a> {
     /// or for summary rows): what each condition's spread about a view's
     /// law is read from ([`Data::measured_spreads`]).
     pub(crate) unit_moments: Arc<Vec<Vec<LawMoments>>>,
-    /// Per unit, its records' slipping samples (empty without a law or for
-    /// summary rows): what the law at a model's own Stribeck rate is read
-    /// from ([`Data::measured_law_at`]).
-    pub(crate) unit_slips: Arc<Vec<Vec<RecordSlips>>>,
     /// The measurement noise on the records' channels.
     pub(crate) sensor: SensorNoise,
     /// The channels derived from the displacement (none of the runs
@@ -533,16 +529,12 @@ impl<'a> Data<'a> {
         let longest_record_s = set.runs.iter().map(|r| r.duration_s()).fold(0.0, f64::max);
         let all_runs: Vec<&Run> = set.runs.iter().collect();
         let measured_law = law::fit_friction_law(&all_runs, &reading);
-        let unit_slips: Vec<Vec<RecordSlips>> = units
+        let unit_moments = units
             .iter()
             .map(|u| match measured_law {
-                Some(_) => u.runs.iter().map(|&r| RecordSlips::of(&set.runs[r], &reading)).collect(),
+                Some(l) => u.runs.iter().map(|&r| LawMoments::of_run(&set.runs[r], &reading, l.c)).collect(),
                 None => Vec::new(),
             })
-            .collect();
-        let unit_moments = unit_slips
-            .iter()
-            .map(|slips| measured_law.map_or_else(Vec::new, |l| slips.iter().map(|s| s.moments(l.c)).collect()))
             .collect();
         Ok(Data {
             set,
@@ -556,7 +548,6 @@ impl<'a> Data<'a> {
             measured_law,
             law_c: measured_law.map(|l| l.c),
             unit_moments: Arc::new(unit_moments),
-            unit_slips: Arc::new(unit_slips),
             sensor,
             derived,
             folds,
@@ -618,25 +609,6 @@ impl<'a> Data<'a> {
     /// replicates of them ([`law::Reading`]).
     pub(crate) fn reading(&self) -> law::Reading<'a> {
         reading_of(self.set, &self.sensor, self.derived)
-    }
-
-    /// The law of this view's fitting units' records at the Stribeck rate
-    /// `c` (s/m), with the view's measured law's anchors: the view's
-    /// measured law where `c` is its rate; `None` without a measured law or
-    /// with fewer than [`law::MIN_SLIP_SAMPLES`] slipping samples.
-    pub(crate) fn measured_law_at(&self, c: f64) -> Option<FrictionLaw> {
-        let measured = self.measured_law?;
-        if measured.c == c {
-            return Some(measured);
-        }
-        let records: Vec<LawMoments> = (0..self.units.len())
-            .filter(|&u| !self.units[u].heldout)
-            .flat_map(|u| self.unit_slips[u].iter().map(|s| s.moments(c)))
-            .collect();
-        let count: usize = records.iter().map(LawMoments::count).sum();
-        (count >= law::MIN_SLIP_SAMPLES)
-            .then(|| LawMoments::law_of_records(&records, c, measured.anchors_m_per_s))
-            .flatten()
     }
 
     /// Per unit of `units`, its records' spread about this view's measured

@@ -12,7 +12,7 @@ use crate::diagnose::cache::RecordReading;
 use crate::diagnose::data::Data;
 use crate::diagnose::derived;
 use crate::diagnose::features::{RunFeatures, SampleGrid, run_features_on};
-use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES, RecordSlips, Spread, variance_gap};
+use crate::diagnose::law::{FrictionLaw, LawMoments, MIN_SLIP_SAMPLES, Spread, variance_gap};
 use crate::diagnose::observable::Observable;
 use crate::diagnose::{DiagnoseSettings, mean, sd};
 use crate::engine::reduce::circular_mean_var;
@@ -128,9 +128,6 @@ pub(crate) struct FittingRecords {
     /// measured law or with fewer than 50 slipping samples). It carries no
     /// anchors: a simulated law is read through `mu` and `sigma` alone.
     pub(crate) law: Option<FrictionLaw>,
-    /// The same fit at the model's own Stribeck rate where that is not the
-    /// measured law's (a force derived from `x`); `law` where it is.
-    pub(crate) law_at_model_rate: Option<FrictionLaw>,
     /// Per unit of `units`, its replicates' spread about `law`
     /// ([`Spread::about`]; `None` without a law or with too few samples).
     pub(crate) spreads: Vec<Option<Spread>>,
@@ -201,16 +198,9 @@ fn readings_of(
                         .collect();
                     let mut readings = records
                         .into_par_iter()
-                        .map(|(grid, run)| {
-                            let slips = c.map(|_| RecordSlips::of(run, &reading));
-                            RecordReading {
-                                features: run_features_on(run, &grid, reading.motion(run)),
-                                moments: slips.as_ref().zip(c).map(|(s, c)| s.moments(c)),
-                                moments_at_model_rate: slips
-                                    .as_ref()
-                                    .filter(|_| c != Some(model.friction.c))
-                                    .map(|s| s.moments(model.friction.c)),
-                            }
+                        .map(|(grid, run)| RecordReading {
+                            features: run_features_on(run, &grid, reading.motion(run)),
+                            moments: c.map(|c| LawMoments::of_run(run, &reading, c)),
                         })
                         .collect::<Vec<_>>()
                         .into_iter();
@@ -263,13 +253,8 @@ pub(crate) fn fitting_records(
         let count: usize = records.iter().map(LawMoments::count).sum();
         (count >= MIN_SLIP_SAMPLES).then(|| LawMoments::law_of_records(&records, measured.c, [0.0; 10])).flatten()
     });
-    let at_model_rate: Vec<LawMoments> = readings.iter().flatten().filter_map(|x| x.moments_at_model_rate).collect();
-    let law_at_model_rate = match law {
-        Some(_) if !at_model_rate.is_empty() => LawMoments::law_of_records(&at_model_rate, model.friction.c, [0.0; 10]),
-        _ => law,
-    };
     let spreads = by_unit.iter().map(|records| law.and_then(|l| Spread::about(records, &l))).collect();
-    Ok(FittingRecords { units, features, law, law_at_model_rate, spreads })
+    Ok(FittingRecords { units, features, law, spreads })
 }
 
 /// How many independent fits (a search round's coarse fits, full searches

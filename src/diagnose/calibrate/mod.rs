@@ -37,9 +37,8 @@ use level::{ResponseTargets, scale_noise, solve_friction_level};
 /// eq. 7: the same least-squares fit of `a + b/(1 + c|v|) + d v²`
 /// ([`crate::diagnose::law::fit_friction_law`]) is run on the measured records and on the model's
 /// simulated replicate records (which carry the data's measurement noise),
-/// and `a`, `b`, `d` are moved by the difference, both fits read at the
-/// model's Stribeck rate `c`, which stays (the measured law's, or for a
-/// force derived from `x` the one [`calibrate_baseline`] chose), and σ_μ² by the difference of the residual variances within
+/// and `a`, `b`, `d` are moved by the difference (`c` stays the measured
+/// law's) and σ_μ² by the difference of the residual variances within
 /// records (each record's mean residual removed, so a friction level that changes with
 /// the load or over time is left to the effect that makes it), condition by
 /// condition ([`crate::diagnose::law::variance_gap`]). The fit's numbers are then
@@ -60,23 +59,21 @@ pub(crate) fn calibrate_and_score(
     law_steps: usize,
     scope: Scope,
 ) -> Result<(Model, Vec<Score>, f64)> {
-    if data.measured_law.is_some() {
+    if let Some(measured) = data.measured_law {
         let mut m = model.clone();
         let response = sigma_response(engine, &m, data, settings)?;
         for _ in 0..if law_steps == 0 { LAW_STEPS } else { law_steps } {
-            let Some(pair) = simulated_law(engine, &m, data, settings)? else { break };
+            let Some((simulated, gap)) = simulated_law(engine, &m, data, settings)? else { break };
             if crate::diagnose::tracing() {
                 let law = |l: &FrictionLaw| format!("a {:.4} b {:.4} d {:.4} sigma {:.4}", l.a, l.b, l.d, l.sigma);
                 eprintln!(
-                    "law step: model sigma {:.4}; measured {}; simulated {} (at c {:.2}); variance gap {:.3e}; response {response:.3}",
+                    "law step: model sigma {:.4}; measured {}; simulated {}; variance gap {gap:.3e}; response {response:.3}",
                     m.friction.sigma,
-                    law(&pair.measured),
-                    law(&pair.simulated),
-                    m.friction.c,
-                    pair.variance_gap
+                    law(&measured),
+                    law(&simulated)
                 );
             }
-            step_law(&mut m, &pair, response);
+            step_law(&mut m, &measured, &simulated, gap, response);
         }
         let scores = score(engine, &m, data, settings, scope)?;
         return Ok((m, scores, slope.unwrap_or(-1.0)));
@@ -165,10 +162,10 @@ pub(crate) fn law_step(
     engine: &Engine,
 ) -> Result<Model> {
     let mut m = model.clone();
-    if data.measured_law.is_some() {
-        if let Some(pair) = simulated_law(engine, model, data, settings)? {
+    if let Some(measured) = data.measured_law {
+        if let Some((simulated, gap)) = simulated_law(engine, model, data, settings)? {
             let response = sigma_response(engine, model, data, settings)?;
-            step_law(&mut m, &pair, response);
+            step_law(&mut m, &measured, &simulated, gap, response);
         }
         return Ok(m);
     }

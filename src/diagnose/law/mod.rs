@@ -203,33 +203,6 @@ fn slipping_samples(run: &Run, reading: &Reading<'_>) -> (Vec<f64>, Vec<f64>) {
     slipping_indices(run, &n, motion).into_iter().map(|i| (v[i].abs(), f[i].abs() / n[i])).unzip()
 }
 
-/// One record's slipping samples ([`slipping_samples`]) and the variance
-/// its sensors put into their μ (–²), kept so that the record's law moments
-/// can be taken at any Stribeck rate ([`RecordSlips::moments`]).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct RecordSlips {
-    /// m/s
-    speed: Vec<f64>,
-    /// –
-    mu: Vec<f64>,
-    /// –²
-    sensor_variance: f64,
-}
-
-impl RecordSlips {
-    /// `run`'s slipping samples, read as `reading` says.
-    pub(crate) fn of(run: &Run, reading: &Reading<'_>) -> RecordSlips {
-        let (speed, mu) = slipping_samples(run, reading);
-        RecordSlips { speed, mu, sensor_variance: reading.sensor_variance(run) }
-    }
-
-    /// Their law moments at Stribeck rate `c` (s/m), as
-    /// [`LawMoments::of_run`] takes them.
-    pub(crate) fn moments(&self, c: f64) -> LawMoments {
-        LawMoments::of_record(&self.speed, &self.mu, c).with_sensor_variance(self.sensor_variance)
-    }
-}
-
 impl SlipSamples {
     /// The slipping samples of `runs` ([`slipping_samples`]), read as
     /// `reading` says; `None` with fewer than 50.
@@ -427,7 +400,7 @@ mod tests {
         let law = |runs: &[&Run]| fit_friction_law(runs, &Reading::default()).unwrap();
         let spread = |runs: &[&Run], l: &FrictionLaw| {
             let moments: Vec<LawMoments> =
-                runs.iter().map(|r| RecordSlips::of(r, &Reading::default()).moments(l.c)).collect();
+                runs.iter().map(|r| LawMoments::of_run(r, &Reading::default(), l.c)).collect();
             Spread::about(&moments, l)
         };
         // Light load: full swings; heavy load: a crawl, 1 sample in 40 kept.

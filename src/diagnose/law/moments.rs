@@ -3,8 +3,9 @@
 //! (–) read from them: the curve from every slipping sample alike, σ_μ
 //! weighted by the noise each record's sensors put into μ.
 
-use super::{FrictionLaw, MAX_D_S2_PER_M2};
+use super::{FrictionLaw, MAX_D_S2_PER_M2, Reading, slipping_samples};
 use crate::diagnose::features::solve_normal;
+use crate::measure::Run;
 
 /// The cross products of a record's columns s², g(s) and μ, each centred on
 /// the record's mean (d, q and y below), summed over some of its samples.
@@ -98,6 +99,13 @@ impl LawMoments {
             m.products.add_sample(s * s - mean_s2, g(s) - mean_g, y - mean_mu);
         }
         m
+    }
+
+    /// The moments of one run's slipping samples ([`slipping_samples`]) at
+    /// Stribeck rate `c` (s/m), read as `reading` says.
+    pub(crate) fn of_run(run: &Run, reading: &Reading<'_>, c: f64) -> LawMoments {
+        let (speed, mu) = slipping_samples(run, reading);
+        LawMoments::of_record(&speed, &mu, c).with_sensor_variance(reading.sensor_variance(run))
     }
 
     /// These moments of one record whose sensors put `variance` (–²) into
@@ -246,7 +254,6 @@ mod tests {
     use super::super::tests::{record_at, record_d};
     use super::*;
     use crate::diagnose::features::least_squares;
-    use crate::diagnose::law::{Reading, RecordSlips, slipping_samples};
 
     /// Records are weighted by the noise their sensors put into μ, not by
     /// their own residual; the curve is read from every sample alike.
@@ -261,7 +268,7 @@ mod tests {
         let moments = |sensor: &[f64]| -> Vec<LawMoments> {
             runs.iter()
                 .zip(sensor)
-                .map(|(r, &v)| RecordSlips::of(r, &Reading::default()).moments(c).with_sensor_variance(v))
+                .map(|(r, &v)| LawMoments::of_run(r, &Reading::default(), c).with_sensor_variance(v))
                 .collect()
         };
         let unweighted = LawMoments::law_of_records(&moments(&[0.0; 3]), c, [0.0; 10]).unwrap();
@@ -291,7 +298,7 @@ mod tests {
         let runs = [record_d(0.22, 0.1, 20.0, 0.3, 0.03, 7), record_at(0.30, 0.1, 20.0, 0.3, 0.02, 8, 0.2)];
         for c in [0.0, 20.0] {
             let mut moments = LawMoments::default();
-            runs.iter().for_each(|r| moments.add(&RecordSlips::of(r, &Reading::default()).moments(c)));
+            runs.iter().for_each(|r| moments.add(&LawMoments::of_run(r, &Reading::default(), c)));
             let law = moments.law(c, [0.0; 10]).unwrap();
             let records: Vec<(Vec<f64>, Vec<f64>)> =
                 runs.iter().map(|r| slipping_samples(r, &Reading::default())).collect();
