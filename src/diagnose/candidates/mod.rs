@@ -264,11 +264,16 @@ pub(crate) struct Context<'a> {
     /// Periods each simulated record is preceded by (the drift's clock
     /// starts there).
     warmup_cycles: u32,
+    /// The `position` form's start (α, β, –) read from a friction derived
+    /// from the motion and corrected for that reading's bias on the
+    /// model's own records ([`Context::with_position_start`]); `None`: the
+    /// reading as it is.
+    position_start: Option<(f64, f64)>,
 }
 
 impl<'a> Context<'a> {
     pub(crate) fn new(data: &'a Data<'a>, model: &'a Model, scores: &'a [Score], warmup_cycles: u32) -> Context<'a> {
-        Context { data, model, scores, warmup_cycles }
+        Context { data, model, scores, warmup_cycles, position_start: None }
     }
 
     /// Mean over the fitting units of the time from a simulated run's start

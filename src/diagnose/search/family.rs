@@ -115,7 +115,8 @@ pub(super) fn round(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<Family>> {
-    let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles);
+    let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles)
+        .with_position_start(engine, search)?;
     let searched: Vec<(Effect, Vec<Variant>)> = Effect::ALL
         .into_iter()
         .filter(|e| !named.contains(e))
