@@ -159,7 +159,8 @@ fn derived_position_reading<'r>(data: &Data<'_>, runs: impl Iterator<Item = &'r 
     (mu > 0.0 && a.is_finite() && b.is_finite()).then_some((a, b))
 }
 
-/// The `position` form's (α, β) read from the model's own records.
+/// `model` with a load that follows the block's position, α and β (–,
+/// shares of N0 per U0 and per U0² of displacement).
 fn with_position(model: &Model, (alpha, beta): (f64, f64)) -> Model {
     let mut m = model.clone();
     m.effects.normal_force_harmonics = Some(NormalForceHarmonics {
@@ -369,14 +370,7 @@ mod tests {
         beta: f64,
     ) -> (crate::measure::MeasurementSet, crate::diagnose::derived::DerivedChannels, Model) {
         let baseline = Model::paper_rig(&[]).expect("the paper rig");
-        let mut truth = baseline.clone();
-        truth.effects.normal_force_harmonics = Some(NormalForceHarmonics {
-            form: HarmonicForm::Position,
-            amplitudes_n: [0.0; 4],
-            amplitudes_per_n0: [alpha, beta, 0.0, 0.0],
-            phases_rad: [0.0; 4],
-            shape: 2.0,
-        });
+        let truth = with_position(&baseline, (alpha, beta));
         // A sweep through the resonance (f0 = 10.05 Hz): the orbits' sizes
         // differ between frequencies, which sets the load's x² apart from
         // the law's v² (on one harmonic orbit they coincide).
