@@ -194,7 +194,8 @@ impl Context<'_> {
         let units: Vec<usize> = (0..data.units.len())
             .filter(|&u| data.units[u].summary.is_none() && !data.units[u].heldout && !data.units[u].runs.is_empty())
             .collect();
-        // One engine job per record length (a job's units share it).
+        // The engine's jobs within each record length (a job's units share
+        // it), as every model's replicates are simulated.
         let mut lengths: Vec<u64> = units.iter().map(|&u| data.record_s[u].to_bits()).collect();
         lengths.sort_unstable();
         lengths.dedup();
@@ -202,10 +203,14 @@ impl Context<'_> {
         let mut runs: Vec<Run> = Vec::new();
         for length in lengths {
             let same: Vec<usize> = units.iter().copied().filter(|&u| data.record_s[u].to_bits() == length).collect();
-            match replicates(engine, &carrying, data, settings, &same, 0..settings.replicates) {
-                Ok(per_unit) => runs.extend(per_unit.into_iter().flatten()),
-                Err(e) if e.cannot_run() => return Ok(self),
-                Err(e) => return Err(e),
+            let frequencies: Vec<f64> = same.iter().map(|&u| data.units[u].condition.excitation_frequency_hz).collect();
+            for job in engine.record_jobs(&frequencies) {
+                let job: Vec<usize> = job.iter().map(|&i| same[i]).collect();
+                match replicates(engine, &carrying, data, settings, &job, 0..settings.replicates) {
+                    Ok(per_unit) => runs.extend(per_unit.into_iter().flatten()),
+                    Err(e) if e.cannot_run() => return Ok(self),
+                    Err(e) => return Err(e),
+                }
             }
         }
         let Some(simulated) = derived_position_reading(data, runs.iter(), self.model.friction.c) else {
