@@ -178,8 +178,7 @@ impl Context<'_> {
     /// of indirect inference, where no record measures N and the friction
     /// force is derived from the motion: the derived force's filter and the
     /// law's terms the reading shares the samples with blur a load that
-    /// follows the block, so the reading returns less than the load (a
-    /// tenth to an eighth less on the independent generator's sets). The
+    /// follows the block, so the reading returns less than the load. The
     /// model carrying the data's reading is simulated on the fitting
     /// units' replicates, derived alike, and read the same way; the start
     /// is the data's reading moved by what the data's and the replicates'
