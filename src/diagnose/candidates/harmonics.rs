@@ -183,10 +183,21 @@ impl Context<'_> {
     /// units' replicates, derived alike, and read the same way; the start
     /// is the data's reading moved by what the data's and the replicates'
     /// readings differ by (as a law step moves the law), which is what the
-    /// reading's bias leaves out, whatever causes it. Unchanged elsewhere.
-    pub(crate) fn with_position_start(mut self, engine: &Engine, settings: &DiagnoseSettings) -> Result<Self> {
+    /// reading's bias leaves out, whatever causes it. Unchanged where
+    /// `searched` (the effects the context starts searches of) leaves out
+    /// `normal_force_harmonics`, the only family the start is for: the
+    /// correction costs a simulation of the replicates.
+    pub(crate) fn with_position_start(
+        mut self,
+        searched: &[Effect],
+        engine: &Engine,
+        settings: &DiagnoseSettings,
+    ) -> Result<Self> {
         let data = self.data;
-        if self.has(Observable::NormalForceHarmonic1N) || !data.derived.friction {
+        if !searched.contains(&Effect::NormalForceHarmonics)
+            || self.has(Observable::NormalForceHarmonic1N)
+            || !data.derived.friction
+        {
             return Ok(self);
         }
         let Some(read) = derived_position_estimate(&self) else { return Ok(self) };
@@ -399,7 +410,8 @@ mod tests {
             let ctx = Context::new(&data, &baseline, &[], 5);
             let read = derived_position_estimate(&ctx).expect("a reading");
             let settings = DiagnoseSettings { replicates: 4, warmup_cycles: 5, ..DiagnoseSettings::default() };
-            let ctx = ctx.with_position_start(&Engine::cpu("test"), &settings).expect("simulated");
+            let searched = [Effect::NormalForceHarmonics];
+            let ctx = ctx.with_position_start(&searched, &Engine::cpu("test"), &settings).expect("simulated");
             let start = ctx.position_start.expect("a corrected start");
             if alpha == 0.0 {
                 assert!(start.0.abs() < 0.002 && start.1.abs() < 0.002, "{start:?} where the load is constant");

@@ -115,14 +115,11 @@ pub(super) fn round(
     engine: &Engine,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<Family>> {
+    let unnamed: Vec<Effect> = Effect::ALL.into_iter().filter(|e| !named.contains(e)).collect();
     let ctx = Context::new(data, &current.model, &current.scores, search.warmup_cycles)
-        .with_position_start(engine, search)?;
-    let searched: Vec<(Effect, Vec<Variant>)> = Effect::ALL
-        .into_iter()
-        .filter(|e| !named.contains(e))
-        .map(|e| (e, variants(e, &ctx)))
-        .filter(|(_, forms)| !forms.is_empty())
-        .collect();
+        .with_position_start(&unnamed, engine, search)?;
+    let searched: Vec<(Effect, Vec<Variant>)> =
+        unnamed.into_iter().map(|e| (e, variants(e, &ctx))).filter(|(_, forms)| !forms.is_empty()).collect();
     let every_form: Vec<&Variant> = searched.iter().flat_map(|(_, forms)| forms).collect();
     progress(&format!(
         "trying every family: a coarse fit of each of {} forms of {} effects",

@@ -13,7 +13,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::score::gap_of;
 use crate::diagnose::simulate::fits_per_task;
 use crate::diagnose::tracing;
-use crate::engine::{Effect, Engine};
+use crate::engine::Engine;
 use crate::error::Result;
 
 /// The family refitted without each fold in the form it is named by (its
@@ -70,12 +70,11 @@ fn refit_fold(
 ) -> Result<Option<Fitted>> {
     let member = &family.pool[member];
     let (view, base): (&Data<'_>, &Fitted) = (&folds.views[k], &folds.current[k]);
-    let mut ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles);
-    // Only a load that follows the block is started from a reading of the
-    // fold's own records that the model's replicates correct.
-    if family.effect == Effect::NormalForceHarmonics {
-        ctx = ctx.with_position_start(engine, search)?;
-    }
+    let ctx = Context::new(view, &base.model, &base.scores, search.warmup_cycles).with_position_start(
+        &[family.effect],
+        engine,
+        search,
+    )?;
     let built = fold_variant(family.effect, member.form, &member.values, &ctx).or_else(|| {
         let forms: Vec<SearchedForm> = variants(family.effect, &ctx).iter().map(|v| v.form).collect();
         let stand_in = &family.pool[family.stand_in(&forms)?];
