@@ -199,7 +199,7 @@ pub struct BenchmarkRow {
     /// Whether the hidden effects move the response statistics (peak
     /// mean, variance and phase) beyond their noise: the mean squared z,
     /// over every condition, of the truth without its effects against the
-    /// truth exceeds 4 (see `Truth::effect_weight`).
+    /// truth exceeds [`RESPONSE_NOISE_WEIGHT`] (see `Truth::effect_weight`).
     pub moves_statistics: bool,
     /// Whether the calibrated baseline's gap was within its noise threshold
     /// of the noise floor.
@@ -217,7 +217,20 @@ pub struct BenchmarkRow {
     pub seconds: f64,
 }
 
+/// The mean squared z of the response statistics (peak mean, variance
+/// and phase, over every condition) beyond which an effect moves the
+/// response beyond its noise, –: the split of the single-effect and the
+/// two-effect scores by what the response can show.
+pub const RESPONSE_NOISE_WEIGHT: f64 = 4.0;
+
 impl BenchmarkRow {
+    /// Whether each of a two-effect set's hidden effects moves the response
+    /// beyond its noise on its own ([`BenchmarkRow::data_weights`] above
+    /// [`RESPONSE_NOISE_WEIGHT`]); false for other sets.
+    pub fn every_effect_moves_response(&self) -> bool {
+        self.data_weights.len() >= 2 && self.data_weights.iter().all(|&w| w > RESPONSE_NOISE_WEIGHT)
+    }
+
     /// Whether the leading verdict is right (`none` for a null set; for a
     /// two-effect set, the leading hidden effect).
     pub fn leading_right(&self) -> bool {
@@ -503,7 +516,7 @@ pub fn run_benchmark(
                 }
             }
             // Whether the effects move the response beyond its noise.
-            let moves = moved > 4.0;
+            let moves = moved > RESPONSE_NOISE_WEIGHT;
             ((base > 0.0).then(|| 1.0 - fitted / base), worst.is_finite().then_some(worst), moves)
         };
         // How far the data move without each of two hidden effects: the
@@ -686,6 +699,17 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
         pairs.len(),
         percent(lead, pairs.len())
     ));
+    // Split as the single-effect sets are: a second effect that leaves the
+    // response within its noise can be named only from another channel.
+    let (seen, unseen): (Vec<&BenchmarkRow>, Vec<&BenchmarkRow>) =
+        pairs.iter().partition(|r| r.every_effect_moves_response());
+    text.push_str(&format!(
+        "  those whose every hidden effect moves the response beyond its noise on its own (data weight above {RESPONSE_NOISE_WEIGHT}): both named {}/{}; the others: both named {}/{}\n",
+        count(&seen, &|r| r.all_right()),
+        seen.len(),
+        count(&unseen, &|r| r.all_right()),
+        unseen.len(),
+    ));
     // The label says which effect the generator made strong; the data may
     // weigh the other more. Both readings, so that neither hides the other.
     let agreeing: Vec<&BenchmarkRow> =
@@ -749,7 +773,7 @@ fn summary(settings: &BenchmarkSettings, engine: &Engine, rows: &[BenchmarkRow],
 
 #[cfg(test)]
 mod tests {
-    use super::{SetShape, Truth, independent};
+    use super::{RESPONSE_NOISE_WEIGHT, SetShape, Truth, independent};
     use crate::engine::{Effect, Engine};
 
     /// How far a truth's one hidden effect moves the response at `ratios`
@@ -773,8 +797,8 @@ mod tests {
     #[test]
     fn an_effect_is_weighed_against_its_twin_without_it() {
         let load = weight(Effect::LoadDependentFriction, 0, &[4.0, 16.0], &[0.8]);
-        assert!(load > 4.0, "a strong Hertzian load dependence moves the response by {load}");
+        assert!(load > RESPONSE_NOISE_WEIGHT, "a strong Hertzian load dependence moves the response by {load}");
         let stiction = weight(Effect::Stiction, 0, &[1.0], &[1.1, 1.2]);
-        assert!(stiction < 4.0, "stiction where the block never stops moves it by {stiction}");
+        assert!(stiction < RESPONSE_NOISE_WEIGHT, "stiction where the block never stops moves it by {stiction}");
     }
 }
