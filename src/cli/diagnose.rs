@@ -52,9 +52,10 @@ pub(crate) struct BenchmarkArgs {
     /// Number of sets with two withheld effects at once.
     #[arg(long, default_value_t = 6)]
     pub(crate) pairs: u32,
-    /// Number of summary-only sets that carry the response phase (null and load-dependent friction alternately).
-    #[arg(long, default_value_t = 2)]
-    pub(crate) phase_only: u32,
+    /// Number of summary-only sets that carry the response phase (null and load-dependent friction
+    /// alternately) [default: 2; 0 with --generator independent, which writes records only].
+    #[arg(long)]
+    pub(crate) phase_only: Option<u32>,
     /// Which functional forms of each withheld effect generate sets (comma list of 1 and 2; neither is a
     /// form the diagnosis fits).
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
@@ -306,17 +307,24 @@ fn benchmark_settings(args: BenchmarkArgs) -> Result<BenchmarkSettings> {
     if loads.is_empty() || loads.len() > 8 || loads.iter().any(|n| !(n.is_finite() && *n > 0.0)) {
         anyhow::bail!("invalid --loads {loads:?}: 1 to 8 normal forces, each > 0 N");
     }
-    if args.generator == GeneratorArg::Independent && args.phase_only > 0 {
-        anyhow::bail!("invalid --phase-only {}: the independent generator writes records only", args.phase_only);
-    }
+    let phase_only = match (args.generator, args.phase_only) {
+        (GeneratorArg::Independent, Some(n)) if n > 0 => {
+            anyhow::bail!("invalid --phase-only {n}: the independent generator writes records only (use 0)")
+        }
+        (GeneratorArg::Independent, _) => 0,
+        (_, n) => n.unwrap_or(2),
+    };
     if load_shares.len() > 8 {
         anyhow::bail!("invalid --load-shares: {} levels; at most 8", load_shares.len());
+    }
+    if let Some(s) = load_shares.iter().find(|s| !(s.is_finite() && **s > 0.0 && **s <= 10.0)) {
+        anyhow::bail!("invalid --load-shares value {s}: each is a share of the no-stop threshold, > 0 and at most 10");
     }
     Ok(BenchmarkSettings {
         out: args.out,
         nulls: args.nulls,
         pairs: args.pairs,
-        phase_only: args.phase_only,
+        phase_only,
         forms: args.forms,
         levels: args.levels,
         effects,
@@ -359,6 +367,24 @@ mod tests {
         let cli = Cli::try_parse_from([&["stickslip", "benchmark-diagnosis"], args].concat()).unwrap();
         let Command::BenchmarkDiagnosis(args) = cli.command else { unreachable!() };
         benchmark_settings(args).unwrap()
+    }
+
+    /// The independent generator runs on its defaults (it writes no
+    /// phase-only sets unless asked, and refuses them by the flag's name),
+    /// and a load share out of range is refused by its flag.
+    #[test]
+    fn the_independent_generator_runs_on_its_defaults() {
+        assert_eq!(settings(&["--generator", "independent"]).phase_only, 0);
+        assert_eq!(settings(&[]).phase_only, 2);
+        let refused = |args: &[&str]| {
+            let cli = Cli::try_parse_from([&["stickslip", "benchmark-diagnosis"], args].concat()).unwrap();
+            let Command::BenchmarkDiagnosis(args) = cli.command else { unreachable!() };
+            benchmark_settings(args).unwrap_err().to_string()
+        };
+        let phase = refused(&["--generator", "independent", "--phase-only", "1"]);
+        assert!(phase.contains("--phase-only 1"), "{phase}");
+        let shares = refused(&["--load-shares", "0.5,1e6"]);
+        assert!(shares.contains("--load-shares value 1000000"), "{shares}");
     }
 
     /// The benchmark as the command line runs it by default passes the

@@ -25,7 +25,7 @@ use crate::engine::effects::{
     Stiction, StictionForm,
 };
 use crate::engine::{Condition, Effect, Engine, Job, Model, Point, Record, RunPlan};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io;
 use crate::measure::{RunEntry, write_manifest, write_run_file};
 
@@ -108,6 +108,17 @@ pub fn random_truth(
     let mut conditions = Vec::new();
     for &eta in frequency_ratios {
         let threshold = DenHartog::stop_threshold(eta);
+        // Near η = 1/3, 1/5, … the block stops at every load, and shares
+        // of the threshold name none.
+        if !(threshold > 1e-3) {
+            return Err(Error::setting(
+                "frequency ratio",
+                format!(
+                    "{eta}: Den Hartog's no-stop threshold there is {threshold:.1e} (the block stops at every \
+                     load), so shares of it name no normal force; move the ratio away from 1/3 and 1/5"
+                ),
+            ));
+        }
         for &share in load_shares {
             let n0 = share * threshold * k * m.excitation.amplitude_m / mu;
             conditions

@@ -38,14 +38,22 @@ impl DenHartog {
         1.0 / (1.0 - self.eta * self.eta)
     }
 
-    /// `U = sin(π/η) / (η (1 + cos(π/η)))`.
+    /// `U = sin(π/η) / (η (1 + cos(π/η)))`, computed as `tan(π/(2η)) / η`
+    /// (the same by the half-angle identity): near η = 1, where both grow
+    /// without bound, `1 + cos(π/η)` rounds to 0 long before the tangent
+    /// stops being exact.
     pub fn u_factor(&self) -> f64 {
-        let a = std::f64::consts::PI / self.eta;
-        a.sin() / (self.eta * (1.0 + a.cos()))
+        (std::f64::consts::FRAC_PI_2 / self.eta).tan() / self.eta
     }
 
-    /// Largest `β` with continuous (non-stop) motion at this `η`.
+    /// Largest `β` with continuous (non-stop) motion at this `η`: at
+    /// resonance (η = 1, where V and U are both unbounded) the formula's
+    /// limit, π/4; near η = 1/3, 1/5, … it falls to 0 (the block stops at
+    /// every load).
     pub fn stop_threshold(eta: f64) -> f64 {
+        if eta == 1.0 {
+            return std::f64::consts::FRAC_PI_4;
+        }
         let dh = DenHartog { eta, beta: 0.0 };
         eta * eta * dh.v_factor().abs() / (1.0 + eta.powi(4) * dh.u_factor().powi(2)).sqrt()
     }
@@ -162,5 +170,25 @@ mod tests {
         let phase = dh.phase_rad().unwrap();
         assert!((phase - 0.546_875_416_650_5).abs() < 1e-8, "{phase}");
         assert!((dh.turning_point_phase_rad().unwrap() - 0.264_950_471_540_2).abs() < 1e-9);
+    }
+
+    /// The no-stop threshold is continuous through resonance, where the
+    /// formula is 0/0: its limit there is π/4, and it stays near π/4 a
+    /// hair either side, where `1 + cos(π/η)` rounds to 0 (within 1e-6 at
+    /// 1 ± 1e-7; within 1e-3 at 1 ± 1e-12, where the rounding of η itself
+    /// moves 1 − η² and π/(2η)'s distance from the pole by 1e-4 of
+    /// themselves); at η = 1/3 it is (about) 0.
+    #[test]
+    fn the_stop_threshold_is_continuous_through_resonance() {
+        let quarter = std::f64::consts::FRAC_PI_4;
+        for (eta, within) in
+            [(1.0, 0.0), (1.0 - 1e-7, 1e-6), (1.0 + 1e-7, 1e-6), (1.0 - 1e-12, 1e-3), (1.0 + 1e-12, 1e-3)]
+        {
+            let t = DenHartog::stop_threshold(eta);
+            assert!((t - quarter).abs() <= within, "eta {eta}: {t}");
+        }
+        let near = DenHartog::stop_threshold(0.999);
+        assert!((near - 0.785_790_733_181_75).abs() < 1e-9, "{near}");
+        assert!(DenHartog::stop_threshold(1.0 / 3.0) < 1e-12);
     }
 }
