@@ -53,6 +53,13 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<()> {
     let model = args.model.load()?;
     let condition = Condition { excitation_frequency_hz: args.frequency, normal_force_n: args.normal_force };
     condition.validate_flags("--frequency", "--normal-force")?;
+    if args.normal_force <= 0.0 {
+        anyhow::bail!(
+            "invalid --normal-force {}: a measurement set's runs are pressed together (normal_force_n > 0 N); \
+             `sweep` runs an unloaded rig",
+            args.normal_force
+        );
+    }
     Oscillator::new(&model, condition)?;
     if args.realisations == 0 || args.realisations > Job::MAX_REALISATIONS {
         anyhow::bail!(

@@ -70,8 +70,8 @@ pub struct VerdictReport {
     pub unexplained_share: f64,
     /// Where the fitted model still misfits beyond noise: which
     /// observables, what that points at, and every effect family whose
-    /// signature still stands out. `null` when it fits.
-    #[serde(default)]
+    /// signature still stands out. Absent when it fits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub misfit: Option<MisfitReport>,
     /// The first family that led a round of the selection and is not
     /// named, and why; absent where every leader is named.

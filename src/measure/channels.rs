@@ -77,10 +77,19 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
         .into_iter()
         .filter_map(|(i, rate)| v.get(i).filter(|v| v.is_finite()).map(|&v| (v, rate)))
         .collect();
-    let (vv, rr, vr) = pairs.iter().fold((0.0, 0.0, 0.0), |(vv, rr, vr), &(v, r)| (vv + v * v, rr + r * r, vr + v * r));
-    if pairs.len() < MIN_SAMPLES || rr <= 0.0 {
+    // Sums of the channels divided by their largest magnitudes, so that
+    // no square underflows (a displacement in units of 1e-200 m is still
+    // one the scale check must see) or overflows.
+    let peak = |f: fn(&(f64, f64)) -> f64| pairs.iter().fold(0.0f64, |m, p| m.max(f(p).abs()));
+    let (v_peak, r_peak) = (peak(|p| p.0), peak(|p| p.1));
+    if pairs.len() < MIN_SAMPLES || r_peak <= 0.0 {
         return Ok(());
     }
+    let v_unit = if v_peak > 0.0 { v_peak } else { 1.0 };
+    let (vv, rr, vr) = pairs.iter().fold((0.0, 0.0, 0.0), |(vv, rr, vr), &(v, r)| {
+        let (v, r) = (v / v_unit, r / r_peak);
+        (vv + v * v, rr + r * r, vr + v * r)
+    });
     // A channel that never changes while `x` moves is dead (or a constant
     // written in its place): read as a velocity, it would make a sliding
     // block look stuck throughout.
@@ -90,7 +99,7 @@ pub(super) fn check_velocity(path: &Path, t_s: &[f64], x_m: &[f64], v: &[f64]) -
         return Err(dead_channel(path, "v", first, "m/s", "the block's velocity dx/dt"));
     }
     let correlation = vr / (vv * rr).sqrt();
-    let scale = (vv / rr).sqrt();
+    let scale = (v_unit / r_peak) * (vv / rr).sqrt();
     if correlation < -SAME_SIGNAL {
         return Err(bad(
             path,
@@ -461,6 +470,13 @@ mod tests {
         let in_mm: Vec<f64> = v.iter().map(|v| v * 1000.0).collect();
         let err = check_velocity(path, &t, &x, &in_mm).unwrap_err().to_string();
         assert!(err.contains("column `v`") && err.contains("1000 times its size"), "{err}");
+        // However small `x` is written, a `v` in m/s is still seen to be
+        // out of scale with it (the sums do not underflow).
+        for tiny in [1e-100, 1e-200, 1e-300] {
+            let x_tiny: Vec<f64> = x.iter().map(|x| x * tiny).collect();
+            let err = check_velocity(path, &t, &x_tiny, &v).unwrap_err().to_string();
+            assert!(err.contains("column `v`") && err.contains("times its size"), "{tiny}: {err}");
+        }
         let err = check_friction(path, &t, &x, &negated(&f)).unwrap_err().to_string();
         assert!(err.contains("column `friction_force`") && err.contains("sign reversed"), "{err}");
         // An offset or a few samples pushed the wrong way by noise are not a

@@ -83,6 +83,11 @@ fn bad_input_is_named_and_nothing_is_written() {
     refused(&["simulate", "--out", out_s, "--set", "rig.mass_kg=-1"], &out, "rig.mass_kg");
     refused(&["simulate", "--out", out_s, "--frequency", "0"], &out, "--frequency");
     refused(&["simulate", "--out", out_s, "--sample-rate", "0"], &out, "--sample-rate");
+    // A set `diagnose` could not read is not written.
+    refused(&["simulate", "--out", out_s, "--normal-force", "0"], &out, "--normal-force");
+    // Where the block stops at every load (η = 1/3), shares of the no-stop
+    // threshold name no load.
+    refused(&["benchmark-diagnosis", "--out", out_s, "--frequency-ratios", "0.7,0.3333333333333333"], &out, "0.333");
     refused(&["benchmark-diagnosis", "--out", out_s, "--load-shares", "0.5,-1"], &out, "--load-shares");
     refused(&["benchmark-diagnosis", "--out", out_s, "--effects", "stickiness"], &out, "stickiness");
     refused(&["benchmark-diagnosis", "--out", out_s, "--frequency-ratios", "0.7,NaN"], &out, "--frequency-ratios");

@@ -53,11 +53,7 @@ fn figure9a_measured(
             let label = match paired {
                 _ if !labels => String::new(),
                 Some(p) if p.same_load => match mean_at(&curves[p.curve].1, m.excitation_frequency_hz) {
-                    Some(sim) => format!(
-                        "{} N: simulated {}",
-                        tick(m.normal_force_n),
-                        percent(100.0 * (sim / m.peak_mean_m - 1.0))
-                    ),
+                    Some(sim) => format!("{} N: simulated {}", tick(m.normal_force_n), relative(sim, m.peak_mean_m)),
                     None => format!("{} N", tick(m.normal_force_n)),
                 },
                 Some(p) => format!("{} N (nearest simulated load {} N)", tick(m.normal_force_n), tick(p.force_n)),
@@ -75,8 +71,18 @@ fn figure9a_measured(
         .collect()
 }
 
-/// A signed percentage with one decimal, two below 0.1% (`−2.9%`, `+0.04%`).
-fn percent(p: f64) -> String {
+/// The simulated mean `sim` against the measured one (both m): a signed
+/// percentage with one decimal, two below 0.1% (`−2.9%`, `+0.04%`); a
+/// factor where the simulated is a thousandfold or more (`×2.0e197`), so
+/// that a label stays one line; `n/a` where the measured mean is 0.
+fn relative(sim: f64, measured: f64) -> String {
+    let p = 100.0 * (sim / measured - 1.0);
+    if !p.is_finite() {
+        return "n/a (measured mean 0)".into();
+    }
+    if p >= 1e5 {
+        return format!("×{:.1e}", sim / measured);
+    }
     let text = if p.abs() < 0.1 { format!("{:.2}", p.abs()) } else { format!("{:.1}", p.abs()) };
     format!("{}{text}%", if p < 0.0 { "−" } else { "+" })
 }
@@ -336,7 +342,11 @@ mod tests {
 
     #[test]
     fn plot_percentages_are_signed_with_one_decimal() {
-        assert_eq!(percent(-2.94), "−2.9%");
-        assert_eq!(percent(0.044), "+0.04%");
+        assert_eq!(relative(0.970_6, 1.0), "−2.9%");
+        assert_eq!(relative(1.000_44, 1.0), "+0.04%");
+        // A measured mean of 0, or one far below the simulated, keeps the
+        // label one short line.
+        assert_eq!(relative(1e-3, 0.0), "n/a (measured mean 0)");
+        assert_eq!(relative(3.85e-3, 3.85e-203), "×1.0e200");
     }
 }
