@@ -110,7 +110,7 @@ pub fn random_truth(
         let threshold = DenHartog::stop_threshold(eta);
         // Near η = 1/3, 1/5, … the block stops at every load, and shares
         // of the threshold name none.
-        if !(threshold > 1e-3) {
+        if threshold.is_nan() || threshold <= 1e-3 {
             return Err(Error::setting(
                 "frequency ratio",
                 format!(
